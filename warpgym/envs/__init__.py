@@ -1,0 +1,5 @@
+"""Environments built on ``warpgym.Sim``."""
+
+from warpgym.envs.locomotion import LocomotionVecEnv
+
+__all__ = ["LocomotionVecEnv"]

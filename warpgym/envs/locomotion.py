@@ -1,0 +1,192 @@
+"""Ant and Humanoid as a Gymnasium vector environment whose every step is Warp kernels.
+
+A step is: copy the actions into a persistent buffer, then one CUDA graph launch (apply actions,
+physics substeps, contact and joint forces, observations, rewards, dones, masked resets). The
+returned tensors are persistent buffers that the next step overwrites: clone what you keep.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import torch
+import warp as wp
+from gymnasium import spaces
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+
+from kernels.actions import apply_actions
+from kernels.locomotion import advance_rng, locomotion_step
+from kernels.resets import reset_finished_envs
+from warpgym.checks import check_float_tensor
+from warpgym.sim import Sim
+from warpgym.tasks import LocomotionTask, get_task
+
+
+class LocomotionVecEnv(VectorEnv):
+    """``num_envs`` copies of a locomotion task on one device; tensors in, tensors out.
+
+    Args:
+        task: "Ant", "Humanoid" or a ``LocomotionTask``.
+        num_envs: number of parallel environments.
+        device: "cpu" or "cuda:N" (default: cuda:0 when present).
+        seed: seed of the reset noise; ``reset(seed=...)`` replaces it.
+        max_episode_steps: episode length (default: the task's, 1000).
+        sim_options: extra ``Sim`` arguments (solver_iterations, ls_iterations, check_inputs).
+        **task_overrides: any ``LocomotionTask`` field, e.g. ``termination_height=0.25``.
+    """
+
+    metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
+
+    def __init__(
+        self,
+        task: str | LocomotionTask = "Ant",
+        num_envs: int = 1,
+        device: str | None = None,
+        seed: int = 0,
+        max_episode_steps: int | None = None,
+        sim_options: dict | None = None,
+        **task_overrides,
+    ):
+        task = get_task(task)
+        if max_episode_steps is not None:
+            task_overrides["episode_length"] = max_episode_steps
+        if task_overrides:
+            task = task.replace(**task_overrides)
+        task.validate()
+        self.task = task
+        self.sim = sim = Sim(task.robot, num_envs, device, seed, dt=task.dt, substeps=task.substeps,
+                             **(sim_options or {}))
+        self.num_envs = n = sim.num_envs
+        self.device = sim.torch_device
+        self.num_actions = a = sim.num_dofs
+        missing = [f for f in sim.spec.feet if f not in sim.body_names]
+        if missing:
+            raise ValueError(f"{sim.spec.mjcf} has no bodies named {missing}; its bodies are {sim.body_names}")
+        feet = [sim.body_names.index(f) for f in sim.spec.feet]
+        self.num_obs = o = task.observation_size(a, len(feet))
+
+        self.single_observation_space = spaces.Box(-np.inf, np.inf, (o,), np.float32)
+        self.single_action_space = spaces.Box(-1.0, 1.0, (a,), np.float32)
+        self.observation_space = batch_space(self.single_observation_space, n)
+        self.action_space = batch_space(self.single_action_space, n)
+
+        dev = sim.device
+        gear = sim.motor_gear_np
+        self.params = task.to_warp(sim.spec.start_height)
+        self._torque_scale = wp.array(gear * task.power_scale, dtype=float, device=dev)
+        self._effort_ratio = wp.array(gear / gear.max(), dtype=float, device=dev)
+        self._dof_lower = wp.array(sim.dof_lower_np, dtype=float, device=dev)
+        self._dof_upper = wp.array(sim.dof_upper_np, dtype=float, device=dev)
+        self._default_dof_pos = wp.array(sim.default_dof_pos_np, dtype=float, device=dev)
+        self._feet = wp.array(np.array(feet, np.int32), dtype=wp.int32, device=dev)
+        self._rng_state = wp.array(np.array([seed, 0], np.int32), dtype=wp.int32, device=dev)
+
+        def buf(shape, dtype=float):
+            return wp.zeros(shape, dtype=dtype, device=dev)
+
+        self._actions_in, self._actions = buf((n, a)), buf((n, a))
+        self._nan_count = buf(n, wp.int32)
+        self._obs, self._final_obs = buf((n, o)), buf((n, o))
+        self._reward, self._potentials = buf(n), buf(n)
+        self._terminated, self._truncated = buf(n, wp.bool), buf(n, wp.bool)
+        self._done, self._nonfinite = buf(n, wp.bool), buf(n, wp.bool)
+        self._ep_length, self._ep_return, self._ep_forward = buf(n, wp.int32), buf(n), buf(n)
+        self._stat_length, self._stat_return, self._stat_speed = buf(n, wp.int32), buf(n), buf(n)
+
+        if task.contact_force_scale != 0.0:
+            sim.enable_contact_forces()
+        self._contact_wrench = sim.contact_wrench_buffer()
+        self._dof_force = sim.dof_force_buffer()
+
+        t = sim.to_torch
+        self._actions_in_t = t(self._actions_in)
+        self.obs, self.reward = t(self._obs), t(self._reward)
+        self.terminated, self.truncated = t(self._terminated), t(self._truncated)
+        self.actions = t(self._actions)
+        done = t(self._done)
+        self.info = {
+            "final_obs": t(self._final_obs),
+            "_final_obs": done,
+            "episode": {
+                "r": t(self._stat_return),
+                "l": t(self._stat_length),
+                "s": t(self._stat_speed),
+                "_r": done,
+                "_l": done,
+                "_s": done,
+            },
+            "_episode": done,
+            "nan_actions": t(self._nan_count),
+            "nonfinite": t(self._nonfinite),
+        }
+        self._graph = None
+        self._reset_all()
+
+    # ------------------------------------------------------------------ device work
+    def _obs_inputs(self):
+        sim = self.sim
+        return [self._dof_force, self._contact_wrench, self._feet, sim.bodies_per_env, self._actions]
+
+    def _launch_step(self) -> None:
+        sim, n, dev = self.sim, self.num_envs, self.sim.device
+        wp.launch(apply_actions, dim=n, inputs=[self._actions_in, self._torque_scale],
+                  outputs=[self._actions, sim.joint_f, self._nan_count], device=dev)
+        sim.simulate()
+        if self.task.contact_force_scale != 0.0:
+            sim.compute_contact_wrenches()
+        if self.task.observe_dof_forces:
+            sim.compute_dof_forces()
+        wp.launch(
+            locomotion_step,
+            dim=n,
+            inputs=[self.params, sim.joint_q, sim.joint_qd, self._dof_lower, self._dof_upper, self._dof_force,
+                    self._contact_wrench, self._feet, sim.bodies_per_env, self._actions, self._effort_ratio,
+                    self._potentials, self._ep_length, self._ep_return, self._ep_forward],
+            outputs=[self._obs, self._reward, self._terminated, self._truncated, self._done, self._nonfinite],
+            device=dev,
+        )
+        self._launch_reset(force_all=0)
+        wp.launch(advance_rng, dim=1, inputs=[self._rng_state], device=dev)
+
+    def _launch_reset(self, force_all: int) -> None:
+        sim = self.sim
+        wp.launch(
+            reset_finished_envs,
+            dim=self.num_envs,
+            inputs=[self.params, force_all, self._rng_state, self._default_dof_pos, self._dof_lower, self._dof_upper,
+                    *self._obs_inputs(), self._terminated, self._truncated, self._done],
+            outputs=[sim.joint_q, sim.joint_qd, sim.solver.mjw_data.qacc_warmstart, self._potentials,
+                     self._ep_length, self._ep_return, self._ep_forward, self._stat_return, self._stat_length,
+                     self._stat_speed, self._final_obs, self._obs],
+            device=sim.device,
+        )
+
+    def _reset_all(self) -> None:
+        def run():
+            self._launch_reset(force_all=1)
+            wp.launch(advance_rng, dim=1, inputs=[self._rng_state], device=self.sim.device)
+
+        self.sim.launch(None, run)
+
+    # ------------------------------------------------------------------ Gymnasium API
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        """Reset every env. With ``seed``, the noise of this and all later resets is reproducible."""
+        if seed is not None:
+            self._rng_state.assign(np.array([int(seed) & 0x7FFFFFFF, 0], np.int32))
+        self._reset_all()
+        return self.obs, {}
+
+    def step(self, actions: torch.Tensor):
+        actions = check_float_tensor("actions", actions, self.device, [(self.num_envs, self.num_actions)])
+        self._actions_in_t.copy_(actions)
+        if self._graph is None and self.sim.device.startswith("cuda"):
+            self._graph = self.sim.capture(self._launch_step)
+        self.sim.launch(self._graph, self._launch_step)
+        return self.obs, self.reward, self.terminated, self.truncated, self.info
+
+    def close(self, **kwargs) -> None:
+        self._graph = None
+        self.closed = True
+
+    def __repr__(self) -> str:
+        return f"LocomotionVecEnv({self.task.name}, num_envs={self.num_envs}, device={self.sim.device!r})"

@@ -1,0 +1,68 @@
+"""The robots warpgym simulates: which MJCF file, where they start, which bodies are feet.
+
+The MJCF files are the ones Newton ships (``newton.examples.get_asset``). Their motor gears are
+read straight from the ``<actuator>`` block so that there is one source for them: the file.
+"""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class RobotSpec:
+    name: str
+    mjcf: str
+    # Height of the root body at reset [m]; chosen so the feet clear the ground under the
+    # largest joint-position noise a reset can draw.
+    start_height: float
+    # Body names (last path component of Newton's body label) whose contact wrench is observed.
+    feet: tuple[str, ...]
+
+
+ROBOTS: dict[str, RobotSpec] = {
+    "ant": RobotSpec(
+        name="ant",
+        mjcf="nv_ant.xml",
+        start_height=0.55,
+        feet=("front_left_foot", "front_right_foot", "left_back_foot", "right_back_foot"),
+    ),
+    "humanoid": RobotSpec(
+        name="humanoid",
+        mjcf="nv_humanoid.xml",
+        start_height=1.34,
+        feet=("right_foot", "left_foot"),
+    ),
+}
+
+
+def robot_spec(name: str) -> RobotSpec:
+    key = str(name).lower()
+    if key not in ROBOTS:
+        raise ValueError(f"unknown robot {name!r}: choose one of {sorted(ROBOTS)}")
+    return ROBOTS[key]
+
+
+def mjcf_path(spec: RobotSpec) -> str:
+    import newton.examples  # noqa: PLC0415  (heavy import, only when a model is built)
+
+    return newton.examples.get_asset(spec.mjcf)
+
+
+def motor_gears(path: str) -> dict[str, float]:
+    """Joint name -> motor gear, from the MJCF's ``<actuator><motor joint=.. gear=..>`` entries."""
+    root = ET.parse(path).getroot()
+    gears: dict[str, float] = {}
+    for motor in root.iter("motor"):
+        joint = motor.get("joint")
+        if joint is None:
+            continue
+        gears[joint] = float(motor.get("gear", "1").split()[0])
+    return gears
+
+
+def hinge_joint_names(path: str) -> list[str]:
+    """Names of the MJCF's hinge joints in document order, which is Newton's dof order."""
+    root = ET.parse(path).getroot()
+    return [j.get("name") for j in root.find("worldbody").iter("joint") if j.get("type", "hinge") == "hinge"]

@@ -1,0 +1,215 @@
+"""``Sim``: N copies of one robot on a ground plane, stepped by Newton's MuJoCo Warp solver.
+
+Every buffer is allocated once. The Newton state is stepped in place (MuJoCo Warp reads
+``joint_q``/``joint_qd`` at the start of a substep and writes them back at its end), so a torch view
+taken of it stays valid for the life of the Sim. On CUDA the substeps run as one captured graph.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import torch
+import warp as wp
+
+from kernels import tensor_api as k_api
+from warpgym.device import resolve_device
+from warpgym.robots import RobotSpec, hinge_joint_names, mjcf_path, motor_gears, robot_spec
+from warpgym.streams import StreamOrder
+from warpgym.tensor_api import TensorAPI
+
+
+def _check_positive_int(name: str, value, fix: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise ValueError(f"{name}={value!r} must be a positive integer: {fix}")
+    return int(value)
+
+
+def _leaf(label: str) -> str:
+    return label.rsplit("/", 1)[-1]
+
+
+class Sim(TensorAPI):
+    """Batched rigid-body simulation of ``num_envs`` independent worlds of one robot.
+
+    Args:
+        robot: "ant" or "humanoid".
+        num_envs: number of worlds (one robot each).
+        device: "cpu", "cuda" or "cuda:N"; default: cuda:0 when present, else cpu.
+        seed: base seed of everything random the Sim and the tasks on it draw.
+        dt: control step [s]; one ``step()`` advances this much.
+        substeps: physics substeps per control step.
+        solver_iterations, ls_iterations: MuJoCo Warp's Newton-solver and line-search iteration caps.
+        check_inputs: validate index tensors on the host (one synchronisation per indexed set).
+    """
+
+    def __init__(
+        self,
+        robot: str = "ant",
+        num_envs: int = 1,
+        device: str | None = None,
+        seed: int = 0,
+        dt: float = 1.0 / 60.0,
+        substeps: int = 2,
+        solver_iterations: int = 8,
+        ls_iterations: int = 8,
+        check_inputs: bool = True,
+    ):
+        self.spec: RobotSpec = robot_spec(robot)
+        self.num_envs = _check_positive_int("num_envs", num_envs, "pass num_envs >= 1")
+        self.substeps = _check_positive_int("substeps", substeps, "pass substeps >= 1 (2 is the default)")
+        if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0):
+            raise ValueError(f"dt={dt!r} must be a positive number of seconds, e.g. 1/60")
+        _check_positive_int("solver_iterations", solver_iterations, "pass a positive iteration cap, e.g. 8")
+        _check_positive_int("ls_iterations", ls_iterations, "pass a positive iteration cap, e.g. 8")
+        self.device = resolve_device(device)
+        self.torch_device = torch.device(self.device)
+        self.seed = int(seed)
+        self.dt = float(dt)
+        self.check_inputs = bool(check_inputs)
+        self._order = StreamOrder(self.device)
+
+        self._build(solver_iterations, ls_iterations)
+        self._graph = None
+        self._contact_forces = False
+        self._tensors: dict[str, tuple[wp.array, torch.Tensor]] = {}
+
+    # ------------------------------------------------------------------ model
+    def _build(self, solver_iterations: int, ls_iterations: int) -> None:
+        import newton  # noqa: PLC0415
+
+        path = mjcf_path(self.spec)
+        robot = newton.ModelBuilder()
+        robot.add_mjcf(path, ignore_names=["floor", "ground"])
+        scene = newton.ModelBuilder()
+        scene.add_ground_plane()
+        scene.replicate(robot, self.num_envs)
+        try:
+            self.model = scene.finalize(device=self.device)
+        except (RuntimeError, MemoryError) as exc:
+            raise MemoryError(
+                f"building {self.num_envs} {self.spec.name} worlds on {self.device} failed ({exc}); "
+                "pass a smaller num_envs"
+            ) from exc
+        model = self.model
+        n = self.num_envs
+        self.coords_per_env = model.joint_coord_count // n
+        self.dofs_per_env = model.joint_dof_count // n
+        self.bodies_per_env = model.body_count // n
+        self.num_dofs = self.dofs_per_env - k_api.ROOT_DOFS
+        self.body_names = [_leaf(s) for s in model.body_label[: self.bodies_per_env]]
+        joints_per_env = model.joint_count // n
+        dof_dims = model.joint_dof_dim.numpy()[:joints_per_env].sum(axis=1)
+        self.dof_names = hinge_joint_names(path)
+        if (
+            int(dof_dims[0]) != k_api.ROOT_DOFS
+            or self.coords_per_env - k_api.ROOT_COORDS != self.num_dofs
+            or len(self.dof_names) != self.num_dofs
+        ):
+            raise ValueError(f"{self.spec.mjcf}: expected a free root joint and {self.num_dofs} hinge joints below it")
+
+        lower = model.joint_limit_lower.numpy()[k_api.ROOT_DOFS : self.dofs_per_env]
+        upper = model.joint_limit_upper.numpy()[k_api.ROOT_DOFS : self.dofs_per_env]
+        gears_by_joint = motor_gears(path)
+        self.dof_lower_np = lower.astype(np.float32)
+        self.dof_upper_np = upper.astype(np.float32)
+        self.default_dof_pos_np = np.clip(0.0, lower, upper).astype(np.float32)
+        self.motor_gear_np = np.array([gears_by_joint.get(name, 0.0) for name in self.dof_names], np.float32)
+
+        # Start state: root upright at the robot's start height, dofs at 0 clamped into their limits.
+        q = model.joint_q.numpy().reshape(n, self.coords_per_env)
+        q[:, :7] = (0.0, 0.0, self.spec.start_height, 0.0, 0.0, 0.0, 1.0)
+        q[:, 7:] = self.default_dof_pos_np
+        model.joint_q.assign(q.reshape(-1))
+        model.joint_qd.zero_()
+
+        self.solver = newton.solvers.SolverMuJoCo(
+            model,
+            iterations=solver_iterations,
+            ls_iterations=ls_iterations,
+            disable_sensors=True,
+        )
+        # The iteration caps are a deliberate speed/accuracy trade, not an error worth a printf per world.
+        from mujoco_warp import OverflowType  # noqa: PLC0415
+
+        opt = self.solver.mjw_model.opt
+        opt.warn_overflow = int(opt.warn_overflow) & ~int(OverflowType.ITERATIONS | OverflowType.LS_ITERATIONS)
+        self.state = model.state()
+        self.control = model.control()
+        self.control.joint_f.zero_()
+
+        # 2-D views of Newton's flat arrays; they share memory and never move.
+        self.joint_q = self.state.joint_q.reshape((n, self.coords_per_env))
+        self.joint_qd = self.state.joint_qd.reshape((n, self.dofs_per_env))
+        self.joint_f = self.control.joint_f.reshape((n, self.dofs_per_env))
+
+        # Newton merges the hinges of one body into a single joint; MuJoCo keeps one dof per hinge,
+        # in the same order, so each Newton joint's dofs map onto a contiguous MuJoCo range.
+        mj_qd_start = self.solver.mj_qd_start.numpy()
+        to_mj = np.concatenate([mj_qd_start[j] + np.arange(dof_dims[j]) for j in range(1, joints_per_env)])
+        to_mj = to_mj.astype(np.int32)
+        self.newton_to_mj_dof = wp.array(to_mj, dtype=wp.int32, device=self.device)
+
+    # ------------------------------------------------------------------ stepping
+    @property
+    def sub_dt(self) -> float:
+        return self.dt / self.substeps
+
+    def simulate(self) -> None:
+        """Advance one control step as plain launches (what the graph on CUDA holds)."""
+        for _ in range(self.substeps):
+            self.solver.step(self.state, self.state, self.control, None, self.sub_dt)
+
+    def capture(self, fn):
+        """Capture ``fn``'s launches as one CUDA graph; return None on the CPU."""
+        if not self.device.startswith("cuda"):
+            return None
+        with wp.ScopedCapture(device=self.device) as cap:
+            fn()
+        return cap.graph
+
+    def launch(self, graph, fn) -> None:
+        """Run ``fn`` (captured as ``graph`` on CUDA), ordered after and before torch's stream."""
+        self._order.warp_waits_for_torch()
+        if graph is not None:
+            wp.capture_launch(graph)
+        else:
+            fn()
+        self._order.torch_waits_for_warp()
+
+    def step(self) -> None:
+        """Advance every world one control step (``substeps`` physics steps)."""
+        if self._graph is None and self.device.startswith("cuda"):
+            self._graph = self.capture(self.simulate)
+        self.launch(self._graph, self.simulate)
+
+    def enable_contact_forces(self) -> None:
+        """Have the solver compute per-body contact wrenches (MuJoCo's ``cfrc_ext``) each substep."""
+        if not self._contact_forces:
+            self.solver.mjw_model.opt.run_rne_postconstraint = True
+            self._contact_forces = True
+            self._graph = None  # the captured graph lacks the extra pass
+
+    def clear_warm_start(self, env_ids: wp.array) -> None:
+        """Forget the solver's warm start for worlds whose state was written from outside."""
+        if env_ids.shape[0] == 0:
+            return
+        warm = self.solver.mjw_data.qacc_warmstart
+        wp.launch(k_api.clear_warmstart_indexed, dim=(env_ids.shape[0], warm.shape[1]),
+                  inputs=[env_ids, warm], device=self.device)
+
+    # ------------------------------------------------------------------ helpers
+    def to_torch(self, array: wp.array) -> torch.Tensor:
+        return wp.to_torch(array, requires_grad=False)
+
+    def warp_buffer(self, key: str, shape, dtype=wp.float32) -> tuple[wp.array, torch.Tensor]:
+        """A persistent (Warp array, torch view) pair, allocated on first request."""
+        if key not in self._tensors:
+            arr = wp.zeros(shape, dtype=dtype, device=self.device)
+            self._tensors[key] = (arr, self.to_torch(arr))
+        return self._tensors[key]
+
+    def __repr__(self) -> str:
+        return (f"Sim(robot={self.spec.name!r}, num_envs={self.num_envs}, device={self.device!r}, "
+                f"dt={self.dt:.5g}, substeps={self.substeps}, dofs={self.num_dofs}, bodies={self.bodies_per_env})")

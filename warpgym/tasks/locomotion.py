@@ -1,0 +1,86 @@
+"""The numbers of a locomotion task, in one place. Kernels receive them as a ``LocomotionParams``."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import warp as wp
+
+from kernels.params import LocomotionParams
+
+
+@dataclass(frozen=True)
+class LocomotionTask:
+    name: str
+    robot: str
+    episode_length: int = 1000  # control steps; reaching it truncates
+    dt: float = 1.0 / 60.0  # control step [s]
+    substeps: int = 2
+    target: tuple[float, float, float] = (1000.0, 0.0, 0.0)
+    power_scale: float = 1.0
+    angular_velocity_scale: float = 1.0
+    dof_velocity_scale: float = 0.2
+    dof_force_scale: float = 0.0  # 0: joint forces are not observed
+    contact_force_scale: float = 0.1
+    heading_weight: float = 0.5
+    up_weight: float = 0.1
+    alive_reward: float = 0.5
+    actions_cost: float = 0.005
+    energy_cost: float = 0.05
+    joints_at_limit_cost: float = 0.1
+    joint_limit_threshold: float = 0.99
+    scaled_limit_cost: bool = False
+    death_cost: float = -2.0
+    termination_height: float = 0.31
+    dof_pos_noise: float = 0.2  # reset: dof position = default + U(-noise, noise), clamped to limits
+    dof_vel_noise: float = 0.1  # reset: dof velocity = U(-noise, noise)
+
+    @property
+    def observe_dof_forces(self) -> bool:
+        return self.dof_force_scale != 0.0
+
+    def observation_size(self, num_dofs: int, num_feet: int) -> int:
+        per_dof = 4 if self.observe_dof_forces else 3
+        return 12 + per_dof * num_dofs + 6 * num_feet
+
+    def replace(self, **changes) -> LocomotionTask:
+        fields = asdict(self)
+        unknown = sorted(set(changes) - set(fields))
+        if unknown:
+            raise ValueError(f"unknown task setting(s) {unknown}: choose from {sorted(fields)}")
+        fields.update(changes)
+        return LocomotionTask(**fields)
+
+    def validate(self) -> None:
+        if not isinstance(self.episode_length, int) or self.episode_length < 1:
+            raise ValueError(f"episode_length={self.episode_length!r} must be a positive integer, e.g. 1000")
+        if not (self.dt > 0):
+            raise ValueError(f"dt={self.dt!r} must be positive, e.g. 1/60")
+        if not (0.0 < self.joint_limit_threshold < 1.0):
+            raise ValueError(f"joint_limit_threshold={self.joint_limit_threshold!r} must lie in (0, 1)")
+
+    def to_warp(self, start_height: float) -> LocomotionParams:
+        p = LocomotionParams()
+        p.dt = self.dt
+        p.target = wp.vec3(*self.target)
+        p.start_pos = wp.vec3(0.0, 0.0, start_height)
+        p.start_rot = wp.quat_identity()
+        p.angular_velocity_scale = self.angular_velocity_scale
+        p.dof_velocity_scale = self.dof_velocity_scale
+        p.dof_force_scale = self.dof_force_scale
+        p.contact_force_scale = self.contact_force_scale
+        p.observe_dof_forces = int(self.observe_dof_forces)
+        p.heading_weight = self.heading_weight
+        p.up_weight = self.up_weight
+        p.alive_reward = self.alive_reward
+        p.actions_cost = self.actions_cost
+        p.energy_cost = self.energy_cost
+        p.joints_at_limit_cost = self.joints_at_limit_cost
+        p.joint_limit_threshold = self.joint_limit_threshold
+        p.scaled_limit_cost = int(self.scaled_limit_cost)
+        p.death_cost = self.death_cost
+        p.termination_height = self.termination_height
+        p.episode_length = self.episode_length
+        p.dof_pos_noise = self.dof_pos_noise
+        p.dof_vel_noise = self.dof_vel_noise
+        return p
