@@ -45,9 +45,16 @@ def robot_spec(name: str) -> RobotSpec:
 
 
 def mjcf_path(spec: RobotSpec) -> str:
-    import newton.examples  # noqa: PLC0415  (heavy import, only when a model is built)
+    # Read the asset from Newton's package data without importing newton.examples, which pulls
+    # in Newton's test utilities (absent from trimmed installs).
+    import importlib.util  # noqa: PLC0415
+    import os  # noqa: PLC0415
 
-    return newton.examples.get_asset(spec.mjcf)
+    origin = importlib.util.find_spec("newton").origin
+    path = os.path.join(os.path.dirname(origin), "examples", "assets", spec.mjcf)
+    if not os.path.isfile(path):
+        raise FileNotFoundError(f"{spec.mjcf} is not in this Newton install ({path}); reinstall newton[sim]")
+    return path
 
 
 def motor_gears(path: str) -> dict[str, float]:
