@@ -60,7 +60,14 @@ def raw_newton_loop(sim):
             states.reverse()
 
     graph = sim.capture(substeps)
-    return (lambda: wp.capture_launch(graph)) if graph is not None else substeps
+    if graph is None:
+        return substeps
+
+    def launch():
+        wp.capture_launch(graph)
+
+    launch.keep_alive = states  # the graph holds raw pointers into these states
+    return launch
 
 
 def gpu_memory_used(device: str) -> int:
