@@ -19,6 +19,10 @@ class RobotSpec:
     start_height: float
     # Body names (last path component of Newton's body label) whose contact wrench is observed.
     feet: tuple[str, ...]
+    # MuJoCo Warp buffer sizes per world (contacts, constraint rows). None: Newton's estimate from the
+    # start pose, which is too small for a Humanoid lying on the ground tangled in itself.
+    nconmax: int | None = None
+    njmax: int | None = None
 
 
 ROBOTS: dict[str, RobotSpec] = {
@@ -33,6 +37,8 @@ ROBOTS: dict[str, RobotSpec] = {
         mjcf="nv_humanoid.xml",
         start_height=1.34,
         feet=("right_foot", "left_foot"),
+        nconmax=96,
+        njmax=192,
     ),
 }
 

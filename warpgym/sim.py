@@ -128,6 +128,8 @@ class Sim(TensorAPI):
             model,
             iterations=solver_iterations,
             ls_iterations=ls_iterations,
+            nconmax=self.spec.nconmax,
+            njmax=self.spec.njmax,
             disable_sensors=True,
         )
         # The iteration caps are a deliberate speed/accuracy trade, not an error worth a printf per world.

@@ -1,0 +1,115 @@
+"""Training configuration, named after the seed's ElegantRL ``Arguments`` where the idea matches.
+
+Units: ``horizon_len`` is env steps per env per iteration (the seed's ``target_step``);
+``batch_size`` is the mini-batch size in samples; ``repeat_times`` is the number of passes over
+each rollout; ``eval_gap`` is wall-clock seconds between evaluations; ``save_gap`` is iterations
+between checkpoints.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field, fields, replace
+from typing import Any, Callable
+
+# Per-task starting points (Isaac Gym's rl_games settings for Ant and Humanoid, adapted to PPO here).
+PRESETS: dict[str, dict[str, Any]] = {
+    "Ant": dict(net_dims=(256, 128, 64), horizon_len=16, batch_size=32768, repeat_times=4,
+                learning_rate=3e-4, reward_scale=0.01),
+    "Humanoid": dict(net_dims=(400, 200, 100), horizon_len=32, batch_size=32768, repeat_times=5,
+                     learning_rate=5e-4, reward_scale=0.01, value_coef=2.0),
+}
+
+
+@dataclass
+class Config:
+    agent: str = "AgentPPO"
+    env_class: Callable | None = None  # builds the training env from env_args
+    env_args: dict = field(default_factory=dict)
+    eval_env_class: Callable | None = None
+    eval_env_args: dict = field(default_factory=dict)
+
+    net_dims: tuple[int, ...] = (256, 128, 64)
+    activation: str = "elu"
+    init_noise_std: float = 1.0
+    batch_size: int = 32768
+    horizon_len: int = 16
+    repeat_times: int = 4
+    learning_rate: float = 3e-4
+    gamma: float = 0.99
+    lambda_gae: float = 0.95
+    clip_ratio: float = 0.2
+    value_clip: float = 0.2
+    value_coef: float = 1.0
+    entropy_coef: float = 0.0
+    bounds_coef: float = 1e-4  # keeps the action mean near [-1, 1], where the env clips
+    max_grad_norm: float = 1.0
+    desired_kl: float = 0.008  # 0 disables the adaptive learning rate
+    reward_scale: float = 1.0
+    normalize_obs: bool = True
+    obs_clip: float = 5.0
+
+    seed: int = 0
+    eval_gap: float = 30.0
+    eval_envs: int = 64
+    save_gap: int = 50
+
+    @classmethod
+    def for_task(cls, task: str, **overrides) -> Config:
+        if task not in PRESETS:
+            raise ValueError(f"no preset for task {task!r}: choose one of {sorted(PRESETS)} or build Config() yourself")
+        return cls(**{**PRESETS[task], **overrides}).validated()
+
+    def replace(self, **changes) -> Config:
+        names = {f.name for f in fields(self)}
+        unknown = sorted(set(changes) - names)
+        if unknown:
+            raise ValueError(f"unknown config field(s) {unknown}: choose from {sorted(names)}")
+        return replace(self, **changes).validated()
+
+    def validated(self) -> Config:
+        if self.agent != "AgentPPO":
+            raise ValueError(f"agent={self.agent!r}: this package implements 'AgentPPO' only")
+        for name in ("batch_size", "horizon_len", "repeat_times", "save_gap", "eval_envs"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int) or v < 1:
+                raise ValueError(f"{name}={v!r} must be a positive integer")
+        if not self.net_dims or any((not isinstance(d, int)) or d < 1 for d in self.net_dims):
+            raise ValueError(f"net_dims={self.net_dims!r} must be a non-empty sequence of positive layer widths")
+        for name, lo, hi in (("gamma", 0.0, 1.0), ("lambda_gae", 0.0, 1.0), ("clip_ratio", 0.0, 1.0)):
+            v = getattr(self, name)
+            if not (lo < v <= hi):
+                raise ValueError(f"{name}={v!r} must lie in ({lo}, {hi}]")
+        for name in ("learning_rate", "init_noise_std", "reward_scale", "max_grad_norm", "obs_clip"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+                raise ValueError(f"{name}={v!r} must be a positive number")
+        for name in ("value_clip", "value_coef", "entropy_coef", "bounds_coef", "desired_kl", "eval_gap"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
+                raise ValueError(f"{name}={v!r} must be a non-negative number")
+        if self.activation not in ("elu", "relu", "tanh"):
+            raise ValueError(f"activation={self.activation!r}: choose 'elu', 'relu' or 'tanh'")
+        self.net_dims = tuple(self.net_dims)
+        return self
+
+    def check_batch(self, num_envs: int) -> int:
+        """Number of mini-batches per pass for this many envs; raises if they do not divide evenly."""
+        samples = num_envs * self.horizon_len
+        if self.batch_size > samples:
+            raise ValueError(
+                f"batch_size={self.batch_size} exceeds the {samples} samples of one rollout "
+                f"({num_envs} envs x horizon_len {self.horizon_len}): lower batch_size or raise num_envs"
+            )
+        if samples % self.batch_size:
+            raise ValueError(
+                f"batch_size={self.batch_size} does not divide the {samples} samples of one rollout "
+                f"({num_envs} envs x horizon_len {self.horizon_len}): pick a divisor, e.g. {samples // 4}"
+            )
+        return samples // self.batch_size
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        for key in ("env_class", "eval_env_class"):
+            d[key] = getattr(d[key], "__qualname__", None) if d[key] is not None else None
+        return d

@@ -1,0 +1,34 @@
+"""Deterministic-policy evaluation: each env plays one episode with the action mean."""
+
+from __future__ import annotations
+
+import torch
+
+
+@torch.no_grad()
+def evaluate(env, policy, normalize, max_steps: int) -> dict:
+    """Mean return, length and forward speed of the first episode of every env (one host read)."""
+    obs, _ = env.reset()
+    n = env.num_envs
+    dev = obs.device
+    finished = torch.zeros(n, dtype=torch.bool, device=dev)
+    ret = torch.zeros(n, device=dev)
+    length = torch.zeros(n, device=dev)
+    out_ret, out_len, out_speed = torch.zeros(n, device=dev), torch.zeros(n, device=dev), torch.zeros(n, device=dev)
+    for _ in range(max_steps):
+        obs, reward, terminated, truncated, info = env.step(policy.act_deterministic(normalize(obs)))
+        live = ~finished
+        ret += reward * live
+        length += live.float()
+        ended = (terminated | truncated) & live
+        out_ret = torch.where(ended, ret, out_ret)
+        out_len = torch.where(ended, length, out_len)
+        speed = info.get("episode", {}).get("s")
+        if speed is not None:
+            out_speed = torch.where(ended, speed, out_speed)
+        finished |= ended
+    # an episode still running at max_steps counts with what it has so far
+    out_ret = torch.where(finished, out_ret, ret)
+    out_len = torch.where(finished, out_len, length)
+    r, ln, s = torch.stack([out_ret.mean(), out_len.mean(), out_speed.mean()]).tolist()
+    return {"eval/return": r, "eval/length": ln, "eval/speed": s}

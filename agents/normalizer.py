@@ -1,0 +1,33 @@
+"""Running mean and variance of observations, kept on the device and merged batch by batch."""
+
+from __future__ import annotations
+
+import torch
+from torch import nn
+
+
+class RunningMeanStd(nn.Module):
+    def __init__(self, size: int, clip: float = 5.0, eps: float = 1e-8):
+        super().__init__()
+        self.clip = clip
+        self.eps = eps
+        self.register_buffer("mean", torch.zeros(size))
+        self.register_buffer("var", torch.ones(size))
+        self.register_buffer("count", torch.zeros((), dtype=torch.float64))
+
+    @torch.no_grad()
+    def update(self, x: torch.Tensor) -> None:
+        """Fold a batch (B, size) into the statistics (Chan et al.'s parallel merge); no host sync."""
+        x = x.reshape(-1, self.mean.shape[0]).float()
+        n = float(x.shape[0])
+        batch_mean = x.mean(0)
+        batch_var = x.var(0, unbiased=False)
+        total = self.count + n
+        w = (n / total).float()
+        delta = batch_mean - self.mean
+        self.mean.add_(delta * w)
+        self.var.copy_(self.var * (1 - w) + batch_var * w + delta * delta * w * (1 - w))
+        self.count.copy_(total)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        return ((x - self.mean) / torch.sqrt(self.var + self.eps)).clamp(-self.clip, self.clip)

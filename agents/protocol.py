@@ -1,0 +1,49 @@
+"""The small vector-env protocol the learner consumes.
+
+An env needs ``num_envs``; observation and action sizes, as ``num_obs``/``num_actions`` or as
+``single_observation_space.shape``/``single_action_space.shape``; ``reset() -> (obs, info)``; and
+``step(actions) -> (obs, reward, terminated, truncated, info)``, everything a torch tensor on one
+device. Finished envs reset inside the step (Gymnasium's same-step autoreset): ``info["final_obs"]``
+holds their last observation, masked by ``info["_final_obs"]``. Optional:
+``info["episode"] = {"r": return, "l": length, "s": mean forward speed, "_r": mask}`` for logging,
+and ``max_episode_steps`` for evaluation.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import torch
+
+
+@dataclass(frozen=True)
+class EnvSpec:
+    num_envs: int
+    num_obs: int
+    num_actions: int
+    device: torch.device
+    max_episode_steps: int
+
+
+def _size(env, attr: str, space: str) -> int:
+    if hasattr(env, attr):
+        return int(getattr(env, attr))
+    if hasattr(env, space):
+        shape = getattr(env, space).shape
+        if len(shape) != 1:
+            raise ValueError(f"{space} has shape {shape}; the learner takes flat (1-D) observations and actions")
+        return int(shape[0])
+    raise TypeError(f"{type(env).__name__} has neither {attr} nor {space}: it does not follow agents.protocol")
+
+
+def env_spec(env) -> EnvSpec:
+    if not hasattr(env, "num_envs"):
+        raise TypeError(f"{type(env).__name__} has no num_envs: it does not follow agents.protocol")
+    device = getattr(env, "device", None)
+    if device is None:
+        raise TypeError(f"{type(env).__name__} has no device attribute: set env.device to its torch device")
+    steps = getattr(env, "max_episode_steps", None)
+    if steps is None:
+        steps = getattr(getattr(env, "task", None), "episode_length", 1000)
+    return EnvSpec(int(env.num_envs), _size(env, "num_obs", "single_observation_space"),
+                   _size(env, "num_actions", "single_action_space"), torch.device(device), int(steps))

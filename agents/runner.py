@@ -1,0 +1,212 @@
+"""Collect rollouts and update the policy, everything on the env's device.
+
+Per environment step there is no host synchronisation: actions, rewards, bootstraps and episode
+statistics stay device tensors. The host reads the device once per iteration, to log.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import torch
+
+from agents.actor_critic import ActorCritic
+from agents.checkpoint import load, rng_state, save_atomic, set_rng_state
+from agents.config import Config
+from agents.evaluate import evaluate
+from agents.logger import MetricsLogger
+from agents.normalizer import RunningMeanStd
+from agents.ppo import PPO
+from agents.protocol import env_spec
+from agents.rollout import EpisodeTracker
+from agents.storage import RolloutStorage, compute_gae
+
+
+class OnPolicyRunner:
+    def __init__(self, env, cfg: Config, run_dir: str | None = None, eval_env=None,
+                 start_time: float | None = None, print_fn=print):
+        self.env, self.cfg, self.eval_env = env, cfg.validated(), eval_env
+        self.spec = spec = env_spec(env)
+        self.device = spec.device
+        self.num_minibatches = cfg.check_batch(spec.num_envs)
+        torch.manual_seed(cfg.seed)
+        self.policy = ActorCritic(spec.num_obs, spec.num_actions, cfg.net_dims, cfg.activation,
+                                  cfg.init_noise_std).to(self.device)
+        self.normalizer = RunningMeanStd(spec.num_obs, cfg.obs_clip).to(self.device)
+        self.ppo = PPO(self.policy, cfg, self.device)
+        self.storage = RolloutStorage(cfg.horizon_len, spec.num_envs, spec.num_obs, spec.num_actions, self.device)
+        self.episodes = EpisodeTracker(spec.num_envs, self.device)
+        self.run_dir = run_dir
+        self.logger = MetricsLogger(run_dir) if run_dir else None
+        self.print = print_fn
+        self.start_time = start_time if start_time is not None else time.time()
+        self.iteration = 0
+        self.samples = 0
+        self.elapsed_before = 0.0  # wall-clock seconds of earlier processes of this run (resume)
+        self.last_eval_time = 0.0  # set when learn() starts: the first evaluation waits eval_gap
+        self.history: list[dict] = []
+        self.obs = None
+
+    # ------------------------------------------------------------------ pieces
+    def normalize(self, obs: torch.Tensor, update: bool = False) -> torch.Tensor:
+        if not self.cfg.normalize_obs:
+            return obs.clone()
+        if update:
+            self.normalizer.update(obs)
+        return self.normalizer(obs)
+
+    def elapsed(self) -> float:
+        return self.elapsed_before + time.time() - self.start_time
+
+    @torch.no_grad()
+    def collect(self) -> None:
+        cfg, s, env, policy = self.cfg, self.storage, self.env, self.policy
+        if self.obs is None:
+            obs, _ = env.reset()
+            self.obs = self.normalize(obs, update=True)
+        obs = self.obs
+        for t in range(cfg.horizon_len):
+            actions, log_prob, value, mean = policy.act(obs)
+            next_obs, reward, terminated, truncated, info = env.step(actions)
+            s.obs[t].copy_(obs)
+            s.actions[t].copy_(actions)
+            s.log_probs[t].copy_(log_prob)
+            s.values[t].copy_(value)
+            s.means[t].copy_(mean)
+            done = terminated | truncated
+            self.episodes.step(reward, done, info)
+            # A truncated episode did not end in the MDP: bootstrap from the value of its last state.
+            bootstrap = policy.value(self.normalize(info["final_obs"])) * truncated
+            s.rewards[t].copy_(reward * cfg.reward_scale + cfg.gamma * bootstrap)
+            s.dones[t].copy_(done)
+            obs = self.normalize(next_obs, update=True)
+        self.obs = obs
+        last_values = policy.value(obs)
+        adv, ret = compute_gae(s.rewards, s.values, s.dones, last_values, cfg.gamma, cfg.lambda_gae)
+        s.advantages.copy_(adv)
+        s.returns.copy_(ret)
+
+    def update(self) -> dict:
+        return self.ppo.update(self.storage, self._old_log_std, self.num_minibatches)
+
+    # ------------------------------------------------------------------ loop
+    def learn(self, max_iterations: int | None = None, total_steps: int | None = None,
+              time_limit: float | None = None) -> list[dict]:
+        if max_iterations is None and total_steps is None and time_limit is None:
+            raise ValueError("give at least one of max_iterations, total_steps, time_limit, or training never stops")
+        per_iter = self.spec.num_envs * self.cfg.horizon_len
+        goal = [max_iterations, None if total_steps is None else math.ceil(total_steps / per_iter)]
+        last_iter = min([g for g in goal if g is not None], default=None)
+        mark = time.perf_counter()
+        self.last_eval_time = self.elapsed()
+        try:
+            while True:
+                if last_iter is not None and self.iteration >= last_iter:
+                    break
+                if time_limit is not None and self.elapsed() >= time_limit:
+                    break
+                t0 = time.perf_counter()
+                self._old_log_std = self.policy.log_std.detach().clone()
+                self.collect()
+                t1 = time.perf_counter()
+                stats = self.update()
+                self.iteration += 1
+                self.samples += per_iter
+                row = self._log_row(stats, t0, t1, mark, last_iter)
+                mark = time.perf_counter()
+                if self.iteration % self.cfg.save_gap == 0 and self.run_dir:
+                    self.save()
+                del row
+            if self.eval_env is not None and self.history and "eval/return" not in self.history[-1]:
+                self._log_final_eval()
+        finally:
+            if self.run_dir:
+                self.save()
+        return self.history
+
+    def _log_row(self, stats: dict, t0: float, t1: float, mark: float, last_iter: int | None) -> dict:
+        keys = list(stats)
+        values = torch.stack([stats[k].float() for k in keys]).tolist()  # the iteration's one host read
+        now = time.perf_counter()
+        row = {"iteration": self.iteration, "samples": self.samples, "time_s": round(self.elapsed(), 3),
+               "samples_per_s": self.spec.num_envs * self.cfg.horizon_len / max(now - mark, 1e-9),
+               "collect_s": t1 - t0, "update_s": now - t1}
+        row.update(self.episodes.read_and_clear())
+        row.update(dict(zip(keys, values)))
+        if self.eval_env is not None and self.elapsed() - self.last_eval_time >= self.cfg.eval_gap:
+            row.update(self.evaluate())
+            row["time_s"] = round(self.elapsed(), 3)
+        self.history.append(row)
+        if self.logger:
+            self.logger.log(row)
+        self.print(progress_line(row, last_iter))
+        return row
+
+    def _log_final_eval(self) -> None:
+        row = dict(self.history[-1])
+        row.update(self.evaluate())
+        row["time_s"] = round(self.elapsed(), 3)
+        self.history[-1] = row
+        if self.logger:
+            self.logger.log(row)
+        self.print(progress_line(row, None))
+
+    def evaluate(self) -> dict:
+        self.last_eval_time = self.elapsed()
+        spec = env_spec(self.eval_env)
+        return evaluate(self.eval_env, self.policy, lambda o: self.normalize(o), spec.max_episode_steps)
+
+    # ------------------------------------------------------------------ checkpoints
+    def state_dict(self) -> dict:
+        return {
+            "iteration": self.iteration, "samples": self.samples, "elapsed_s": self.elapsed(),
+            "policy": self.policy.state_dict(), "normalizer": self.normalizer.state_dict(),
+            "optimizer": self.ppo.optimizer.state_dict(), "lr": self.ppo.lr.item(),
+            "rng": rng_state(self.device), "config": self.cfg.to_dict(),
+            "spec": {"num_obs": self.spec.num_obs, "num_actions": self.spec.num_actions},
+        }
+
+    def save(self, path: str | None = None) -> str:
+        import os  # noqa: PLC0415
+
+        path = path or os.path.join(self.run_dir, "checkpoint.pt")
+        save_atomic(self.state_dict(), path)
+        return path
+
+    def load(self, path: str, resume: bool = True) -> None:
+        ckpt = load(path, self.device)
+        want = (self.spec.num_obs, self.spec.num_actions)
+        have = (ckpt["spec"]["num_obs"], ckpt["spec"]["num_actions"])
+        if want != have:
+            raise ValueError(f"checkpoint {path} is for obs/action sizes {have}, this env has {want}: pick its task")
+        self.policy.load_state_dict(ckpt["policy"])
+        self.normalizer.load_state_dict(ckpt["normalizer"])
+        if resume:
+            self.ppo.optimizer.load_state_dict(ckpt["optimizer"])
+            self.ppo.lr.fill_(ckpt["lr"])
+            self.iteration, self.samples = ckpt["iteration"], ckpt["samples"]
+            self.elapsed_before = ckpt["elapsed_s"]
+            self.start_time = time.time()
+            set_rng_state(ckpt["rng"], self.device)
+
+
+def progress_line(row: dict, last_iter: int | None) -> str:
+    it = row["iteration"]
+    if last_iter:
+        frac = min(it / last_iter, 1.0)
+        bar = "#" * int(20 * frac) + "." * (20 - int(20 * frac))
+        head = f"it {it:5d}/{last_iter} [{bar}] {100 * frac:5.1f}%"
+    else:
+        head = f"it {it:5d}"
+
+    def fmt(key, spec, unit=""):
+        v = row.get(key)
+        return "  -  " if v is None else f"{v:{spec}}{unit}"
+
+    m, s = divmod(int(row["time_s"]), 60)
+    line = (f"{head} | {row['samples'] / 1e6:8.2f}M samples | {row['samples_per_s'] / 1e3:7.1f}k/s | "
+            f"return {fmt('return', '8.1f')} | speed {fmt('speed', '5.2f', ' m/s')} | {m:02d}:{s:02d}")
+    if "eval/return" in row:
+        line += f" | eval {row['eval/return']:.1f} @ {row['eval/speed']:.2f} m/s"
+    return line

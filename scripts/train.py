@@ -1,0 +1,162 @@
+"""Train PPO on a warpgym task and show episodic reward against wall-clock time and against samples.
+
+    python scripts/train.py --task Ant                       # GPU: 4096 envs; CPU: 32 envs, a short demo
+    python scripts/train.py --task Humanoid --time-limit 300
+    python scripts/train.py --resume runs/Ant-20261122-120000 --max-iterations 800
+
+A run directory holds config.json, metrics.jsonl/.csv, tensorboard/, checkpoint.pt (written
+atomically every --save-gap iterations and at the end), summary.json, and the two plots
+reward_vs_time.png and reward_vs_samples.png.
+"""
+
+from __future__ import annotations
+
+import time
+
+PROCESS_START = time.time()  # the wall-clock axis starts here: imports and kernel compiles count
+
+import argparse  # noqa: E402
+import json  # noqa: E402
+import os  # noqa: E402
+import statistics  # noqa: E402
+import sys  # noqa: E402
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+from agents import Config, OnPolicyRunner  # noqa: E402
+from agents.config import PRESETS  # noqa: E402
+
+DEFAULT_ITERATIONS = {"cuda": {"Ant": 500, "Humanoid": 1000}, "cpu": {"Ant": 20, "Humanoid": 20}}
+DEFAULT_ENVS = {"cuda": 4096, "cpu": 32}
+TASK_NAMES = {t.lower(): t for t in PRESETS}
+
+
+def parse_args(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--task", default="Ant", help="Ant or Humanoid")
+    ap.add_argument("--num-envs", type=int, default=None, help="default: 4096 on a GPU, 32 on the CPU")
+    ap.add_argument("--device", default=None, help="default: cuda:0 when present, else cpu")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--max-iterations", type=int, default=None)
+    ap.add_argument("--total-steps", type=int, default=None, help="stop after this many samples")
+    ap.add_argument("--time-limit", type=float, default=None, help="stop after this many seconds since start")
+    ap.add_argument("--run-dir", default=None, help="default: runs/<Task>-<date>-<time>")
+    ap.add_argument("--resume", default=None, metavar="RUN_DIR", help="continue the run saved in RUN_DIR")
+    ap.add_argument("--eval-gap", type=float, default=None, help="seconds between deterministic evaluations")
+    ap.add_argument("--eval-envs", type=int, default=None, help="envs per evaluation (the seed's eval env: 1)")
+    ap.add_argument("--no-eval", action="store_true")
+    ap.add_argument("--save-gap", type=int, default=None, help="iterations between checkpoints")
+    ap.add_argument("--horizon-len", type=int, default=None)
+    ap.add_argument("--batch-size", type=int, default=None)
+    ap.add_argument("--repeat-times", type=int, default=None)
+    ap.add_argument("--learning-rate", type=float, default=None)
+    ap.add_argument("--no-plots", action="store_true")
+    return ap.parse_args(argv)
+
+
+def build_config(args, task: str, num_envs: int, device: str) -> Config:
+    cfg = Config.for_task(task, seed=args.seed)
+    changes = {k: v for k, v in {
+        "horizon_len": args.horizon_len, "repeat_times": args.repeat_times, "learning_rate": args.learning_rate,
+        "save_gap": args.save_gap, "eval_gap": args.eval_gap, "eval_envs": args.eval_envs,
+    }.items() if v is not None}
+    if "eval_envs" not in changes and device == "cpu":
+        changes["eval_envs"] = 4
+    cfg = cfg.replace(**changes)
+    samples = num_envs * cfg.horizon_len
+    batch = args.batch_size if args.batch_size is not None else (
+        cfg.batch_size if cfg.batch_size <= samples // 2 and samples % cfg.batch_size == 0 else max(samples // 2, 1))
+    from warpgym.envs import LocomotionVecEnv  # noqa: PLC0415
+
+    return cfg.replace(
+        batch_size=batch,
+        env_class=LocomotionVecEnv,
+        env_args={"task": task, "num_envs": num_envs, "device": device, "seed": args.seed},
+        eval_env_class=LocomotionVecEnv,
+        eval_env_args={"task": task, "num_envs": cfg.eval_envs, "device": device, "seed": args.seed + 1},
+    )
+
+
+def write_json(path: str, obj) -> None:
+    with open(path + ".tmp", "w") as f:
+        json.dump(obj, f, indent=1)
+    os.replace(path + ".tmp", path)
+
+
+def summarize(history: list[dict], device_name: str, cfg: Config) -> dict:
+    """Steady-state throughput and the first time each forward speed was reached."""
+    steady = [r["samples_per_s"] for r in history[len(history) // 5 :]] or [0.0]
+    out = {"device": device_name, "num_envs": cfg.env_args["num_envs"], "iterations": len(history),
+           "steady_samples_per_s_median": statistics.median(steady)}
+    if history:
+        out["final"] = {k: history[-1].get(k) for k in ("time_s", "samples", "return", "speed")}
+    evals = [r for r in history if "eval/return" in r]
+    if evals:
+        best = max(evals, key=lambda r: r["eval/return"])
+        out["best_eval"] = {k: best[k] for k in ("time_s", "samples", "eval/return", "eval/speed")}
+        for v in (1.0, 2.0, 3.0):
+            hit = next((r for r in evals if r["eval/speed"] >= v), None)
+            out[f"first_eval_speed_{v:g}ms"] = None if hit is None else {"time_s": hit["time_s"], "samples": hit["samples"]}
+    return out
+
+
+def main(argv=None) -> int:
+    args = parse_args(argv)
+    import torch  # noqa: PLC0415
+
+    import warpgym  # noqa: PLC0415,F401  (registers the envs, quiets Warp)
+    from warpgym.device import resolve_device  # noqa: PLC0415
+    from warpgym.envs import LocomotionVecEnv  # noqa: PLC0415
+
+    if args.resume:
+        with open(os.path.join(args.resume, "config.json")) as f:
+            saved = json.load(f)
+        task, run_dir = saved["task"], args.resume
+        device = resolve_device(args.device or saved["device"])
+        num_envs = saved["num_envs"]
+        args.seed = saved["seed"]
+    else:
+        if args.task.lower() not in TASK_NAMES:
+            raise SystemExit(f"--task {args.task!r}: choose one of {sorted(TASK_NAMES.values())}")
+        task = TASK_NAMES[args.task.lower()]
+        device = resolve_device(args.device)
+        kind = "cuda" if device.startswith("cuda") else "cpu"
+        num_envs = args.num_envs or DEFAULT_ENVS[kind]
+        run_dir = args.run_dir or os.path.join("runs", f"{task}-{time.strftime('%Y%m%d-%H%M%S')}")
+    kind = "cuda" if device.startswith("cuda") else "cpu"
+    cfg = build_config(args, task, num_envs, device)
+    if args.max_iterations is None and args.total_steps is None and args.time_limit is None:
+        args.max_iterations = DEFAULT_ITERATIONS[kind][task]
+
+    os.makedirs(run_dir, exist_ok=True)
+    device_name = torch.cuda.get_device_name(torch.device(device)) if kind == "cuda" else "cpu"
+    if not args.resume:
+        write_json(os.path.join(run_dir, "config.json"),
+                   {"task": task, "device": device, "num_envs": num_envs, "seed": args.seed, **cfg.to_dict()})
+    print(f"warpgym PPO | {task} | {num_envs} envs on {device} ({device_name}) | run dir {run_dir}", flush=True)
+
+    env = cfg.env_class(**cfg.env_args)
+    eval_env = None if args.no_eval else cfg.eval_env_class(**cfg.eval_env_args)
+    assert isinstance(env, LocomotionVecEnv)
+    runner = OnPolicyRunner(env, cfg, run_dir=run_dir, eval_env=eval_env, start_time=PROCESS_START,
+                            print_fn=lambda s: print(s, flush=True))
+    if args.resume:
+        runner.load(os.path.join(run_dir, "checkpoint.pt"), resume=True)
+        print(f"resumed at iteration {runner.iteration} ({runner.samples} samples)", flush=True)
+    history = runner.learn(args.max_iterations, args.total_steps, args.time_limit)
+    summary = summarize(history, device_name, cfg)
+    write_json(os.path.join(run_dir, "summary.json"), summary)
+    if not args.no_plots:
+        try:
+            from agents.plotting import plot_runs  # noqa: PLC0415
+
+            paths = plot_runs([run_dir], run_dir, labels=[f"{task} {num_envs} envs"], title=f"warpgym {task}")
+            print("wrote " + ", ".join(paths), flush=True)
+        except ImportError:
+            print("matplotlib is not installed: pip install 'warpgym[train]' for the plots", flush=True)
+    print(json.dumps(summary), flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,41 @@
+"""One world as a plain ``gymnasium.Env`` with numpy in and out, for evaluation and inspection."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import torch
+
+from warpgym.envs.locomotion import LocomotionVecEnv
+
+
+class LocomotionEnv(gym.Env):
+    metadata = {"render_modes": []}
+
+    def __init__(self, task="Ant", device: str = "cpu", seed: int = 0, render_mode=None, **kwargs):
+        if render_mode is not None:
+            raise ValueError(f"render_mode={render_mode!r}: warpgym envs do not render; pass render_mode=None")
+        self._vec = LocomotionVecEnv(task, num_envs=1, device=device, seed=seed, **kwargs)
+        self.task = self._vec.task
+        self.observation_space = self._vec.single_observation_space
+        self.action_space = self._vec.single_action_space
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        super().reset(seed=seed)
+        obs, _ = self._vec.reset(seed=seed)
+        return obs[0].cpu().numpy().copy(), {}
+
+    def step(self, action):
+        a = torch.as_tensor(np.asarray(action, dtype=np.float32).reshape(1, -1), device=self._vec.device)
+        obs, reward, terminated, truncated, info = self._vec.step(a)
+        done = bool(terminated[0] or truncated[0])
+        # the vector env has already started the next episode; report the one that ended
+        out = info["final_obs"][0] if done else obs[0]
+        extra = {"nan_actions": int(info["nan_actions"][0]), "nonfinite": bool(info["nonfinite"][0])}
+        if done:
+            ep = info["episode"]
+            extra["episode"] = {"r": float(ep["r"][0]), "l": int(ep["l"][0]), "s": float(ep["s"][0])}
+        return out.cpu().numpy().copy(), float(reward[0]), bool(terminated[0]), bool(truncated[0]), extra
+
+    def close(self):
+        self._vec.close()
