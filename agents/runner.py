@@ -98,14 +98,15 @@ class OnPolicyRunner:
         per_iter = self.spec.num_envs * self.cfg.horizon_len
         goal = [max_iterations, None if total_steps is None else math.ceil(total_steps / per_iter)]
         last_iter = min([g for g in goal if g is not None], default=None)
+
+        def done() -> bool:
+            return ((last_iter is not None and self.iteration >= last_iter)
+                    or (time_limit is not None and self.elapsed() >= time_limit))
+
         mark = time.perf_counter()
         self.last_eval_time = self.elapsed()
         try:
-            while True:
-                if last_iter is not None and self.iteration >= last_iter:
-                    break
-                if time_limit is not None and self.elapsed() >= time_limit:
-                    break
+            while not done():
                 t0 = time.perf_counter()
                 self._old_log_std = self.policy.log_std.detach().clone()
                 self.collect()
@@ -113,19 +114,17 @@ class OnPolicyRunner:
                 stats = self.update()
                 self.iteration += 1
                 self.samples += per_iter
-                row = self._log_row(stats, t0, t1, mark, last_iter)
+                # the last iteration always carries an evaluation, so every run ends with one
+                self._log_row(stats, t0, t1, mark, last_iter, final=done())
                 mark = time.perf_counter()
                 if self.iteration % self.cfg.save_gap == 0 and self.run_dir:
                     self.save()
-                del row
-            if self.eval_env is not None and self.history and "eval/return" not in self.history[-1]:
-                self._log_final_eval()
         finally:
             if self.run_dir:
                 self.save()
         return self.history
 
-    def _log_row(self, stats: dict, t0: float, t1: float, mark: float, last_iter: int | None) -> dict:
+    def _log_row(self, stats: dict, t0: float, t1: float, mark: float, last_iter: int | None, final: bool) -> dict:
         keys = list(stats)
         values = torch.stack([stats[k].float() for k in keys]).tolist()  # the iteration's one host read
         now = time.perf_counter()
@@ -134,7 +133,7 @@ class OnPolicyRunner:
                "collect_s": t1 - t0, "update_s": now - t1}
         row.update(self.episodes.read_and_clear())
         row.update(dict(zip(keys, values)))
-        if self.eval_env is not None and self.elapsed() - self.last_eval_time >= self.cfg.eval_gap:
+        if self.eval_env is not None and (final or self.elapsed() - self.last_eval_time >= self.cfg.eval_gap):
             row.update(self.evaluate())
             row["time_s"] = round(self.elapsed(), 3)
         self.history.append(row)
@@ -142,15 +141,6 @@ class OnPolicyRunner:
             self.logger.log(row)
         self.print(progress_line(row, last_iter))
         return row
-
-    def _log_final_eval(self) -> None:
-        row = dict(self.history[-1])
-        row.update(self.evaluate())
-        row["time_s"] = round(self.elapsed(), 3)
-        self.history[-1] = row
-        if self.logger:
-            self.logger.log(row)
-        self.print(progress_line(row, None))
 
     def evaluate(self) -> dict:
         self.last_eval_time = self.elapsed()

@@ -30,27 +30,33 @@ def locomotion_step(
     terminated: wp.array[wp.bool],  # (N,) out: fell, or the state is no longer finite
     truncated: wp.array[wp.bool],  # (N,) out: reached the episode length
     done: wp.array[wp.bool],  # (N,) out: terminated or truncated
-    nonfinite: wp.array[wp.bool],  # (N,) out: the physics produced NaN/inf for this env
+    diverged: wp.array[wp.bool],  # (N,) out: the physics blew up (NaN/inf or beyond max_speed) in this env
 ):
     env = wp.tid()
-    finite = bool(True)
+    # A world is "diverged" when its state is NaN/inf or moves faster than any robot can: a solver
+    # blow-up, whose enormous progress reward would wreck a value function if it were passed on.
+    sane = bool(True)
     for i in range(joint_q.shape[1]):
         if not wp.isfinite(joint_q[env, i]):
-            finite = False
+            sane = False
     for i in range(joint_qd.shape[1]):
-        if not wp.isfinite(joint_qd[env, i]):
-            finite = False
+        v = joint_qd[env, i]
+        if not wp.isfinite(v) or wp.abs(v) > p.max_speed:
+            sane = False
 
     write_observation(env, p, joint_q, joint_qd, dof_lower, dof_upper, dof_force, contact_wrench,
                       foot_bodies, bodies_per_env, actions, 0, obs)
 
     new_potential = potential(p, root_position(joint_q, env))
-    r = locomotion_reward(env, p, obs, actions, effort_ratio, new_potential - potentials[env])
+    progress = new_potential - potentials[env]
+    if wp.abs(progress) > p.max_speed:
+        sane = False  # the root jumped farther in one step than max_speed allows
+    r = locomotion_reward(env, p, obs, actions, effort_ratio, progress)
     potentials[env] = new_potential
     fell = obs[env, 0] < p.termination_height
     if fell:
         r = p.death_cost
-    if not finite:
+    if not sane:
         # nothing about this step is meaningful: end the episode without reward or bootstrap
         r = 0.0
         fell = True
@@ -58,7 +64,7 @@ def locomotion_step(
     length = ep_length[env] + 1
     ep_length[env] = length
     ep_return[env] = ep_return[env] + r
-    if finite:
+    if sane:
         ep_forward[env] = ep_forward[env] + joint_qd[env, 0]
     trunc = (length >= p.episode_length) and not fell
 
@@ -66,7 +72,7 @@ def locomotion_step(
     terminated[env] = fell
     truncated[env] = trunc
     done[env] = fell or trunc
-    nonfinite[env] = not finite
+    diverged[env] = not sane
 
 
 @wp.kernel

@@ -28,3 +28,4 @@ class LocomotionParams:
     episode_length: int
     dof_pos_noise: float
     dof_vel_noise: float
+    max_speed: float  # any root or joint velocity above this [m/s, rad/s] means the solver diverged

@@ -142,3 +142,16 @@ def clear_warmstart_indexed(
     # diverged world's warm start may hold NaN that would poison the next solve).
     k, j = wp.tid()
     qacc_warmstart[env_ids[k], j] = 0.0
+
+
+@wp.kernel
+def gather_force_sensors(
+    contact_wrench: wp.array2d[float],  # (N*B, 6)
+    sensor_bodies: wp.array[wp.int32],  # (F,) body index within an env
+    bodies_per_env: int,
+    out: wp.array2d[float],  # (N*F, 6): force 3, torque 3
+):
+    env, k = wp.tid()
+    row = env * bodies_per_env + sensor_bodies[k]
+    for i in range(6):
+        out[env * sensor_bodies.shape[0] + k, i] = contact_wrench[row, i]

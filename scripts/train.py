@@ -20,6 +20,7 @@ import json  # noqa: E402
 import os  # noqa: E402
 import statistics  # noqa: E402
 import sys  # noqa: E402
+from dataclasses import fields  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
@@ -50,30 +51,39 @@ def parse_args(argv=None):
     ap.add_argument("--batch-size", type=int, default=None)
     ap.add_argument("--repeat-times", type=int, default=None)
     ap.add_argument("--learning-rate", type=float, default=None)
+    ap.add_argument("--episode-length", type=int, default=None, help="steps per episode (task default: 1000)")
     ap.add_argument("--no-plots", action="store_true")
     return ap.parse_args(argv)
 
 
-def build_config(args, task: str, num_envs: int, device: str) -> Config:
-    cfg = Config.for_task(task, seed=args.seed)
+def build_config(args, task: str, num_envs: int, device: str, saved: dict | None = None) -> Config:
+    """The task's preset, or the saved config of the run being resumed, then the flags given."""
+    if saved is not None:
+        known = {f.name for f in fields(Config)} - {"env_class", "env_args", "eval_env_class", "eval_env_args"}
+        cfg = Config(**{k: (tuple(v) if k == "net_dims" else v) for k, v in saved.items() if k in known})
+    else:
+        cfg = Config.for_task(task, seed=args.seed)
     changes = {k: v for k, v in {
         "horizon_len": args.horizon_len, "repeat_times": args.repeat_times, "learning_rate": args.learning_rate,
         "save_gap": args.save_gap, "eval_gap": args.eval_gap, "eval_envs": args.eval_envs,
+        "batch_size": args.batch_size,
     }.items() if v is not None}
-    if "eval_envs" not in changes and device == "cpu":
+    if saved is None and "eval_envs" not in changes and device == "cpu":
         changes["eval_envs"] = 4
     cfg = cfg.replace(**changes)
     samples = num_envs * cfg.horizon_len
-    batch = args.batch_size if args.batch_size is not None else (
-        cfg.batch_size if cfg.batch_size <= samples // 2 and samples % cfg.batch_size == 0 else max(samples // 2, 1))
+    batch = cfg.batch_size
+    if saved is None and args.batch_size is None and (batch > samples // 2 or samples % batch):
+        batch = max(samples // 2, 1)  # the preset's mini-batch does not fit this env count
     from warpgym.envs import LocomotionVecEnv  # noqa: PLC0415
 
+    common = {"task": task, "device": device, "max_episode_steps": args.episode_length}
     return cfg.replace(
         batch_size=batch,
         env_class=LocomotionVecEnv,
-        env_args={"task": task, "num_envs": num_envs, "device": device, "seed": args.seed},
+        env_args={**common, "num_envs": num_envs, "seed": args.seed},
         eval_env_class=LocomotionVecEnv,
-        eval_env_args={"task": task, "num_envs": cfg.eval_envs, "device": device, "seed": args.seed + 1},
+        eval_env_args={**common, "num_envs": cfg.eval_envs, "seed": args.seed + 1},
     )
 
 
@@ -108,6 +118,7 @@ def main(argv=None) -> int:
     from warpgym.device import resolve_device  # noqa: PLC0415
     from warpgym.envs import LocomotionVecEnv  # noqa: PLC0415
 
+    saved = None
     if args.resume:
         with open(os.path.join(args.resume, "config.json")) as f:
             saved = json.load(f)
@@ -115,6 +126,7 @@ def main(argv=None) -> int:
         device = resolve_device(args.device or saved["device"])
         num_envs = saved["num_envs"]
         args.seed = saved["seed"]
+        args.episode_length = saved["env_args"].get("max_episode_steps")
     else:
         if args.task.lower() not in TASK_NAMES:
             raise SystemExit(f"--task {args.task!r}: choose one of {sorted(TASK_NAMES.values())}")
@@ -124,7 +136,7 @@ def main(argv=None) -> int:
         num_envs = args.num_envs or DEFAULT_ENVS[kind]
         run_dir = args.run_dir or os.path.join("runs", f"{task}-{time.strftime('%Y%m%d-%H%M%S')}")
     kind = "cuda" if device.startswith("cuda") else "cpu"
-    cfg = build_config(args, task, num_envs, device)
+    cfg = build_config(args, task, num_envs, device, saved)
     if args.max_iterations is None and args.total_steps is None and args.time_limit is None:
         args.max_iterations = DEFAULT_ITERATIONS[kind][task]
 
@@ -134,6 +146,8 @@ def main(argv=None) -> int:
         write_json(os.path.join(run_dir, "config.json"),
                    {"task": task, "device": device, "num_envs": num_envs, "seed": args.seed, **cfg.to_dict()})
     print(f"warpgym PPO | {task} | {num_envs} envs on {device} ({device_name}) | run dir {run_dir}", flush=True)
+    print("building the envs; Warp compiles its kernels on first use (about a minute on a CPU, "
+          "cached in ~/.cache/warp afterwards)", flush=True)
 
     env = cfg.env_class(**cfg.env_args)
     eval_env = None if args.no_eval else cfg.eval_env_class(**cfg.eval_env_args)

@@ -2,6 +2,9 @@
 
 import warp as _wp
 
+# Warp announces every module it loads at INFO; keep warnings and errors.
+if getattr(_wp.config, "log_level", None) is not None and _wp.config.log_level < _wp.LOG_WARNING:
+    _wp.config.log_level = _wp.LOG_WARNING
 _wp.config.quiet = True
 
 from warpgym.device import default_device, resolve_device  # noqa: E402

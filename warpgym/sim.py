@@ -102,6 +102,11 @@ class Sim(TensorAPI):
         joints_per_env = model.joint_count // n
         dof_dims = model.joint_dof_dim.numpy()[:joints_per_env].sum(axis=1)
         self.dof_names = hinge_joint_names(path)
+        missing = [f for f in self.spec.feet if f not in self.body_names]
+        if missing:
+            raise ValueError(f"{self.spec.mjcf} has no bodies named {missing}; its bodies are {self.body_names}")
+        self.foot_bodies = wp.array([self.body_names.index(f) for f in self.spec.feet], dtype=wp.int32,
+                                    device=self.device)
         if (
             int(dof_dims[0]) != k_api.ROOT_DOFS
             or self.coords_per_env - k_api.ROOT_COORDS != self.num_dofs

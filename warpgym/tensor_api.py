@@ -133,6 +133,28 @@ class TensorAPI:
     def refresh_net_contact_force_tensor(self) -> None:
         self._run(self.compute_contact_wrenches)
 
+    def acquire_force_sensor_tensor(self) -> torch.Tensor:
+        """(N*F, 6): contact force 3 and torque 3 (about the body origin, world frame) on each foot.
+
+        The sensors sit on the robot's feet (``spec.feet``, in that order), as IsaacGymEnvs places
+        force sensors on the Ant's and Humanoid's feet.
+        """
+        self.enable_contact_forces()
+        self.refresh_force_sensor_tensor()
+        return self._tensors["force_sensors"][1]
+
+    def refresh_force_sensor_tensor(self) -> None:
+        feet = self.foot_bodies
+        out = self.warp_buffer("force_sensors", (self.num_envs * feet.shape[0], 6))[0]
+
+        def run():
+            self.compute_contact_wrenches()
+            wp.launch(k_api.gather_force_sensors, dim=(self.num_envs, feet.shape[0]),
+                      inputs=[self.contact_wrench_buffer(), feet, self.bodies_per_env], outputs=[out],
+                      device=self.device)
+
+        self._run(run)
+
     def acquire_dof_force_tensor(self) -> torch.Tensor:
         """(N*K,): generalised force on each joint (actuation + passive), from the last substep."""
         self.refresh_dof_force_tensor()

@@ -59,11 +59,7 @@ class LocomotionVecEnv(VectorEnv):
         self.num_envs = n = sim.num_envs
         self.device = sim.torch_device
         self.num_actions = a = sim.num_dofs
-        missing = [f for f in sim.spec.feet if f not in sim.body_names]
-        if missing:
-            raise ValueError(f"{sim.spec.mjcf} has no bodies named {missing}; its bodies are {sim.body_names}")
-        feet = [sim.body_names.index(f) for f in sim.spec.feet]
-        self.num_obs = o = task.observation_size(a, len(feet))
+        self.num_obs = o = task.observation_size(a, sim.foot_bodies.shape[0])
 
         self.single_observation_space = spaces.Box(-np.inf, np.inf, (o,), np.float32)
         self.single_action_space = spaces.Box(-1.0, 1.0, (a,), np.float32)
@@ -78,7 +74,7 @@ class LocomotionVecEnv(VectorEnv):
         self._dof_lower = wp.array(sim.dof_lower_np, dtype=float, device=dev)
         self._dof_upper = wp.array(sim.dof_upper_np, dtype=float, device=dev)
         self._default_dof_pos = wp.array(sim.default_dof_pos_np, dtype=float, device=dev)
-        self._feet = wp.array(np.array(feet, np.int32), dtype=wp.int32, device=dev)
+        self._feet = sim.foot_bodies
         self._rng_state = wp.array(np.array([seed, 0], np.int32), dtype=wp.int32, device=dev)
 
         def buf(shape, dtype=float):
@@ -89,7 +85,7 @@ class LocomotionVecEnv(VectorEnv):
         self._obs, self._final_obs = buf((n, o)), buf((n, o))
         self._reward, self._potentials = buf(n), buf(n)
         self._terminated, self._truncated = buf(n, wp.bool), buf(n, wp.bool)
-        self._done, self._nonfinite = buf(n, wp.bool), buf(n, wp.bool)
+        self._done, self._diverged = buf(n, wp.bool), buf(n, wp.bool)
         self._ep_length, self._ep_return, self._ep_forward = buf(n, wp.int32), buf(n), buf(n)
         self._stat_length, self._stat_return, self._stat_speed = buf(n, wp.int32), buf(n), buf(n)
 
@@ -117,7 +113,7 @@ class LocomotionVecEnv(VectorEnv):
             },
             "_episode": done,
             "nan_actions": t(self._nan_count),
-            "nonfinite": t(self._nonfinite),
+            "diverged": t(self._diverged),
         }
         self._graph = None
         self._reset_all()
@@ -142,7 +138,7 @@ class LocomotionVecEnv(VectorEnv):
             inputs=[self.params, sim.joint_q, sim.joint_qd, self._dof_lower, self._dof_upper, self._dof_force,
                     self._contact_wrench, self._feet, sim.bodies_per_env, self._actions, self._effort_ratio,
                     self._potentials, self._ep_length, self._ep_return, self._ep_forward],
-            outputs=[self._obs, self._reward, self._terminated, self._truncated, self._done, self._nonfinite],
+            outputs=[self._obs, self._reward, self._terminated, self._truncated, self._done, self._diverged],
             device=dev,
         )
         self._launch_reset(force_all=0)

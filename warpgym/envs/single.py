@@ -31,7 +31,7 @@ class LocomotionEnv(gym.Env):
         done = bool(terminated[0] or truncated[0])
         # the vector env has already started the next episode; report the one that ended
         out = info["final_obs"][0] if done else obs[0]
-        extra = {"nan_actions": int(info["nan_actions"][0]), "nonfinite": bool(info["nonfinite"][0])}
+        extra = {"nan_actions": int(info["nan_actions"][0]), "diverged": bool(info["diverged"][0])}
         if done:
             ep = info["episode"]
             extra["episode"] = {"r": float(ep["r"][0]), "l": int(ep["l"][0]), "s": float(ep["s"][0])}

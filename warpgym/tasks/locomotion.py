@@ -34,6 +34,9 @@ class LocomotionTask:
     termination_height: float = 0.31
     dof_pos_noise: float = 0.2  # reset: dof position = default + U(-noise, noise), clamped to limits
     dof_vel_noise: float = 0.1  # reset: dof velocity = U(-noise, noise)
+    # Any root or joint speed above this [m/s or rad/s] is a solver blow-up, not locomotion: the env
+    # ends the episode with zero reward and flags it in info["diverged"].
+    max_speed: float = 200.0
 
     @property
     def observe_dof_forces(self) -> bool:
@@ -83,4 +86,5 @@ class LocomotionTask:
         p.episode_length = self.episode_length
         p.dof_pos_noise = self.dof_pos_noise
         p.dof_vel_noise = self.dof_vel_noise
+        p.max_speed = self.max_speed
         return p

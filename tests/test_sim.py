@@ -1,0 +1,192 @@
+"""warpgym.Sim and its Isaac-like Tensor API on Warp's CPU backend."""
+
+import math
+
+import pytest
+import torch
+
+from warpgym import Sim
+
+G = 9.81
+
+
+def put(sim, z=0.55, quat=(0.0, 0.0, 0.0, 1.0), dof_vel=0.0):
+    """Every env: root at height z with orientation quat, at rest; joints at their defaults."""
+    n, k = sim.num_envs, sim.num_dofs
+    ids = torch.arange(n, dtype=torch.int32)
+    root = torch.zeros(n, 13)
+    root[:, 2] = z
+    root[:, 3:7] = torch.tensor(quat)
+    sim.set_actor_root_state_tensor_indexed(root, ids)
+    dofs = torch.zeros(n * k, 2)
+    dofs[:, 0] = torch.as_tensor(sim.default_dof_pos_np).repeat(n)
+    dofs[:, 1] = dof_vel
+    sim.set_dof_state_tensor_indexed(dofs, ids)
+    sim.set_dof_actuation_force_tensor(torch.zeros(n, k))
+
+
+def test_tensor_shapes(ant_sim):
+    n, k, b = ant_sim.num_envs, ant_sim.num_dofs, ant_sim.bodies_per_env
+    assert (k, b) == (8, 9)
+    assert ant_sim.acquire_actor_root_state_tensor().shape == (n, 13)
+    assert ant_sim.acquire_dof_state_tensor().shape == (n * k, 2)
+    assert ant_sim.acquire_rigid_body_state_tensor().shape == (n * b, 13)
+    assert ant_sim.acquire_net_contact_force_tensor().shape == (n * b, 3)
+    assert ant_sim.acquire_dof_force_tensor().shape == (n * k,)
+    assert ant_sim.acquire_force_sensor_tensor().shape == (n * 4, 6)
+    assert ant_sim.dof_pos.shape == ant_sim.dof_vel.shape == (n, k)
+    assert ant_sim.root_pose.shape == (n, 7) and ant_sim.root_vel.shape == (n, 6)
+    assert ant_sim.body_q.shape == (n, b, 7) and ant_sim.body_qd.shape == (n, b, 6)
+
+
+def test_humanoid_has_21_dofs_and_gears_from_its_mjcf():
+    sim = Sim("humanoid", num_envs=1, device="cpu")
+    assert sim.num_dofs == 21
+    assert sim.dof_names[:3] == ["abdomen_z", "abdomen_y", "abdomen_x"]
+    gears = dict(zip(sim.dof_names, sim.motor_gear_np.tolist()))
+    assert gears["right_hip_y"] == 135.0 and gears["left_ankle_x"] == 22.5
+
+
+def test_root_state_quaternion_is_xyzw_and_agrees_with_body_transforms(ant_sim):
+    s, c = math.sin(math.pi / 4), math.cos(math.pi / 4)
+    put(ant_sim, z=0.8, quat=(0.0, 0.0, s, c))  # 90 degrees about +z
+    ant_sim.step()
+    root = ant_sim.acquire_actor_root_state_tensor()
+    bodies = ant_sim.acquire_rigid_body_state_tensor().view(ant_sim.num_envs, -1, 13)
+    torso, leg = 0, ant_sim.body_names.index("front_left_leg")
+    torch.testing.assert_close(bodies[:, torso, :7], root[:, :7])
+    assert torch.allclose(root[:, 3:7], torch.tensor([0.0, 0.0, s, c]), atol=1e-3)
+    # the front-left hip sits at (0.2, 0.2, 0) in the torso frame; turned 90 degrees it is at (-0.2, 0.2)
+    offset = bodies[:, leg, :3] - root[:, :3]
+    assert torch.allclose(offset[:, :2], torch.tensor([-0.2, 0.2]), atol=1e-2)
+
+
+def test_dof_state_matches_live_views(ant_sim):
+    put(ant_sim)
+    ant_sim.set_dof_actuation_force_tensor(torch.linspace(-3, 3, ant_sim.num_envs * ant_sim.num_dofs))
+    for _ in range(5):
+        ant_sim.step()
+    state = ant_sim.acquire_dof_state_tensor()
+    assert state[:, 1].abs().max() > 0.1
+    torch.testing.assert_close(state[:, 0], ant_sim.dof_pos.reshape(-1))
+    torch.testing.assert_close(state[:, 1], ant_sim.dof_vel.reshape(-1))
+
+
+def test_views_are_zero_copy_stable_and_writable(ant_sim):
+    put(ant_sim)
+    pos, vel, root = ant_sim.dof_pos, ant_sim.dof_vel, ant_sim.root_pose
+    ptrs = (pos.data_ptr(), vel.data_ptr(), root.data_ptr())
+    before = pos.clone()
+    vel[1, 0] = 4.0  # spin env 1's first hip through the view
+    root[2, 2] = 2.0  # lift env 2 through the view
+    ant_sim.step()
+    assert (ant_sim.dof_pos.data_ptr(), ant_sim.dof_vel.data_ptr(), ant_sim.root_pose.data_ptr()) == ptrs
+    assert pos[1, 0] - before[1, 0] > 0.02  # the write was seen by the step
+    assert abs(pos[0, 0] - before[0, 0]) < 0.01
+    assert root[2, 2] > 1.9 and root[0, 2] < 0.6
+
+
+def test_indexed_setters_change_only_selected_envs(ant_sim):
+    put(ant_sim)
+    root = ant_sim.acquire_actor_root_state_tensor().clone()
+    dofs = ant_sim.acquire_dof_state_tensor().clone()
+    new_root = root.clone()
+    new_root[:, 0] += 5.0
+    new_dofs = dofs.clone()
+    new_dofs[:, 1] = 0.7
+    ids = torch.tensor([1], dtype=torch.int64)
+    ant_sim.set_actor_root_state_tensor_indexed(new_root, ids)
+    ant_sim.set_dof_state_tensor_indexed(new_dofs, ids)
+    ant_sim.refresh_actor_root_state_tensor()
+    ant_sim.refresh_dof_state_tensor()
+    after_root = ant_sim.acquire_actor_root_state_tensor()
+    after_dofs = ant_sim.acquire_dof_state_tensor().view(ant_sim.num_envs, -1, 2)
+    assert torch.equal(after_root[1], new_root[1])
+    assert torch.equal(after_root[[0, 2]], root[[0, 2]])
+    assert torch.all(after_dofs[1, :, 1] == 0.7)
+    assert torch.equal(after_dofs[[0, 2]], dofs.view(ant_sim.num_envs, -1, 2)[[0, 2]])
+
+
+def test_dropped_ant_falls_and_rests_on_its_feet(ant_sim):
+    put(ant_sim, z=1.0)
+    heights = []
+    for _ in range(150):  # 2.5 s
+        ant_sim.step()
+        heights.append(ant_sim.root_pose[0, 2].item())
+    assert min(heights[:20]) < 1.0 and heights[-1] < 0.6  # it fell
+    assert abs(heights[-1] - heights[-10]) < 1e-3  # and came to rest
+    assert ant_sim.root_vel.abs().max() < 0.05
+    contact = ant_sim.acquire_net_contact_force_tensor().view(ant_sim.num_envs, -1, 3)
+    feet = ant_sim.foot_bodies.numpy().tolist()
+    weight = float(ant_sim.model.body_mass.numpy()[: ant_sim.bodies_per_env].sum()) * G
+    assert torch.all(contact[:, feet, 2] > 0.05 * weight)  # every foot carries load
+    torch.testing.assert_close(contact[:, feet, 2].sum(1), torch.full((ant_sim.num_envs,), weight), rtol=0.03,
+                               atol=0.0)
+    others = [i for i in range(ant_sim.bodies_per_env) if i not in feet]
+    assert contact[:, others].abs().max() < 1e-3 * weight
+    sensors = ant_sim.acquire_force_sensor_tensor().view(ant_sim.num_envs, 4, 6)
+    torch.testing.assert_close(sensors[:, :, :3], contact[:, feet])
+
+
+def test_joint_torque_turns_the_joint_its_way(ant_sim):
+    put(ant_sim, z=0.8)
+    k = ant_sim.num_dofs
+    forces = torch.zeros(ant_sim.num_envs, k)
+    forces[0, 0], forces[1, 0] = 2.0, -2.0  # hip_1: +, -, and none in env 2
+    ant_sim.set_dof_actuation_force_tensor(forces)
+    for _ in range(6):
+        ant_sim.step()
+    hip = ant_sim.dof_pos[:, 0]
+    assert hip[0] > hip[2] + 0.05 and hip[1] < hip[2] - 0.05
+    assert ant_sim.acquire_dof_force_tensor().view(-1, k)[0, 0] > 1.0  # the applied torque is reported
+
+
+def test_worlds_evolve_independently(ant_sim):
+    put(ant_sim, z=0.7)
+    gen = torch.Generator().manual_seed(3)
+    for _ in range(20):
+        a = torch.rand(ant_sim.num_dofs, generator=gen) * 6 - 3
+        b = torch.rand(ant_sim.num_dofs, generator=gen) * 6 - 3
+        ant_sim.set_dof_actuation_force_tensor(torch.stack([a, a, b]))
+        ant_sim.step()
+    q = ant_sim.acquire_dof_state_tensor().view(ant_sim.num_envs, -1, 2)
+    torch.testing.assert_close(q[0], q[1], atol=1e-5, rtol=0)  # same actions, same states
+    assert (q[0] - q[2]).abs().max() > 0.05  # different actions, different states
+
+
+@pytest.mark.parametrize(
+    "kwargs, error, words",
+    [
+        (dict(robot="spider"), ValueError, ["spider", "ant", "humanoid"]),
+        (dict(num_envs=0), ValueError, ["num_envs=0"]),
+        (dict(num_envs=2.5), ValueError, ["num_envs=2.5"]),
+        (dict(device="cuda:7"), ValueError, ["cuda:7", "device='cpu'"]),
+        (dict(device="gpu"), ValueError, ["'gpu'", "cuda:N"]),
+        (dict(substeps=0), ValueError, ["substeps=0"]),
+        (dict(dt=-0.01), ValueError, ["dt=-0.01"]),
+    ],
+)
+def test_bad_construction_arguments_say_what_to_do(kwargs, error, words):
+    args = dict(robot="ant", num_envs=1, device="cpu") | kwargs
+    with pytest.raises(error) as info:
+        Sim(**args)
+    for w in words:
+        assert w in str(info.value)
+
+
+def test_bad_tensors_and_indices_are_refused(ant_sim):
+    n, k = ant_sim.num_envs, ant_sim.num_dofs
+    with pytest.raises(ValueError, match=r"shape \(5,\)"):
+        ant_sim.set_dof_actuation_force_tensor(torch.zeros(5))
+    with pytest.raises(TypeError, match="float64"):
+        ant_sim.set_dof_actuation_force_tensor(torch.zeros(n, k, dtype=torch.float64))
+    with pytest.raises(ValueError, match="meta"):
+        ant_sim.set_dof_actuation_force_tensor(torch.zeros(n, k, device="meta"))
+    with pytest.raises(IndexError, match=r"index 3, outside \[0, 2\]"):
+        ant_sim.set_actor_root_state_tensor_indexed(torch.zeros(n, 13), torch.tensor([0, 3]))
+    with pytest.raises(IndexError, match="index -1"):
+        ant_sim.set_dof_state_tensor_indexed(torch.zeros(n * k, 2), torch.tensor([-1]))
+    with pytest.raises(TypeError, match="int32 or int64"):
+        ant_sim.set_dof_state_tensor_indexed(torch.zeros(n * k, 2), torch.tensor([0.0]))
+    with pytest.raises(ValueError, match=r"expected \(3, 13\)"):
+        ant_sim.set_actor_root_state_tensor_indexed(torch.zeros(13), torch.tensor([0]))
