@@ -2,7 +2,10 @@
 clipping, mini-epochs over shuffled mini-batches, and a learning rate adapted to a KL target.
 
 The learning rate lives in a device tensor that the optimizer reads, so adapting it per mini-batch
-never waits on the host. Losses are summed on the device and returned as tensors.
+never waits on the host; losses are summed on the device. On CUDA one mini-batch step (forward,
+backward, clipping, Adam, KL and learning-rate update) is captured once as a CUDA graph and replayed:
+the step is a few hundred small kernels, and launching them one by one from Python costs more than
+running them.
 """
 
 from __future__ import annotations
@@ -41,47 +44,89 @@ def adapted_lr(lr: torch.Tensor, kl: torch.Tensor, desired_kl: float) -> torch.T
 
 
 class PPO:
-    def __init__(self, policy: ActorCritic, cfg: Config, device: torch.device):
+    def __init__(self, policy: ActorCritic, cfg: Config, device: torch.device, cuda_graph: bool = True):
         self.policy = policy
         self.cfg = cfg
+        self.device = device
         self.lr = torch.tensor(cfg.learning_rate, dtype=torch.float32, device=device)
-        self.optimizer = torch.optim.Adam(policy.parameters(), lr=self.lr, fused=True)
+        is_cuda = device.type == "cuda"
+        self.optimizer = torch.optim.Adam(policy.parameters(), lr=self.lr, fused=True, capturable=is_cuda)
+        self.use_graph = cuda_graph and is_cuda
+        self._graph = None
+        self._batch: dict[str, torch.Tensor] | None = None
+
+    def _bind(self, storage: RolloutStorage, size: int) -> None:
+        """Persistent inputs of the mini-batch step; a captured graph reads them by address."""
+        self._batch = {
+            "obs": storage.obs.flatten(0, 1), "actions": storage.actions.flatten(0, 1),
+            "log_probs": storage.log_probs.flatten(0, 1), "values": storage.values.flatten(0, 1),
+            "means": storage.means.flatten(0, 1), "returns": storage.returns.flatten(0, 1),
+            "adv": torch.zeros_like(storage.advantages.flatten(0, 1)),
+        }
+        self._idx = torch.zeros(size, dtype=torch.long, device=self.device)
+        self._old_log_std = torch.zeros_like(self.policy.log_std)
+        self._sums = torch.zeros(5, device=self.device)  # surrogate, value, entropy, kl, bounds
+        self._storage_id = id(storage)
+        self._graph = None
+
+    def _step(self) -> None:
+        cfg, policy, b, idx = self.cfg, self.policy, self._batch, self._idx
+        log_prob, entropy, values, mean = policy.evaluate(b["obs"][idx], b["actions"][idx])
+        with torch.no_grad():
+            kl = gaussian_kl(b["means"][idx], self._old_log_std, mean, policy.log_std).mean()
+            if cfg.desired_kl > 0:
+                self.lr.copy_(adapted_lr(self.lr, kl, cfg.desired_kl))
+        surr = surrogate_loss(log_prob, b["log_probs"][idx], b["adv"][idx], cfg.clip_ratio)
+        v_loss = value_loss(values, b["values"][idx], b["returns"][idx], cfg.value_clip)
+        ent = entropy.mean()
+        b_loss = bounds_loss(mean)
+        loss = surr + cfg.value_coef * v_loss - cfg.entropy_coef * ent + cfg.bounds_coef * b_loss
+        self.optimizer.zero_grad(set_to_none=False)
+        loss.backward()
+        torch.nn.utils.clip_grad_norm_(policy.parameters(), cfg.max_grad_norm, foreach=True)
+        self.optimizer.step()
+        self._sums += torch.stack([surr.detach(), v_loss.detach(), ent.detach(), kl, b_loss.detach()])
+
+    def _capture(self) -> None:
+        graph = torch.cuda.CUDAGraph()
+        with torch.cuda.graph(graph):
+            self._step()
+        self._graph = graph
 
     def update(self, storage: RolloutStorage, old_log_std: torch.Tensor, num_minibatches: int) -> dict:
-        cfg, policy = self.cfg, self.policy
-        obs = storage.obs.flatten(0, 1)
-        actions = storage.actions.flatten(0, 1)
-        old_log_probs = storage.log_probs.flatten(0, 1)
-        old_values = storage.values.flatten(0, 1)
-        old_means = storage.means.flatten(0, 1)
-        returns = storage.returns.flatten(0, 1)
-        adv = storage.advantages.flatten(0, 1)
-        adv = (adv - adv.mean()) / (adv.std() + 1e-8)
-
-        total = obs.shape[0]
+        cfg = self.cfg
+        total = storage.obs.shape[0] * storage.obs.shape[1]
         size = total // num_minibatches
-        dev = obs.device
-        sums = torch.zeros(5, device=dev)  # surrogate, value, entropy, kl, bounds
-        for _ in range(cfg.repeat_times):
-            perm = torch.randperm(total, device=dev)
+        if self._batch is None or self._storage_id != id(storage) or self._idx.shape[0] != size:
+            self._bind(storage, size)
+        adv = storage.advantages.flatten(0, 1)
+        self._batch["adv"].copy_((adv - adv.mean()) / (adv.std() + 1e-8))
+        self._old_log_std.copy_(old_log_std)
+        self._sums.zero_()
+
+        def epoch() -> None:
+            perm = torch.randperm(total, device=self.device)
             for i in range(num_minibatches):
-                idx = perm[i * size : (i + 1) * size]
-                log_prob, entropy, values, mean = policy.evaluate(obs[idx], actions[idx])
-                with torch.no_grad():
-                    kl = gaussian_kl(old_means[idx], old_log_std, mean, policy.log_std).mean()
-                    if cfg.desired_kl > 0:
-                        self.lr.copy_(adapted_lr(self.lr, kl, cfg.desired_kl))
-                surr = surrogate_loss(log_prob, old_log_probs[idx], adv[idx], cfg.clip_ratio)
-                v_loss = value_loss(values, old_values[idx], returns[idx], cfg.value_clip)
-                ent = entropy.mean()
-                b_loss = bounds_loss(mean)
-                loss = surr + cfg.value_coef * v_loss - cfg.entropy_coef * ent + cfg.bounds_coef * b_loss
-                self.optimizer.zero_grad(set_to_none=True)
-                loss.backward()
-                torch.nn.utils.clip_grad_norm_(policy.parameters(), cfg.max_grad_norm, foreach=True)
-                self.optimizer.step()
-                sums += torch.stack([surr.detach(), v_loss.detach(), ent.detach(), kl, b_loss.detach()])
-        sums /= cfg.repeat_times * num_minibatches
-        return {"loss/surrogate": sums[0], "loss/value": sums[1], "loss/entropy": sums[2],
-                "policy/kl": sums[3], "loss/bounds": sums[4], "policy/lr": self.lr.clone(),
-                "policy/noise_std": policy.log_std.detach().exp().mean()}
+                self._idx.copy_(perm[i * size : (i + 1) * size])
+                if self._graph is not None:
+                    self._graph.replay()
+                else:
+                    self._step()
+
+        for e in range(cfg.repeat_times):
+            if self.use_graph and self._graph is None:
+                # The first pass runs eagerly on a side stream (CUDA graphs want warmed-up kernels
+                # and existing Adam state); then the step is captured for every later mini-batch.
+                main, side = torch.cuda.current_stream(self.device), torch.cuda.Stream(self.device)
+                side.wait_stream(main)
+                with torch.cuda.stream(side):
+                    epoch()
+                main.wait_stream(side)
+                self._capture()
+            else:
+                epoch()
+        self._sums /= cfg.repeat_times * num_minibatches
+        s = self._sums
+        return {"loss/surrogate": s[0].clone(), "loss/value": s[1].clone(), "loss/entropy": s[2].clone(),
+                "policy/kl": s[3].clone(), "loss/bounds": s[4].clone(), "policy/lr": self.lr.clone(),
+                "policy/noise_std": self.policy.log_std.detach().exp().mean()}

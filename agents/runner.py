@@ -18,6 +18,7 @@ from agents.evaluate import evaluate
 from agents.logger import MetricsLogger
 from agents.normalizer import RunningMeanStd
 from agents.ppo import PPO
+from agents.profiling import PhaseTimer
 from agents.protocol import env_spec
 from agents.rollout import EpisodeTracker
 from agents.storage import RolloutStorage, compute_gae
@@ -25,7 +26,7 @@ from agents.storage import RolloutStorage, compute_gae
 
 class OnPolicyRunner:
     def __init__(self, env, cfg: Config, run_dir: str | None = None, eval_env=None,
-                 start_time: float | None = None, print_fn=print):
+                 start_time: float | None = None, print_fn=print, profile: bool = False, cuda_graph: bool = True):
         self.env, self.cfg, self.eval_env = env, cfg.validated(), eval_env
         self.spec = spec = env_spec(env)
         self.device = spec.device
@@ -34,7 +35,7 @@ class OnPolicyRunner:
         self.policy = ActorCritic(spec.num_obs, spec.num_actions, cfg.net_dims, cfg.activation,
                                   cfg.init_noise_std).to(self.device)
         self.normalizer = RunningMeanStd(spec.num_obs, cfg.obs_clip).to(self.device)
-        self.ppo = PPO(self.policy, cfg, self.device)
+        self.ppo = PPO(self.policy, cfg, self.device, cuda_graph=cuda_graph)
         self.storage = RolloutStorage(cfg.horizon_len, spec.num_envs, spec.num_obs, spec.num_actions, self.device)
         self.episodes = EpisodeTracker(spec.num_envs, self.device)
         self.run_dir = run_dir
@@ -47,6 +48,7 @@ class OnPolicyRunner:
         self.last_eval_time = 0.0  # set when learn() starts: the first evaluation waits eval_gap
         self.history: list[dict] = []
         self.obs = None
+        self.timer = PhaseTimer(self.device, enabled=profile)
 
     # ------------------------------------------------------------------ pieces
     def normalize(self, obs: torch.Tensor, update: bool = False) -> torch.Tensor:
@@ -66,9 +68,13 @@ class OnPolicyRunner:
             obs, _ = env.reset()
             self.obs = self.normalize(obs, update=True)
         obs = self.obs
+        timer = self.timer
+        timer.start()
         for t in range(cfg.horizon_len):
             actions, log_prob, value, mean = policy.act(obs)
+            timer.lap("collect: policy inference")
             next_obs, reward, terminated, truncated, info = env.step(actions)
+            timer.lap("collect: env step (physics + task kernels)")
             s.obs[t].copy_(obs)
             s.actions[t].copy_(actions)
             s.log_probs[t].copy_(log_prob)
@@ -81,11 +87,13 @@ class OnPolicyRunner:
             s.rewards[t].copy_(reward * cfg.reward_scale + cfg.gamma * bootstrap)
             s.dones[t].copy_(done)
             obs = self.normalize(next_obs, update=True)
+            timer.lap("collect: storage, stats, normaliser, bootstrap")
         self.obs = obs
         last_values = policy.value(obs)
         adv, ret = compute_gae(s.rewards, s.values, s.dones, last_values, cfg.gamma, cfg.lambda_gae)
         s.advantages.copy_(adv)
         s.returns.copy_(ret)
+        timer.lap("GAE")
 
     def update(self) -> dict:
         return self.ppo.update(self.storage, self._old_log_std, self.num_minibatches)
@@ -112,10 +120,13 @@ class OnPolicyRunner:
                 self.collect()
                 t1 = time.perf_counter()
                 stats = self.update()
+                self.timer.lap("PPO update")
                 self.iteration += 1
+                self.timer.iterations += 1
                 self.samples += per_iter
                 # the last iteration always carries an evaluation, so every run ends with one
                 self._log_row(stats, t0, t1, mark, last_iter, final=done())
+                self.timer.lap("logging, evaluation, host read")
                 mark = time.perf_counter()
                 if self.iteration % self.cfg.save_gap == 0 and self.run_dir:
                     self.save()
@@ -134,7 +145,9 @@ class OnPolicyRunner:
         row.update(self.episodes.read_and_clear())
         row.update(dict(zip(keys, values)))
         if self.eval_env is not None and (final or self.elapsed() - self.last_eval_time >= self.cfg.eval_gap):
+            t_eval = time.perf_counter()
             row.update(self.evaluate())
+            row["eval_s"] = time.perf_counter() - t_eval
             row["time_s"] = round(self.elapsed(), 3)
         self.history.append(row)
         if self.logger:

@@ -53,6 +53,9 @@ def parse_args(argv=None):
     ap.add_argument("--learning-rate", type=float, default=None)
     ap.add_argument("--episode-length", type=int, default=None, help="steps per episode (task default: 1000)")
     ap.add_argument("--no-plots", action="store_true")
+    ap.add_argument("--no-cuda-graph", action="store_true", help="run the PPO update eagerly (no CUDA graph)")
+    ap.add_argument("--profile", action="store_true",
+                    help="time each phase of an iteration (synchronises the GPU between phases: slower)")
     return ap.parse_args(argv)
 
 
@@ -153,12 +156,18 @@ def main(argv=None) -> int:
     eval_env = None if args.no_eval else cfg.eval_env_class(**cfg.eval_env_args)
     assert isinstance(env, LocomotionVecEnv)
     runner = OnPolicyRunner(env, cfg, run_dir=run_dir, eval_env=eval_env, start_time=PROCESS_START,
-                            print_fn=lambda s: print(s, flush=True))
+                            print_fn=lambda s: print(s, flush=True), profile=args.profile,
+                            cuda_graph=not args.no_cuda_graph)
     if args.resume:
         runner.load(os.path.join(run_dir, "checkpoint.pt"), resume=True)
         print(f"resumed at iteration {runner.iteration} ({runner.samples} samples)", flush=True)
     history = runner.learn(args.max_iterations, args.total_steps, args.time_limit)
     summary = summarize(history, device_name, cfg)
+    if args.profile:
+        summary["profile"] = runner.timer.table()
+        print("| phase | ms / iteration | share |\n|---|---:|---:|")
+        for p in summary["profile"]:
+            print(f"| {p['phase']} | {p['ms_per_iteration']:.2f} | {100 * p['share']:.1f}% |")
     write_json(os.path.join(run_dir, "summary.json"), summary)
     if not args.no_plots:
         try:

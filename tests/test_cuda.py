@@ -1,0 +1,80 @@
+"""Checks that need a GPU: they run on the CUDA machine (`pytest tests/test_cuda.py`) and skip in CI."""
+
+import copy
+
+import pytest
+import torch
+
+import reference
+
+pytestmark = pytest.mark.skipif(not torch.cuda.is_available(), reason="needs a CUDA GPU")
+DEV = "cuda:0"
+
+
+def filled_storage(num_envs=256, horizon=8, obs=12, act=3, seed=0):
+    from agents.storage import RolloutStorage
+
+    g = torch.Generator(device=DEV).manual_seed(seed)
+    s = RolloutStorage(horizon, num_envs, obs, act, torch.device(DEV))
+    for t in (s.obs, s.actions, s.means, s.values, s.returns, s.advantages):
+        t.copy_(torch.randn(t.shape, generator=g, device=DEV))
+    s.log_probs.copy_(-torch.rand(s.log_probs.shape, generator=g, device=DEV) * 3)
+    return s
+
+
+def test_graph_captured_update_matches_the_eager_one():
+    from agents import Config
+    from agents.actor_critic import ActorCritic
+    from agents.ppo import PPO
+
+    cfg = Config(net_dims=(32, 32), horizon_len=8, batch_size=512, repeat_times=3).validated()
+    torch.manual_seed(0)
+    base = ActorCritic(12, 3, cfg.net_dims).to(DEV)
+    results = []
+    for graph in (False, True):
+        policy = copy.deepcopy(base)
+        ppo = PPO(policy, cfg, torch.device(DEV), cuda_graph=graph)
+        storage = filled_storage(seed=0)
+        for it in range(3):  # the graph is captured during the first update and replayed after
+            fresh = filled_storage(seed=it)  # a new rollout, written into the same buffers
+            for name in ("obs", "actions", "means", "values", "returns", "advantages", "log_probs"):
+                getattr(storage, name).copy_(getattr(fresh, name))
+            torch.manual_seed(100 + it)
+            stats = ppo.update(storage, policy.log_std.detach().clone(), 4)
+        results.append((torch.cat([p.detach().flatten() for p in policy.parameters()]), stats))
+    (p_eager, s_eager), (p_graph, s_graph) = results
+    torch.testing.assert_close(p_graph, p_eager, atol=1e-5, rtol=1e-4)
+    for key in s_eager:
+        torch.testing.assert_close(s_graph[key], s_eager[key], atol=1e-5, rtol=1e-4)
+
+
+def test_env_on_cuda_matches_the_torch_reference_from_another_stream():
+    from warpgym.envs import LocomotionVecEnv
+
+    env = LocomotionVecEnv("Ant", num_envs=64, device=DEV, seed=0)
+    env.reset(seed=1)
+    stream = torch.cuda.Stream()
+    with torch.cuda.stream(stream):  # the env orders itself after whatever stream torch is on
+        for _ in range(20):
+            before = reference.potentials(env.sim.acquire_actor_root_state_tensor().cpu(), env.task)
+            actions = torch.rand(64, 8, device=DEV) * 2 - 1
+            obs, rew, term, trunc, _ = env.step(actions)
+            live = (~(term | trunc)).cpu()
+            ref_obs = reference.observation(_CpuView(env.sim), env.task, actions.cpu())
+            progress = reference.potentials(env.sim.acquire_actor_root_state_tensor().cpu(), env.task) - before
+            ref_rew = reference.reward(ref_obs, actions.cpu(), progress, env.task, env.sim.motor_gear_np)
+            torch.testing.assert_close(obs.cpu()[live], ref_obs[live], atol=5e-4, rtol=1e-3)
+            torch.testing.assert_close(rew.cpu()[live], ref_rew[live], atol=5e-3, rtol=1e-3)
+
+
+class _CpuView:
+    """Hands the reference CPU copies of the CUDA sim's Tensor API buffers."""
+
+    def __init__(self, sim):
+        self._sim = sim
+
+    def __getattr__(self, name):
+        attr = getattr(self._sim, name)
+        if name.startswith("acquire_"):
+            return lambda: attr().cpu()
+        return attr
