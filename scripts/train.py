@@ -110,6 +110,10 @@ def summarize(history: list[dict], device_name: str, cfg: Config) -> dict:
         for v in (1.0, 2.0, 3.0):
             hit = next((r for r in evals if r["eval/speed"] >= v), None)
             out[f"first_eval_speed_{v:g}ms"] = None if hit is None else {"time_s": hit["time_s"], "samples": hit["samples"]}
+    for v in (1.0, 2.0, 3.0):  # training episodes (stochastic policy), logged every iteration
+        hit = next((r for r in history if (r.get("speed") or 0.0) >= v), None)
+        out[f"first_train_speed_{v:g}ms"] = None if hit is None else {"time_s": hit["time_s"], "samples": hit["samples"]}
+    out["first_iteration_time_s"] = history[0]["time_s"] if history else None
     return out
 
 
