@@ -47,6 +47,7 @@ class Config:
     desired_kl: float = 0.008  # 0 disables the adaptive learning rate
     reward_scale: float = 1.0
     normalize_obs: bool = True
+    tf32: bool = True  # on CUDA, let matmuls use TF32 tensor cores
     obs_clip: float = 5.0
 
     seed: int = 0

@@ -1,4 +1,4 @@
-"""Running episode statistics kept on the device, so a rollout never waits on the host."""
+"""Episode statistics of a rollout, kept on the device and reduced once per iteration."""
 
 from __future__ import annotations
 
@@ -6,29 +6,40 @@ import torch
 
 
 class EpisodeTracker:
-    """Per-env running return and length; sums over the episodes that finish, read once per log."""
+    """Return, length and mean forward speed of the episodes that finish during rollouts.
 
-    def __init__(self, num_envs: int, device: torch.device):
+    Envs that report ``info["episode"]`` (return ``r``, length ``l``, speed ``s``) cost one copy per
+    step; for others the tracker sums rewards itself.
+    """
+
+    def __init__(self, horizon: int, num_envs: int, device: torch.device):
+        self.ended = torch.zeros(horizon, 3, num_envs, device=device)  # r, l, s of episodes ending at t
+        self.has_speed = False
         self.ret = torch.zeros(num_envs, device=device)
         self.length = torch.zeros(num_envs, device=device)
-        # finished episodes: count, sum of returns, of lengths, of mean forward speeds, speed count
+        # since the last read: episodes, sum of returns, lengths, speeds, episodes with a speed
         self.sums = torch.zeros(5, dtype=torch.float64, device=device)
 
-    def step(self, reward: torch.Tensor, done: torch.Tensor, info: dict) -> torch.Tensor:
-        """Fold one step in; return the mask of envs whose episode ended."""
+    def record(self, t: int, reward: torch.Tensor, done: torch.Tensor, info: dict) -> None:
+        ep = info.get("episode") if isinstance(info, dict) else None
+        if ep is not None and "r" in ep and "l" in ep:
+            self.has_speed = "s" in ep
+            speed = ep["s"] if self.has_speed else torch.zeros_like(ep["r"])
+            torch.stack([ep["r"], ep["l"].float(), speed], out=self.ended[t])
+            return
         self.ret += reward
         self.length += 1
-        d = done.float()
-        speed = info.get("episode", {}).get("s") if isinstance(info, dict) else None
-        has_speed = speed is not None
-        self.sums += torch.stack([
-            d.sum(), (self.ret * d).sum(), (self.length * d).sum(),
-            (speed * d).sum() if has_speed else d.new_zeros(()), d.sum() if has_speed else d.new_zeros(()),
-        ]).double()
-        keep = 1.0 - d
+        torch.stack([self.ret, self.length, torch.zeros_like(self.ret)], out=self.ended[t])
+        keep = 1.0 - done.float()
         self.ret *= keep
         self.length *= keep
-        return done
+
+    def end_rollout(self, dones: torch.Tensor) -> None:
+        """Fold the rollout's finished episodes (``dones``: (T, N), 1 where one ended) into the sums."""
+        count = dones.sum()
+        totals = (self.ended * dones.unsqueeze(1)).sum((0, 2))
+        speed_count = count if self.has_speed else torch.zeros_like(count)
+        self.sums += torch.cat([count[None], totals, speed_count[None]]).double()
 
     def read_and_clear(self) -> dict:
         """One host read; means of the episodes finished since the last call (None where there were none)."""

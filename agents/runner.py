@@ -1,7 +1,9 @@
 """Collect rollouts and update the policy, everything on the env's device.
 
-Per environment step there is no host synchronisation: actions, rewards, bootstraps and episode
-statistics stay device tensors. The host reads the device once per iteration, to log.
+Per environment step there is no host synchronisation and little Python: the step's tensors are
+copied into the rollout buffers, and everything that can wait (truncation bootstraps, episode
+statistics, the observation normaliser's update) runs once per rollout, batched over all steps.
+The host reads the device once per iteration, to log.
 """
 
 from __future__ import annotations
@@ -32,12 +34,15 @@ class OnPolicyRunner:
         self.device = spec.device
         self.num_minibatches = cfg.check_batch(spec.num_envs)
         torch.manual_seed(cfg.seed)
+        if self.device.type == "cuda" and cfg.tf32:
+            # TF32 matmuls: the policy's layers run on tensor cores; PPO does not notice the precision
+            torch.backends.cuda.matmul.allow_tf32 = True
         self.policy = ActorCritic(spec.num_obs, spec.num_actions, cfg.net_dims, cfg.activation,
                                   cfg.init_noise_std).to(self.device)
         self.normalizer = RunningMeanStd(spec.num_obs, cfg.obs_clip).to(self.device)
         self.ppo = PPO(self.policy, cfg, self.device, cuda_graph=cuda_graph)
         self.storage = RolloutStorage(cfg.horizon_len, spec.num_envs, spec.num_obs, spec.num_actions, self.device)
-        self.episodes = EpisodeTracker(spec.num_envs, self.device)
+        self.episodes = EpisodeTracker(cfg.horizon_len, spec.num_envs, self.device)
         self.run_dir = run_dir
         self.logger = MetricsLogger(run_dir) if run_dir else None
         self.print = print_fn
@@ -47,30 +52,30 @@ class OnPolicyRunner:
         self.elapsed_before = 0.0  # wall-clock seconds of earlier processes of this run (resume)
         self.last_eval_time = 0.0  # set when learn() starts: the first evaluation waits eval_gap
         self.history: list[dict] = []
-        self.obs = None
+        self.last_raw_obs: torch.Tensor | None = None  # the env's latest observation, not yet acted on
         self.timer = PhaseTimer(self.device, enabled=profile)
 
     # ------------------------------------------------------------------ pieces
-    def normalize(self, obs: torch.Tensor, update: bool = False) -> torch.Tensor:
-        if not self.cfg.normalize_obs:
-            return obs.clone()
-        if update:
-            self.normalizer.update(obs)
-        return self.normalizer(obs)
+    def normalize(self, obs: torch.Tensor) -> torch.Tensor:
+        return self.normalizer(obs) if self.cfg.normalize_obs else obs
 
     def elapsed(self) -> float:
         return self.elapsed_before + time.time() - self.start_time
 
     @torch.no_grad()
     def collect(self) -> None:
+        """One rollout of ``horizon_len`` steps. The normaliser is frozen during it and learns from
+        its raw observations afterwards; truncated episodes are bootstrapped in one batched pass."""
         cfg, s, env, policy = self.cfg, self.storage, self.env, self.policy
-        if self.obs is None:
+        if self.last_raw_obs is None:
             obs, _ = env.reset()
-            self.obs = self.normalize(obs, update=True)
-        obs = self.obs
+            self.last_raw_obs = obs.clone()
+            self.normalizer.update(obs)
         timer = self.timer
         timer.start()
+        s.raw_obs[0].copy_(self.last_raw_obs)
         for t in range(cfg.horizon_len):
+            obs = self.normalize(s.raw_obs[t])
             actions, log_prob, value, mean = policy.act(obs)
             timer.lap("collect: policy inference")
             next_obs, reward, terminated, truncated, info = env.step(actions)
@@ -80,20 +85,25 @@ class OnPolicyRunner:
             s.log_probs[t].copy_(log_prob)
             s.values[t].copy_(value)
             s.means[t].copy_(mean)
+            s.rewards[t].copy_(reward)
             done = terminated | truncated
-            self.episodes.step(reward, done, info)
-            # A truncated episode did not end in the MDP: bootstrap from the value of its last state.
-            bootstrap = policy.value(self.normalize(info["final_obs"])) * truncated
-            s.rewards[t].copy_(reward * cfg.reward_scale + cfg.gamma * bootstrap)
             s.dones[t].copy_(done)
-            obs = self.normalize(next_obs, update=True)
-            timer.lap("collect: storage, stats, normaliser, bootstrap")
-        self.obs = obs
-        last_values = policy.value(obs)
-        adv, ret = compute_gae(s.rewards, s.values, s.dones, last_values, cfg.gamma, cfg.lambda_gae)
+            s.truncated[t].copy_(truncated)
+            s.final_obs[t].copy_(info["final_obs"])
+            self.episodes.record(t, reward, done, info)
+            (s.raw_obs[t + 1] if t + 1 < cfg.horizon_len else self.last_raw_obs).copy_(next_obs)
+            timer.lap("collect: storage and statistics")
+        last_values = policy.value(self.normalize(self.last_raw_obs))
+        # A truncated episode did not end in the MDP: bootstrap it from the value of its last state.
+        final_values = policy.value(self.normalize(s.final_obs.flatten(0, 1))).view_as(s.rewards)
+        rewards = s.rewards * cfg.reward_scale + cfg.gamma * final_values * s.truncated
+        adv, ret = compute_gae(rewards, s.values, s.dones, last_values, cfg.gamma, cfg.lambda_gae)
         s.advantages.copy_(adv)
         s.returns.copy_(ret)
-        timer.lap("GAE")
+        self.episodes.end_rollout(s.dones)
+        if cfg.normalize_obs:
+            self.normalizer.update(s.raw_obs.flatten(0, 1))
+        timer.lap("bootstrap, GAE, normaliser")
 
     def update(self) -> dict:
         return self.ppo.update(self.storage, self._old_log_std, self.num_minibatches)
@@ -158,7 +168,7 @@ class OnPolicyRunner:
     def evaluate(self) -> dict:
         self.last_eval_time = self.elapsed()
         spec = env_spec(self.eval_env)
-        return evaluate(self.eval_env, self.policy, lambda o: self.normalize(o), spec.max_episode_steps)
+        return evaluate(self.eval_env, self.policy, self.normalize, spec.max_episode_steps)
 
     # ------------------------------------------------------------------ checkpoints
     def state_dict(self) -> dict:

@@ -13,12 +13,15 @@ class RolloutStorage:
         def z(*shape, dtype=torch.float32):
             return torch.zeros(*shape, dtype=dtype, device=device)
 
-        self.obs = z(t, n, num_obs)
+        self.obs = z(t, n, num_obs)  # normalised, as the policy saw them
+        self.raw_obs = z(t, n, num_obs)  # as the env returned them; the normaliser learns from these
+        self.final_obs = z(t, n, num_obs)  # raw last observation of episodes that ended at step t
+        self.truncated = z(t, n)
         self.actions = z(t, n, num_actions)
         self.log_probs = z(t, n)
         self.values = z(t, n)
         self.means = z(t, n, num_actions)
-        self.rewards = z(t, n)
+        self.rewards = z(t, n)  # env rewards; scaled and bootstrapped after the rollout
         self.dones = z(t, n)
         self.advantages = z(t, n)
         self.returns = z(t, n)
