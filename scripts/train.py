@@ -52,6 +52,7 @@ def parse_args(argv=None):
     ap.add_argument("--repeat-times", type=int, default=None)
     ap.add_argument("--learning-rate", type=float, default=None)
     ap.add_argument("--episode-length", type=int, default=None, help="steps per episode (task default: 1000)")
+    ap.add_argument("--substeps", type=int, default=None, help="physics substeps per 1/60 s step (task default: 2)")
     ap.add_argument("--no-plots", action="store_true")
     ap.add_argument("--no-cuda-graph", action="store_true", help="run the PPO update eagerly (no CUDA graph)")
     ap.add_argument("--profile", action="store_true",
@@ -81,6 +82,8 @@ def build_config(args, task: str, num_envs: int, device: str, saved: dict | None
     from warpgym.envs import LocomotionVecEnv  # noqa: PLC0415
 
     common = {"task": task, "device": device, "max_episode_steps": args.episode_length}
+    if args.substeps is not None:
+        common["substeps"] = args.substeps
     return cfg.replace(
         batch_size=batch,
         env_class=LocomotionVecEnv,
@@ -134,6 +137,7 @@ def main(argv=None) -> int:
         num_envs = saved["num_envs"]
         args.seed = saved["seed"]
         args.episode_length = saved["env_args"].get("max_episode_steps")
+        args.substeps = saved["env_args"].get("substeps")
     else:
         if args.task.lower() not in TASK_NAMES:
             raise SystemExit(f"--task {args.task!r}: choose one of {sorted(TASK_NAMES.values())}")
