@@ -63,28 +63,14 @@ class LocomotionTask:
             raise ValueError(f"joint_limit_threshold={self.joint_limit_threshold!r} must lie in (0, 1)")
 
     def to_warp(self, start_height: float) -> LocomotionParams:
+        """The kernels' view of this task: every field the struct shares with it, plus the start pose."""
         p = LocomotionParams()
-        p.dt = self.dt
+        for name in LocomotionParams.vars:
+            if name in self.__dataclass_fields__:
+                value = getattr(self, name)
+                setattr(p, name, int(value) if isinstance(value, bool) else value)
         p.target = wp.vec3(*self.target)
         p.start_pos = wp.vec3(0.0, 0.0, start_height)
         p.start_rot = wp.quat_identity()
-        p.angular_velocity_scale = self.angular_velocity_scale
-        p.dof_velocity_scale = self.dof_velocity_scale
-        p.dof_force_scale = self.dof_force_scale
-        p.contact_force_scale = self.contact_force_scale
         p.observe_dof_forces = int(self.observe_dof_forces)
-        p.heading_weight = self.heading_weight
-        p.up_weight = self.up_weight
-        p.alive_reward = self.alive_reward
-        p.actions_cost = self.actions_cost
-        p.energy_cost = self.energy_cost
-        p.joints_at_limit_cost = self.joints_at_limit_cost
-        p.joint_limit_threshold = self.joint_limit_threshold
-        p.scaled_limit_cost = int(self.scaled_limit_cost)
-        p.death_cost = self.death_cost
-        p.termination_height = self.termination_height
-        p.episode_length = self.episode_length
-        p.dof_pos_noise = self.dof_pos_noise
-        p.dof_vel_noise = self.dof_vel_noise
-        p.max_speed = self.max_speed
         return p
