@@ -16,17 +16,24 @@ class RunningMeanStd(nn.Module):
         self.register_buffer("count", torch.zeros((), dtype=torch.float64))
 
     @torch.no_grad()
-    def update(self, x: torch.Tensor) -> None:
-        """Fold a batch (B, size) into the statistics (Chan et al.'s parallel merge); no host sync."""
-        x = x.reshape(-1, self.mean.shape[0]).float()
-        n = float(x.shape[0])
-        batch_mean = x.mean(0)
-        batch_var = x.var(0, unbiased=False)
+    def update(self, x: torch.Tensor, workers=None) -> None:
+        """Fold a batch (B, size) into the statistics (Chan et al.'s parallel merge); no host sync.
+
+        With ``workers`` (agents.distributed.Workers), the batch is every process's batch together.
+        """
+        size = self.mean.shape[0]
+        x = x.reshape(-1, size).double()
+        moments = torch.cat([x.new_full((1,), x.shape[0]), x.sum(0), (x * x).sum(0)])
+        if workers is not None:
+            workers.sum_(moments)
+        n = moments[0]
+        batch_mean = moments[1 : 1 + size] / n
+        batch_var = (moments[1 + size :] / n - batch_mean * batch_mean).clamp(min=0.0)
         total = self.count + n
-        w = (n / total).float()
+        w = n / total
         delta = batch_mean - self.mean
-        self.mean.add_(delta * w)
-        self.var.copy_(self.var * (1 - w) + batch_var * w + delta * delta * w * (1 - w))
+        self.mean.add_((delta * w).float())
+        self.var.copy_((self.var * (1 - w) + batch_var * w + delta * delta * w * (1 - w)).float())
         self.count.copy_(total)
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:

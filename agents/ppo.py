@@ -14,6 +14,7 @@ import torch
 
 from agents.actor_critic import ActorCritic, gaussian_kl
 from agents.config import Config
+from agents.distributed import Workers
 from agents.storage import RolloutStorage
 
 LR_MIN, LR_MAX = 1e-5, 1e-2
@@ -44,14 +45,18 @@ def adapted_lr(lr: torch.Tensor, kl: torch.Tensor, desired_kl: float) -> torch.T
 
 
 class PPO:
-    def __init__(self, policy: ActorCritic, cfg: Config, device: torch.device, cuda_graph: bool = True):
+    def __init__(self, policy: ActorCritic, cfg: Config, device: torch.device, cuda_graph: bool = True,
+                 workers: Workers | None = None):
         self.policy = policy
+        self.workers = workers or Workers()
         self.cfg = cfg
         self.device = device
         self.lr = torch.tensor(cfg.learning_rate, dtype=torch.float32, device=device)
         is_cuda = device.type == "cuda"
         self.optimizer = torch.optim.Adam(policy.parameters(), lr=self.lr, fused=True, capturable=is_cuda)
-        self.use_graph = cuda_graph and is_cuda
+        # Across several processes the step all-reduces gradients; it then runs eagerly, since NCCL
+        # inside a captured graph has not been checked on this project's machines.
+        self.use_graph = cuda_graph and is_cuda and not self.workers.active
         self._graph = None
         self._batch: dict[str, torch.Tensor] | None = None
 
@@ -73,7 +78,7 @@ class PPO:
         cfg, policy, b, idx = self.cfg, self.policy, self._batch, self._idx
         log_prob, entropy, values, mean = policy.evaluate(b["obs"][idx], b["actions"][idx])
         with torch.no_grad():
-            kl = gaussian_kl(b["means"][idx], self._old_log_std, mean, policy.log_std).mean()
+            kl = self.workers.mean_(gaussian_kl(b["means"][idx], self._old_log_std, mean, policy.log_std).mean())
             if cfg.desired_kl > 0:
                 self.lr.copy_(adapted_lr(self.lr, kl, cfg.desired_kl))
         surr = surrogate_loss(log_prob, b["log_probs"][idx], b["adv"][idx], cfg.clip_ratio)
@@ -83,6 +88,7 @@ class PPO:
         loss = surr + cfg.value_coef * v_loss - cfg.entropy_coef * ent + cfg.bounds_coef * b_loss
         self.optimizer.zero_grad(set_to_none=False)
         loss.backward()
+        self.workers.mean_grads_(policy.parameters())
         torch.nn.utils.clip_grad_norm_(policy.parameters(), cfg.max_grad_norm, foreach=True)
         self.optimizer.step()
         self._sums += torch.stack([surr.detach(), v_loss.detach(), ent.detach(), kl, b_loss.detach()])

@@ -41,8 +41,12 @@ class EpisodeTracker:
         speed_count = count if self.has_speed else torch.zeros_like(count)
         self.sums += torch.cat([count[None], totals, speed_count[None]]).double()
 
-    def read_and_clear(self) -> dict:
-        """One host read; means of the episodes finished since the last call (None where there were none)."""
+    def read_and_clear(self, workers=None) -> dict:
+        """One host read; means of the episodes finished since the last call (None where there were none).
+
+        With ``workers``, the episodes of every process count."""
+        if workers is not None:
+            workers.sum_(self.sums)
         n, r, length, s, ns = self.sums.tolist()
         self.sums.zero_()
         return {

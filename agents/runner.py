@@ -16,6 +16,7 @@ import torch
 from agents.actor_critic import ActorCritic
 from agents.checkpoint import load, rng_state, save_atomic, set_rng_state
 from agents.config import Config
+from agents.distributed import Workers
 from agents.evaluate import evaluate
 from agents.logger import MetricsLogger
 from agents.normalizer import RunningMeanStd
@@ -32,6 +33,7 @@ class OnPolicyRunner:
         self.env, self.cfg, self.eval_env = env, cfg.validated(), eval_env
         self.spec = spec = env_spec(env)
         self.device = spec.device
+        self.workers = Workers()
         self.num_minibatches = cfg.check_batch(spec.num_envs)
         torch.manual_seed(cfg.seed)
         if self.device.type == "cuda" and cfg.tf32:
@@ -40,12 +42,17 @@ class OnPolicyRunner:
         self.policy = ActorCritic(spec.num_obs, spec.num_actions, cfg.net_dims, cfg.activation,
                                   cfg.init_noise_std).to(self.device)
         self.normalizer = RunningMeanStd(spec.num_obs, cfg.obs_clip).to(self.device)
-        self.ppo = PPO(self.policy, cfg, self.device, cuda_graph=cuda_graph)
+        # every process starts from rank 0's weights, then explores with its own noise
+        self.workers.broadcast_(list(self.policy.parameters()) + list(self.normalizer.buffers()))
+        torch.manual_seed(cfg.seed + 7919 * self.workers.rank)
+        self.ppo = PPO(self.policy, cfg, self.device, cuda_graph=cuda_graph, workers=self.workers)
         self.storage = RolloutStorage(cfg.horizon_len, spec.num_envs, spec.num_obs, spec.num_actions, self.device)
         self.episodes = EpisodeTracker(cfg.horizon_len, spec.num_envs, self.device)
-        self.run_dir = run_dir
-        self.logger = MetricsLogger(run_dir) if run_dir else None
-        self.print = print_fn
+        main = self.workers.is_main
+        self.run_dir = run_dir if main else None
+        self.logger = MetricsLogger(run_dir) if run_dir and main else None
+        self.print = print_fn if main else (lambda s: None)
+        self.eval_env = eval_env if main else None
         self.start_time = start_time if start_time is not None else time.time()
         self.iteration = 0
         self.samples = 0
@@ -70,7 +77,7 @@ class OnPolicyRunner:
         if self.last_raw_obs is None:
             obs, _ = env.reset()
             self.last_raw_obs = obs.clone()
-            self.normalizer.update(obs)
+            self.normalizer.update(obs, self.workers)
         timer = self.timer
         timer.start()
         s.raw_obs[0].copy_(self.last_raw_obs)
@@ -102,7 +109,7 @@ class OnPolicyRunner:
         s.returns.copy_(ret)
         self.episodes.end_rollout(s.dones)
         if cfg.normalize_obs:
-            self.normalizer.update(s.raw_obs.flatten(0, 1))
+            self.normalizer.update(s.raw_obs.flatten(0, 1), self.workers)
         timer.lap("bootstrap, GAE, normaliser")
 
     def update(self) -> dict:
@@ -113,13 +120,14 @@ class OnPolicyRunner:
               time_limit: float | None = None) -> list[dict]:
         if max_iterations is None and total_steps is None and time_limit is None:
             raise ValueError("give at least one of max_iterations, total_steps, time_limit, or training never stops")
-        per_iter = self.spec.num_envs * self.cfg.horizon_len
+        per_iter = self.spec.num_envs * self.cfg.horizon_len * self.workers.size  # samples of all processes
         goal = [max_iterations, None if total_steps is None else math.ceil(total_steps / per_iter)]
         last_iter = min([g for g in goal if g is not None], default=None)
 
         def done() -> bool:
-            return ((last_iter is not None and self.iteration >= last_iter)
+            stop = ((last_iter is not None and self.iteration >= last_iter)
                     or (time_limit is not None and self.elapsed() >= time_limit))
+            return self.workers.agree(stop, self.device)  # all processes stop at the same iteration
 
         mark = time.perf_counter()
         self.last_eval_time = self.elapsed()
@@ -150,9 +158,9 @@ class OnPolicyRunner:
         values = torch.stack([stats[k].float() for k in keys]).tolist()  # the iteration's one host read
         now = time.perf_counter()
         row = {"iteration": self.iteration, "samples": self.samples, "time_s": round(self.elapsed(), 3),
-               "samples_per_s": self.spec.num_envs * self.cfg.horizon_len / max(now - mark, 1e-9),
+               "samples_per_s": self.spec.num_envs * self.cfg.horizon_len * self.workers.size / max(now - mark, 1e-9),
                "collect_s": t1 - t0, "update_s": now - t1}
-        row.update(self.episodes.read_and_clear())
+        row.update(self.episodes.read_and_clear(self.workers))
         row.update(dict(zip(keys, values)))
         if self.eval_env is not None and (final or self.elapsed() - self.last_eval_time >= self.cfg.eval_gap):
             t_eval = time.perf_counter()

@@ -3,6 +3,7 @@
     python scripts/train.py --task Ant                       # GPU: 4096 envs; CPU: 32 envs, a short demo
     python scripts/train.py --task Humanoid --time-limit 300
     python scripts/train.py --resume runs/Ant-20261122-120000 --max-iterations 800
+    torchrun --nproc_per_node=4 scripts/train.py --task Ant  # 4 GPUs, 4096 envs each, one policy
 
 A run directory holds config.json, metrics.jsonl/.csv, tensorboard/, checkpoint.pt (written
 atomically every --save-gap iterations and at the end), summary.json, and the two plots
@@ -120,8 +121,37 @@ def summarize(history: list[dict], device_name: str, cfg: Config) -> dict:
     return out
 
 
+def start_workers(args) -> tuple[int, str | None]:
+    """Under torchrun (WORLD_SIZE > 1): join the process group; return (rank, this process's device)."""
+    if int(os.environ.get("WORLD_SIZE", "1")) <= 1:
+        return 0, args.device
+    import torch  # noqa: PLC0415
+    import torch.distributed as dist  # noqa: PLC0415
+
+    local = int(os.environ.get("LOCAL_RANK", "0"))
+    on_cpu = args.device == "cpu" or (args.device is None and not torch.cuda.is_available())
+    if on_cpu:
+        device = "cpu"
+    else:
+        device = f"cuda:{local}"
+        torch.cuda.set_device(local)
+    dist.init_process_group("gloo" if on_cpu else "nccl")
+    return dist.get_rank(), device
+
+
 def main(argv=None) -> int:
     args = parse_args(argv)
+    import torch.distributed as dist  # noqa: PLC0415
+
+    rank, args.device = start_workers(args)
+    try:
+        return train(args, rank)
+    finally:
+        if dist.is_available() and dist.is_initialized():
+            dist.destroy_process_group()
+
+
+def train(args, rank: int) -> int:
     import torch  # noqa: PLC0415
 
     import warpgym  # noqa: PLC0415,F401  (registers the envs, quiets Warp)
@@ -148,17 +178,24 @@ def main(argv=None) -> int:
         run_dir = args.run_dir or os.path.join("runs", f"{task}-{time.strftime('%Y%m%d-%H%M%S')}")
     kind = "cuda" if device.startswith("cuda") else "cpu"
     cfg = build_config(args, task, num_envs, device, saved)
+    if rank > 0:  # each process draws its own reset noise; rank 0 alone logs, evaluates and saves
+        cfg = cfg.replace(env_args={**cfg.env_args, "seed": cfg.env_args["seed"] + 1000 * rank})
+        args.no_eval = True
     if args.max_iterations is None and args.total_steps is None and args.time_limit is None:
         args.max_iterations = DEFAULT_ITERATIONS[kind][task]
 
-    os.makedirs(run_dir, exist_ok=True)
+    if rank == 0:
+        os.makedirs(run_dir, exist_ok=True)
     device_name = torch.cuda.get_device_name(torch.device(device)) if kind == "cuda" else "cpu"
-    if not args.resume:
+    if not args.resume and rank == 0:
         write_json(os.path.join(run_dir, "config.json"),
                    {"task": task, "device": device, "num_envs": num_envs, "seed": args.seed, **cfg.to_dict()})
-    print(f"warpgym PPO | {task} | {num_envs} envs on {device} ({device_name}) | run dir {run_dir}", flush=True)
-    print("building the envs; Warp compiles its kernels on first use (about a minute on a CPU, "
-          "cached in ~/.cache/warp afterwards)", flush=True)
+    say = print if rank == 0 else (lambda *a, **k: None)
+    workers = int(os.environ.get("WORLD_SIZE", "1"))
+    say(f"warpgym PPO | {task} | {num_envs} envs on {device} ({device_name})"
+        + (f" x {workers} processes" if workers > 1 else "") + f" | run dir {run_dir}", flush=True)
+    say("building the envs; Warp compiles its kernels on first use (about a minute on a CPU, "
+        "cached in ~/.cache/warp afterwards)", flush=True)
 
     env = cfg.env_class(**cfg.env_args)
     eval_env = None if args.no_eval else cfg.eval_env_class(**cfg.eval_env_args)
@@ -168,8 +205,10 @@ def main(argv=None) -> int:
                             cuda_graph=not args.no_cuda_graph)
     if args.resume:
         runner.load(os.path.join(run_dir, "checkpoint.pt"), resume=True)
-        print(f"resumed at iteration {runner.iteration} ({runner.samples} samples)", flush=True)
+        say(f"resumed at iteration {runner.iteration} ({runner.samples} samples)", flush=True)
     history = runner.learn(args.max_iterations, args.total_steps, args.time_limit)
+    if rank > 0:
+        return 0
     summary = summarize(history, device_name, cfg)
     if args.profile:
         summary["profile"] = runner.timer.table()
