@@ -190,3 +190,15 @@ def test_bad_tensors_and_indices_are_refused(ant_sim):
         ant_sim.set_dof_state_tensor_indexed(torch.zeros(n * k, 2), torch.tensor([0.0]))
     with pytest.raises(ValueError, match=r"expected \(3, 13\)"):
         ant_sim.set_actor_root_state_tensor_indexed(torch.zeros(13), torch.tensor([0]))
+
+
+def test_too_many_envs_for_the_gpu_is_refused_before_allocating(monkeypatch):
+    from warpgym.robots import robot_spec
+
+    sim = Sim.__new__(Sim)  # only the check, on a pretend GPU with 1 GiB free
+    sim.spec, sim.num_envs, sim.device, sim.torch_device = robot_spec("humanoid"), 100_000, "cuda:0", None
+    monkeypatch.setattr(torch.cuda, "mem_get_info", lambda device=None: (2**30, 80 * 2**30))
+    with pytest.raises(MemoryError, match=r"num_envs=100000 .* 1.0 GiB free: pass num_envs <= 8378"):
+        sim._check_memory()
+    sim.num_envs = 4000
+    sim._check_memory()

@@ -23,6 +23,9 @@ class RobotSpec:
     # start pose, which is too small for a Humanoid lying on the ground tangled in itself.
     nconmax: int | None = None
     njmax: int | None = None
+    # Device memory per 1000 envs [MiB], measured on an H100 (docs/benchmarks.md), for the check
+    # that refuses a num_envs the GPU cannot hold before anything is allocated.
+    mib_per_1000_envs: float = 50.0
 
 
 ROBOTS: dict[str, RobotSpec] = {
@@ -31,6 +34,7 @@ ROBOTS: dict[str, RobotSpec] = {
         mjcf="nv_ant.xml",
         start_height=0.55,
         feet=("front_left_foot", "front_right_foot", "left_back_foot", "right_back_foot"),
+        mib_per_1000_envs=50.0,
     ),
     "humanoid": RobotSpec(
         name="humanoid",
@@ -39,6 +43,7 @@ ROBOTS: dict[str, RobotSpec] = {
         feet=("right_foot", "left_foot"),
         nconmax=96,
         njmax=192,
+        mib_per_1000_envs=110.0,
     ),
 }
 

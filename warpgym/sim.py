@@ -37,7 +37,7 @@ class Sim(TensorAPI):
         robot: "ant" or "humanoid".
         num_envs: number of worlds (one robot each).
         device: "cpu", "cuda" or "cuda:N"; default: cuda:0 when present, else cpu.
-        seed: base seed of everything random the Sim and the tasks on it draw.
+        seed: seed for the tasks built on this Sim (the bare Sim itself draws no random numbers).
         dt: control step [s]; one ``step()`` advances this much.
         substeps: physics substeps per control step.
         solver_iterations, ls_iterations: MuJoCo Warp's Newton-solver and line-search iteration caps.
@@ -76,22 +76,29 @@ class Sim(TensorAPI):
         self._tensors: dict[str, tuple[wp.array, torch.Tensor]] = {}
 
     # ------------------------------------------------------------------ model
+    def _check_memory(self) -> None:
+        if not self.device.startswith("cuda"):
+            return
+        free, _ = torch.cuda.mem_get_info(self.torch_device)
+        need = self.spec.mib_per_1000_envs * self.num_envs / 1000 * 2**20
+        if need > 0.9 * free:
+            fits = int(0.9 * free / (self.spec.mib_per_1000_envs * 2**20) * 1000)
+            raise MemoryError(
+                f"num_envs={self.num_envs} {self.spec.name} worlds need about {need / 2**30:.1f} GiB on "
+                f"{self.device}, which has {free / 2**30:.1f} GiB free: pass num_envs <= {fits}"
+            )
+
     def _build(self, solver_iterations: int, ls_iterations: int) -> None:
         import newton  # noqa: PLC0415
 
+        self._check_memory()
         path = mjcf_path(self.spec)
         robot = newton.ModelBuilder()
         robot.add_mjcf(path, ignore_names=["floor", "ground"])
         scene = newton.ModelBuilder()
         scene.add_ground_plane()
         scene.replicate(robot, self.num_envs)
-        try:
-            self.model = scene.finalize(device=self.device)
-        except (RuntimeError, MemoryError) as exc:
-            raise MemoryError(
-                f"building {self.num_envs} {self.spec.name} worlds on {self.device} failed ({exc}); "
-                "pass a smaller num_envs"
-            ) from exc
+        self.model = scene.finalize(device=self.device)
         model = self.model
         n = self.num_envs
         self.coords_per_env = model.joint_coord_count // n
