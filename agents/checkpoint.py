@@ -34,3 +34,21 @@ def set_rng_state(state: dict, device: torch.device) -> None:
     torch.set_rng_state(state["torch"].cpu())
     if device.type == "cuda" and "cuda" in state:
         torch.cuda.set_rng_state(state["cuda"].cpu(), device)
+
+
+def policy_from_checkpoint(ckpt: dict, num_obs: int, num_actions: int, device: torch.device):
+    """The trained actor-critic and its observation normaliser, ready for evaluation."""
+    from agents.actor_critic import ActorCritic  # noqa: PLC0415
+    from agents.normalizer import RunningMeanStd  # noqa: PLC0415
+
+    cfg = ckpt["config"]
+    have = (ckpt["spec"]["num_obs"], ckpt["spec"]["num_actions"])
+    if have != (num_obs, num_actions):
+        raise ValueError(f"checkpoint is for obs/action sizes {have}, the env has {(num_obs, num_actions)}")
+    policy = ActorCritic(num_obs, num_actions, tuple(cfg["net_dims"]), cfg["activation"]).to(device)
+    policy.load_state_dict(ckpt["policy"])
+    if not cfg["normalize_obs"]:
+        return policy, lambda obs: obs
+    norm = RunningMeanStd(num_obs, cfg["obs_clip"]).to(device)
+    norm.load_state_dict(ckpt["normalizer"])
+    return policy, norm

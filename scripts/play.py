@@ -26,10 +26,8 @@ def main(argv=None) -> int:
 
     import torch  # noqa: PLC0415
 
-    from agents.actor_critic import ActorCritic  # noqa: PLC0415
-    from agents.checkpoint import load  # noqa: PLC0415
+    from agents.checkpoint import load, policy_from_checkpoint  # noqa: PLC0415
     from agents.evaluate import evaluate  # noqa: PLC0415
-    from agents.normalizer import RunningMeanStd  # noqa: PLC0415
     from warpgym.device import resolve_device  # noqa: PLC0415
     from warpgym.envs import LocomotionVecEnv  # noqa: PLC0415
 
@@ -43,11 +41,8 @@ def main(argv=None) -> int:
     episode_length = cfg["env_args"].get("max_episode_steps")
     n = args.num_envs or (64 if device.startswith("cuda") else 4)
     env = LocomotionVecEnv(task, num_envs=n, device=device, seed=args.seed, max_episode_steps=episode_length)
-    policy = ActorCritic(env.num_obs, env.num_actions, tuple(cfg["net_dims"]), cfg["activation"]).to(device)
-    policy.load_state_dict(ckpt["policy"])
-    norm = RunningMeanStd(env.num_obs, cfg["obs_clip"]).to(device)
-    norm.load_state_dict(ckpt["normalizer"])
-    result = evaluate(env, policy, norm if cfg["normalize_obs"] else (lambda o: o), env.task.episode_length)
+    policy, normalize = policy_from_checkpoint(ckpt, env.num_obs, env.num_actions, torch.device(device))
+    result = evaluate(env, policy, normalize, env.task.episode_length)
     result = {"task": task, "checkpoint": path, "iteration": ckpt["iteration"], "samples": ckpt["samples"],
               "episodes": n, **result}
     print(f"{task}: {n} episodes of the deterministic policy from iteration {ckpt['iteration']}: "

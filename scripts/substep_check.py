@@ -4,8 +4,9 @@ training step size exploits the integrator, not the robot.
     python scripts/substep_check.py runs/Ant-.../checkpoint.pt --num-envs 256 --steps 300
 
 Runs the deterministic policy for --steps control steps under four settings (2 or 8 substeps per
-1/60 s step; 8 or 50 solver and line-search iterations) and prints the mean forward speed, the
-mean torso height, the envs still alive and the largest joint speed seen.
+1/60 s step; 8 or 50 solver and line-search iterations) and prints the forward speed and the torso
+height (summed while an env is alive, divided by envs x steps, so a fallen env adds zero), the envs
+still alive at the end and the largest joint speed seen.
 """
 
 from __future__ import annotations
@@ -31,9 +32,7 @@ def main(argv=None) -> int:
 
     import torch  # noqa: PLC0415
 
-    from agents.actor_critic import ActorCritic  # noqa: PLC0415
-    from agents.checkpoint import load  # noqa: PLC0415
-    from agents.normalizer import RunningMeanStd  # noqa: PLC0415
+    from agents.checkpoint import load, policy_from_checkpoint  # noqa: PLC0415
     from warpgym.device import resolve_device  # noqa: PLC0415
     from warpgym.envs import LocomotionVecEnv  # noqa: PLC0415
 
@@ -44,10 +43,7 @@ def main(argv=None) -> int:
     for label, substeps, iters in SETTINGS:
         env = LocomotionVecEnv(cfg["env_args"]["task"], num_envs=n, device=device, seed=5, substeps=substeps,
                                sim_options={"solver_iterations": iters, "ls_iterations": iters})
-        policy = ActorCritic(env.num_obs, env.num_actions, tuple(cfg["net_dims"]), cfg["activation"]).to(device)
-        policy.load_state_dict(ckpt["policy"])
-        norm = RunningMeanStd(env.num_obs, cfg["obs_clip"]).to(device)
-        norm.load_state_dict(ckpt["normalizer"])
+        policy, normalize = policy_from_checkpoint(ckpt, env.num_obs, env.num_actions, torch.device(device))
         obs, _ = env.reset(seed=5)
         alive = torch.ones(n, dtype=torch.bool, device=device)
         vx = torch.zeros(n, device=device)
@@ -55,7 +51,7 @@ def main(argv=None) -> int:
         max_dof_vel = torch.zeros((), device=device)
         with torch.no_grad():
             for _ in range(args.steps):
-                obs, _, term, trunc, _ = env.step(policy.act_deterministic(norm(obs)))
+                obs, _, term, trunc, _ = env.step(policy.act_deterministic(normalize(obs)))
                 alive &= ~(term | trunc)
                 vx += env.sim.root_vel[:, 0] * alive
                 z += env.sim.root_pose[:, 2] * alive

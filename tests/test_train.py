@@ -9,12 +9,13 @@ import torch
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
 
+import play  # noqa: E402
 import train  # noqa: E402
 
 from agents.logger import read_metrics  # noqa: E402
 
 
-def test_short_cpu_run_writes_logs_checkpoint_plots_and_resumes(tmp_path):
+def test_short_cpu_run_writes_logs_checkpoint_plots_resumes_and_plays(tmp_path, capsys):
     run = str(tmp_path / "ant")
     common = ["--horizon-len", "8", "--save-gap", "2", "--eval-gap", "0", "--eval-envs", "2",
               "--episode-length", "40"]
@@ -36,3 +37,9 @@ def test_short_cpu_run_writes_logs_checkpoint_plots_and_resumes(tmp_path):
     assert [r["iteration"] for r in rows] == [1, 2, 3, 4, 5]
     assert rows[3]["time_s"] > rows[2]["time_s"]  # the wall-clock axis carries on across processes
     assert torch.load(os.path.join(run, "checkpoint.pt"), weights_only=False)["samples"] == 5 * 64
+
+    # the deterministic policy of that run plays full 40-step episodes and reports return and speed
+    assert play.main([run, "--device", "cpu", "--num-envs", "2"]) == 0
+    result = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert result["iteration"] == 5 and result["episodes"] == 2
+    assert 0 < result["eval/length"] <= 40 and result["eval/return"] != 0

@@ -34,7 +34,6 @@ ROBOTS: dict[str, RobotSpec] = {
         mjcf="nv_ant.xml",
         start_height=0.55,
         feet=("front_left_foot", "front_right_foot", "left_back_foot", "right_back_foot"),
-        mib_per_1000_envs=50.0,
     ),
     "humanoid": RobotSpec(
         name="humanoid",
