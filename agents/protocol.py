@@ -7,6 +7,10 @@ device. Finished envs reset inside the step (Gymnasium's same-step autoreset): `
 holds their last observation, masked by ``info["_final_obs"]``. Optional:
 ``info["episode"] = {"r": return, "l": length, "s": mean forward speed, "_r": mask}`` for logging,
 and ``max_episode_steps`` for evaluation.
+
+Optional too: ``graph_capturable = True`` declares that ``step`` can be recorded into a torch CUDA
+graph and replayed: it never waits on the host, and its outputs are persistent tensors that each
+step overwrites. The runner then captures whole rollouts.
 """
 
 from __future__ import annotations
@@ -23,6 +27,7 @@ class EnvSpec:
     num_actions: int
     device: torch.device
     max_episode_steps: int
+    graph_capturable: bool = False
 
 
 def _size(env, attr: str, space: str) -> int:
@@ -46,4 +51,5 @@ def env_spec(env) -> EnvSpec:
     if steps is None:
         steps = getattr(getattr(env, "task", None), "episode_length", 1000)
     return EnvSpec(int(env.num_envs), _size(env, "num_obs", "single_observation_space"),
-                   _size(env, "num_actions", "single_action_space"), torch.device(device), int(steps))
+                   _size(env, "num_actions", "single_action_space"), torch.device(device), int(steps),
+                   bool(getattr(env, "graph_capturable", False)))

@@ -29,7 +29,8 @@ from agents.storage import RolloutStorage, compute_gae
 
 class OnPolicyRunner:
     def __init__(self, env, cfg: Config, run_dir: str | None = None, eval_env=None,
-                 start_time: float | None = None, print_fn=print, profile: bool = False, cuda_graph: bool = True):
+                 start_time: float | None = None, print_fn=print, profile: bool = False, cuda_graph: bool = True,
+                 rollout_graph: bool = True):
         self.env, self.cfg, self.eval_env = env, cfg.validated(), eval_env
         self.spec = spec = env_spec(env)
         self.device = spec.device
@@ -61,6 +62,11 @@ class OnPolicyRunner:
         self.history: list[dict] = []
         self.last_raw_obs: torch.Tensor | None = None  # the env's latest observation, not yet acted on
         self.timer = PhaseTimer(self.device, enabled=profile)
+        # Only an env that declares it (agents.protocol) is captured; the normaliser update stays
+        # outside the graph, since across processes it all-reduces.
+        self.rollout_graph = rollout_graph and cuda_graph and self.device.type == "cuda" and spec.graph_capturable
+        self._rollout_graph: torch.cuda.CUDAGraph | None = None
+        self._rollouts_eager = 0
 
     # ------------------------------------------------------------------ pieces
     def normalize(self, obs: torch.Tensor) -> torch.Tensor:
@@ -71,15 +77,50 @@ class OnPolicyRunner:
 
     @torch.no_grad()
     def collect(self) -> None:
-        """One rollout of ``horizon_len`` steps. The normaliser is frozen during it and learns from
-        its raw observations afterwards; truncated episodes are bootstrapped in one batched pass."""
-        cfg, s, env, policy = self.cfg, self.storage, self.env, self.policy
+        """One rollout of ``horizon_len`` steps, then the observation normaliser learns from it.
+
+        On CUDA the second rollout is captured as one CUDA graph (policy, env step, storage,
+        bootstrap and GAE, ``horizon_len`` times over) and every later rollout replays it; the
+        first runs eagerly and warms up every kernel the capture will record."""
         if self.last_raw_obs is None:
-            obs, _ = env.reset()
+            obs, _ = self.env.reset()
             self.last_raw_obs = obs.clone()
             self.normalizer.update(obs, self.workers)
         timer = self.timer
         timer.start()
+        if self._rollout_graph is not None:
+            self._rollout_graph.replay()
+            timer.lap("collect: rollout graph (policy, env step, storage, GAE)")
+        elif self.rollout_graph and self._rollouts_eager > 0:
+            self._rollout_graph = self._capture_rollout()
+            if self._rollout_graph is not None:
+                self._rollout_graph.replay()
+            else:
+                self._rollout(timer)
+            timer.lap("collect: rollout graph capture")
+        else:
+            self._rollout(timer)
+            self._rollouts_eager += 1
+        if self.cfg.normalize_obs:
+            self.normalizer.update(self.storage.raw_obs.flatten(0, 1), self.workers)
+        timer.lap("normaliser update")
+
+    def _capture_rollout(self) -> torch.cuda.CUDAGraph | None:
+        graph = torch.cuda.CUDAGraph()
+        try:
+            with torch.cuda.graph(graph, capture_error_mode="thread_local"):
+                self._rollout(PhaseTimer(self.device))  # a synchronisation would break the capture
+        except RuntimeError as e:
+            # Nothing ran during the failed capture; the rollouts go on eagerly, a little slower.
+            self.rollout_graph = False
+            self.print(f"warning: capturing the rollout as a CUDA graph failed ({e}); collecting eagerly")
+            return None
+        return graph
+
+    def _rollout(self, timer: PhaseTimer) -> None:
+        """The rollout's device work. The normaliser is frozen during it; truncated episodes are
+        bootstrapped from the value of their final observation in one batched pass at the end."""
+        cfg, s, env, policy = self.cfg, self.storage, self.env, self.policy
         s.raw_obs[0].copy_(self.last_raw_obs)
         for t in range(cfg.horizon_len):
             obs = self.normalize(s.raw_obs[t])
@@ -101,16 +142,13 @@ class OnPolicyRunner:
             (s.raw_obs[t + 1] if t + 1 < cfg.horizon_len else self.last_raw_obs).copy_(next_obs)
             timer.lap("collect: storage and statistics")
         last_values = policy.value(self.normalize(self.last_raw_obs))
-        # A truncated episode did not end in the MDP: bootstrap it from the value of its last state.
         final_values = policy.value(self.normalize(s.final_obs.flatten(0, 1))).view_as(s.rewards)
         rewards = s.rewards * cfg.reward_scale + cfg.gamma * final_values * s.truncated
         adv, ret = compute_gae(rewards, s.values, s.dones, last_values, cfg.gamma, cfg.lambda_gae)
         s.advantages.copy_(adv)
         s.returns.copy_(ret)
         self.episodes.end_rollout(s.dones)
-        if cfg.normalize_obs:
-            self.normalizer.update(s.raw_obs.flatten(0, 1), self.workers)
-        timer.lap("bootstrap, GAE, normaliser")
+        timer.lap("bootstrap, GAE")
 
     def update(self) -> dict:
         return self.ppo.update(self.storage, self._old_log_std, self.num_minibatches)

@@ -4,6 +4,9 @@ import warp as wp
 
 from kernels.tensor_api import ROOT_DOFS
 
+# Nothing differentiates through these kernels; skipping adjoint code shortens their compile.
+wp.set_module_options({"enable_backward": False})
+
 
 @wp.kernel
 def apply_actions(

@@ -7,6 +7,9 @@ from kernels.observations import potential, root_position, write_observation
 from kernels.params import LocomotionParams
 from kernels.rewards import locomotion_reward
 
+# Nothing differentiates through these kernels; skipping adjoint code shortens their compile.
+wp.set_module_options({"enable_backward": False})
+
 
 @wp.kernel
 def locomotion_step(

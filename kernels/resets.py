@@ -6,6 +6,9 @@ from kernels.observations import potential, write_observation
 from kernels.params import LocomotionParams
 from kernels.tensor_api import ROOT_COORDS, ROOT_DOFS
 
+# Nothing differentiates through these kernels; skipping adjoint code shortens their compile.
+wp.set_module_options({"enable_backward": False})
+
 
 @wp.func
 def env_rng(rng_state: wp.array[wp.int32], env: int):

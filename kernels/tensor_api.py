@@ -9,6 +9,9 @@ Layouts (N envs, C joint coordinates and D joint dofs per env, the first 7 coord
 
 import warp as wp
 
+# Nothing differentiates through these kernels; skipping adjoint code shortens their compile.
+wp.set_module_options({"enable_backward": False})
+
 ROOT_COORDS = 7
 ROOT_DOFS = 6
 

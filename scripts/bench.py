@@ -127,8 +127,12 @@ def main(argv=None) -> int:
     ap.add_argument("--repeats", type=int, default=5, help="timings per figure; the median is reported")
     ap.add_argument("--solver-iterations", type=int, default=8)
     ap.add_argument("--ls-iterations", type=int, default=8)
+    ap.add_argument("--no-mathdx", action="store_true",
+                    help="compile Warp's tile Cholesky without libmathdx (faster to compile; see the timings)")
     ap.add_argument("--out", default=None, help="JSON file to write (default: print only)")
     args = ap.parse_args(argv)
+    if args.no_mathdx:
+        wp.config.enable_mathdx_solver = False
     device = resolve_device(args.device)
     gpu = torch.cuda.get_device_name(torch.device(device)) if device.startswith("cuda") else platform.processor()
 
@@ -149,6 +153,7 @@ def main(argv=None) -> int:
               f"{r['gpu_mem_mib'] / r['num_envs'] * 1000:.0f} |")
     if args.out:
         meta = {"device": device, "gpu": gpu, "warp": wp.__version__, "torch": torch.__version__,
+                "mathdx_solver": bool(wp.config.enable_mathdx_solver),
                 "command": " ".join([os.path.basename(sys.argv[0])] + (argv if argv is not None else sys.argv[1:]))}
         os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
         with open(args.out + ".tmp", "w") as f:

@@ -1,41 +1,64 @@
 #!/usr/bin/env bash
 # Produce every number in docs/benchmarks.md on one GPU machine. Usage: scripts/run_benchmarks.sh OUT_DIR
-# Writes logs, JSON and run directories under OUT_DIR; takes about 20 minutes on an H100.
+# Writes logs, JSON and run directories under OUT_DIR; takes about 25 minutes on an H100.
+# The first run starts from an empty Warp kernel cache (a fresh machine), so run this script first.
 set -uo pipefail
 out=${1:?usage: scripts/run_benchmarks.sh OUT_DIR}
 mkdir -p "$out"
 export PYTHONUNBUFFERED=1
-graph_flag=""
+flags=""
 step() { echo "== $(date +%T) $*" | tee -a "$out/progress.log"; }
+nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv > "$out/machine.txt" 2>&1
+python3 -c "import torch, warp, newton, mujoco_warp; print(torch.__version__, warp.__version__, newton.__version__, mujoco_warp.__version__)" >> "$out/machine.txt" 2>&1
 
-step "GPU checks (CUDA graph update vs eager, env vs torch reference)"
-if ! python3 -m pytest -q tests/test_cuda.py > "$out/test_cuda.log" 2>&1; then
-  step "GPU checks FAILED: training below runs the PPO update without a CUDA graph"
-  graph_flag="--no-cuda-graph"
+# Everything below shares one kernel cache that starts empty: the first run pays every compile.
+cold=$(mktemp -d)
+export WARP_CACHE_PATH=$cold
+step "cold start: Ant 4096 envs, 75 s, empty kernel cache $cold"
+python3 scripts/train.py --task Ant --num-envs 4096 --time-limit 75 --eval-gap 10 \
+  --run-dir "$out/ant_4096_cold" > "$out/ant_4096_cold.log" 2>&1
+
+step "GPU checks (captured rollout and update vs eager, env vs torch reference)"
+python3 -m pytest -q tests/test_cuda.py > "$out/test_cuda.log" 2>&1
+if grep -q "FAILED.*captured_rollout" "$out/test_cuda.log"; then
+  step "captured rollout check FAILED: training below collects eagerly"; flags="$flags --no-rollout-graph"
+fi
+if grep -q "FAILED.*captured_update" "$out/test_cuda.log"; then
+  step "captured update check FAILED: training below runs without CUDA graphs"; flags="$flags --no-cuda-graph"
 fi
 
 step "throughput: raw Newton vs Sim vs full env step"
 python3 scripts/bench.py --robots ant humanoid --num-envs 1024 4096 16384 --steps 100 --repeats 5 \
   --out "$out/bench.json" > "$out/bench.log" 2>&1
 
+nomathdx=$(mktemp -d)
+step "Ant 4096 without libmathdx, from an empty kernel cache: compile time and throughput"
+WARP_CACHE_PATH=$nomathdx python3 scripts/bench.py --robots ant --num-envs 4096 --steps 100 --repeats 5 \
+  --no-mathdx --out "$out/bench_no_mathdx.json" > "$out/bench_no_mathdx.log" 2>&1
+
 for task in Ant Humanoid; do
   step "profile: $task 4096 envs, 40 iterations"
   python3 scripts/train.py --task "$task" --num-envs 4096 --max-iterations 40 --profile --no-eval --no-plots \
-    $graph_flag --run-dir "$out/profile_$task" > "$out/profile_$task.log" 2>&1
+    $flags --run-dir "$out/profile_$task" > "$out/profile_$task.log" 2>&1
 done
+
+step "train: Ant 4096 envs, 90 s, rollouts launched step by step (what the rollout graph buys)"
+python3 scripts/train.py --task Ant --num-envs 4096 --time-limit 90 --eval-gap 10 --no-rollout-graph $flags \
+  --run-dir "$out/ant_4096_no_rollout_graph" > "$out/ant_4096_no_rollout_graph.log" 2>&1
 
 for n in 4096 1024 16384 32768; do
   step "train: Ant $n envs, 90 s"
-  python3 scripts/train.py --task Ant --num-envs "$n" --time-limit 90 --eval-gap 10 $graph_flag \
+  python3 scripts/train.py --task Ant --num-envs "$n" --time-limit 90 --eval-gap 10 $flags \
     --run-dir "$out/ant_$n" > "$out/ant_$n.log" 2>&1
 done
 
 step "train: Humanoid 4096 envs, 300 s"
-python3 scripts/train.py --task Humanoid --num-envs 4096 --time-limit 300 --eval-gap 20 $graph_flag \
+python3 scripts/train.py --task Humanoid --num-envs 4096 --time-limit 300 --eval-gap 20 $flags \
   --run-dir "$out/humanoid_4096" > "$out/humanoid_4096.log" 2>&1
 
 python3 scripts/plot.py "$out/ant_1024" "$out/ant_4096" "$out/ant_16384" "$out/ant_32768" \
   --labels "1024 envs" "4096 envs" "16384 envs" "32768 envs" --title "Ant: PPO, one GPU" \
   --out "$out/fig_ant" > /dev/null 2>&1
+rm -rf "$cold" "$nomathdx"
 step "done"
 touch "$out/DONE"

@@ -55,7 +55,10 @@ def parse_args(argv=None):
     ap.add_argument("--episode-length", type=int, default=None, help="steps per episode (task default: 1000)")
     ap.add_argument("--substeps", type=int, default=None, help="physics substeps per 1/60 s step (task default: 2)")
     ap.add_argument("--no-plots", action="store_true")
-    ap.add_argument("--no-cuda-graph", action="store_true", help="run the PPO update eagerly (no CUDA graph)")
+    ap.add_argument("--no-cuda-graph", action="store_true",
+                    help="run everything eagerly: no CUDA graph of the rollout or of the PPO update")
+    ap.add_argument("--no-rollout-graph", action="store_true",
+                    help="launch each rollout step from Python instead of replaying one captured rollout")
     ap.add_argument("--profile", action="store_true",
                     help="time each phase of an iteration (synchronises the GPU between phases: slower)")
     return ap.parse_args(argv)
@@ -202,7 +205,7 @@ def train(args, rank: int) -> int:
     assert isinstance(env, LocomotionVecEnv)
     runner = OnPolicyRunner(env, cfg, run_dir=run_dir, eval_env=eval_env, start_time=PROCESS_START,
                             print_fn=lambda s: print(s, flush=True), profile=args.profile,
-                            cuda_graph=not args.no_cuda_graph)
+                            cuda_graph=not args.no_cuda_graph, rollout_graph=not args.no_rollout_graph)
     if args.resume:
         runner.load(os.path.join(run_dir, "checkpoint.pt"), resume=True)
         say(f"resumed at iteration {runner.iteration} ({runner.samples} samples)", flush=True)

@@ -15,6 +15,7 @@ import warp as wp
 
 from kernels import tensor_api as k_api
 from warpgym.device import resolve_device
+from warpgym.preload import Preload
 from warpgym.robots import RobotSpec, hinge_joint_names, mjcf_path, motor_gears, robot_spec
 from warpgym.streams import StreamOrder
 from warpgym.tensor_api import TensorAPI
@@ -92,6 +93,7 @@ class Sim(TensorAPI):
         import newton  # noqa: PLC0415
 
         self._check_memory()
+        preload = Preload(self.device)  # compiles while the model is built below
         path = mjcf_path(self.spec)
         robot = newton.ModelBuilder()
         robot.add_mjcf(path, ignore_names=["floor", "ground"])
@@ -136,6 +138,7 @@ class Sim(TensorAPI):
         model.joint_q.assign(q.reshape(-1))
         model.joint_qd.zero_()
 
+        preload.wait()
         self.solver = newton.solvers.SolverMuJoCo(
             model,
             iterations=solver_iterations,
@@ -176,15 +179,21 @@ class Sim(TensorAPI):
             self.solver.step(self.state, self.state, self.control, None, self.sub_dt)
 
     def capture(self, fn):
-        """Capture ``fn``'s launches as one CUDA graph; return None on the CPU."""
-        if not self.device.startswith("cuda"):
+        """Capture ``fn``'s launches as one CUDA graph; return None on the CPU, or while torch is
+        capturing (``launch`` then records ``fn`` into torch's graph)."""
+        if not self.device.startswith("cuda") or self._order.torch_is_capturing():
             return None
         with wp.ScopedCapture(device=self.device) as cap:
             fn()
         return cap.graph
 
     def launch(self, graph, fn) -> None:
-        """Run ``fn`` (captured as ``graph`` on CUDA), ordered after and before torch's stream."""
+        """Run ``fn`` (captured as ``graph`` on CUDA), ordered after and before torch's stream.
+
+        While torch captures a CUDA graph, ``fn``'s launches are recorded into it instead."""
+        if self._order.torch_is_capturing():
+            self._order.run_in_torch_capture(fn)
+            return
         self._order.warp_waits_for_torch()
         if graph is not None:
             wp.capture_launch(graph)
@@ -194,7 +203,7 @@ class Sim(TensorAPI):
 
     def step(self) -> None:
         """Advance every world one control step (``substeps`` physics steps)."""
-        if self._graph is None and self.device.startswith("cuda"):
+        if self._graph is None:
             self._graph = self.capture(self.simulate)
         self.launch(self._graph, self.simulate)
 

@@ -57,9 +57,7 @@ class TensorAPI:
 
     # ------------------------------------------------------------------ device passes (capturable)
     def _run(self, fn) -> None:
-        self._order.warp_waits_for_torch()
-        fn()
-        self._order.torch_waits_for_warp()
+        self.launch(None, fn)
 
     def contact_wrench_buffer(self) -> wp.array:
         """(N*B, 6) per-body contact force 3 and torque 3 about the body origin, world frame."""

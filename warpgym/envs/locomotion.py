@@ -36,6 +36,9 @@ class LocomotionVecEnv(VectorEnv):
     """
 
     metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
+    # step() never waits on the host and returns persistent buffers, so a learner may record it into
+    # a torch CUDA graph (agents.protocol); the Warp launches then join torch's capture.
+    graph_capturable = True
 
     def __init__(
         self,
@@ -175,7 +178,7 @@ class LocomotionVecEnv(VectorEnv):
     def step(self, actions: torch.Tensor):
         actions = check_float_tensor("actions", actions, self.device, [(self.num_envs, self.num_actions)])
         self._actions_in_t.copy_(actions)
-        if self._graph is None and self.sim.device.startswith("cuda"):
+        if self._graph is None:
             self._graph = self.sim.capture(self._launch_step)
         self.sim.launch(self._graph, self._launch_step)
         return self.obs, self.reward, self.terminated, self.truncated, self.info
