@@ -7,6 +7,7 @@ out=${1:?usage: scripts/run_benchmarks.sh OUT_DIR}
 mkdir -p "$out"
 export PYTHONUNBUFFERED=1
 flags=""
+quick=${QUICK:-0}  # QUICK=1: only the runs behind the targets (cold start, ratios, profiles, Ant and Humanoid 4096)
 step() { echo "== $(date +%T) $*" | tee -a "$out/progress.log"; }
 nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv > "$out/machine.txt" 2>&1
 python3 -c "import torch, warp, newton, mujoco_warp; print(torch.__version__, warp.__version__, newton.__version__, mujoco_warp.__version__)" >> "$out/machine.txt" 2>&1
@@ -28,13 +29,17 @@ if grep -q "FAILED.*captured_update" "$out/test_cuda.log"; then
 fi
 
 step "throughput: raw Newton vs Sim vs full env step"
-python3 scripts/bench.py --robots ant humanoid --num-envs 1024 4096 16384 --steps 100 --repeats 5 \
+if [ "$quick" = 1 ]; then sizes="4096"; else sizes="1024 4096 16384"; fi
+python3 scripts/bench.py --robots ant humanoid --num-envs $sizes --steps 100 --repeats 5 \
   --out "$out/bench.json" > "$out/bench.log" 2>&1
 
+if [ "$quick" != 1 ]; then
 nomathdx=$(mktemp -d)
 step "Ant 4096 without libmathdx, from an empty kernel cache: compile time and throughput"
 WARP_CACHE_PATH=$nomathdx python3 scripts/bench.py --robots ant --num-envs 4096 --steps 100 --repeats 5 \
   --no-mathdx --out "$out/bench_no_mathdx.json" > "$out/bench_no_mathdx.log" 2>&1
+rm -rf "$nomathdx"
+fi
 
 for task in Ant Humanoid; do
   step "profile: $task 4096 envs, 40 iterations"
@@ -46,19 +51,21 @@ step "train: Ant 4096 envs, 90 s, rollouts launched step by step (what the rollo
 python3 scripts/train.py --task Ant --num-envs 4096 --time-limit 90 --eval-gap 10 --no-rollout-graph $flags \
   --run-dir "$out/ant_4096_no_rollout_graph" > "$out/ant_4096_no_rollout_graph.log" 2>&1
 
-for n in 4096 1024 16384 32768; do
+if [ "$quick" = 1 ]; then sizes="4096"; else sizes="4096 1024 16384 32768"; fi
+for n in $sizes; do
   step "train: Ant $n envs, 90 s"
   python3 scripts/train.py --task Ant --num-envs "$n" --time-limit 90 --eval-gap 10 $flags \
     --run-dir "$out/ant_$n" > "$out/ant_$n.log" 2>&1
 done
 
-step "train: Humanoid 4096 envs, 300 s"
-python3 scripts/train.py --task Humanoid --num-envs 4096 --time-limit 300 --eval-gap 20 $flags \
+if [ "$quick" = 1 ]; then hum_s=150; else hum_s=300; fi
+step "train: Humanoid 4096 envs, $hum_s s"
+python3 scripts/train.py --task Humanoid --num-envs 4096 --time-limit $hum_s --eval-gap 20 $flags \
   --run-dir "$out/humanoid_4096" > "$out/humanoid_4096.log" 2>&1
 
 python3 scripts/plot.py "$out/ant_1024" "$out/ant_4096" "$out/ant_16384" "$out/ant_32768" \
   --labels "1024 envs" "4096 envs" "16384 envs" "32768 envs" --title "Ant: PPO, one GPU" \
   --out "$out/fig_ant" > /dev/null 2>&1
-rm -rf "$cold" "$nomathdx"
+rm -rf "$cold"
 step "done"
 touch "$out/DONE"
