@@ -7,7 +7,7 @@ import json
 import os
 
 COLUMNS = [
-    "iteration", "samples", "time_s", "samples_per_s", "collect_s", "update_s", "episodes",
+    "iteration", "samples", "time_s", "samples_per_s", "iteration_s", "episodes",
     "return", "length", "speed", "eval/return", "eval/length", "eval/speed", "eval_s",
     "loss/surrogate", "loss/value", "loss/entropy", "loss/bounds", "policy/kl", "policy/lr", "policy/noise_std",
 ]

@@ -41,17 +41,27 @@ class EpisodeTracker:
         speed_count = count if self.has_speed else torch.zeros_like(count)
         self.sums += torch.cat([count[None], totals, speed_count[None]]).double()
 
-    def read_and_clear(self, workers=None) -> dict:
-        """One host read; means of the episodes finished since the last call (None where there were none).
+    def take(self, workers=None) -> torch.Tensor:
+        """The sums since the last call, as a new device tensor, and restart them (no host read).
 
         With ``workers``, the episodes of every process count."""
         if workers is not None:
             workers.sum_(self.sums)
-        n, r, length, s, ns = self.sums.tolist()
+        taken = self.sums.clone()
         self.sums.zero_()
+        return taken
+
+    @staticmethod
+    def summary(sums: list[float]) -> dict:
+        """Means of the episodes in ``take()``'s sums, read to the host (None where there were none)."""
+        n, r, length, s, ns = sums
         return {
             "episodes": int(n),
             "return": r / n if n else None,
             "length": length / n if n else None,
             "speed": s / ns if ns else None,
         }
+
+    def read_and_clear(self, workers=None) -> dict:
+        """One host read: means of the episodes finished since the last call."""
+        return self.summary(self.take(workers).tolist())

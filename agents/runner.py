@@ -3,7 +3,8 @@
 Per environment step there is no host synchronisation and little Python: the step's tensors are
 copied into the rollout buffers, and everything that can wait (truncation bootstraps, episode
 statistics, the observation normaliser's update) runs once per rollout, batched over all steps.
-The host reads the device once per iteration, to log.
+The host reads the device once per iteration, to log, one iteration late: the statistics of
+iteration k are copied out while iteration k+1 runs, so the GPU never waits on logging.
 """
 
 from __future__ import annotations
@@ -167,44 +168,66 @@ class OnPolicyRunner:
                     or (time_limit is not None and self.elapsed() >= time_limit))
             return self.workers.agree(stop, self.device)  # all processes stop at the same iteration
 
-        mark = time.perf_counter()
         self.last_eval_time = self.elapsed()
+        self._mark = time.perf_counter()
+        pending = None
         try:
             while not done():
-                t0 = time.perf_counter()
                 self._old_log_std = self.policy.log_std.detach().clone()
                 self.collect()
-                t1 = time.perf_counter()
                 stats = self.update()
                 self.timer.lap("PPO update")
                 self.iteration += 1
                 self.timer.iterations += 1
                 self.samples += per_iter
-                # the last iteration always carries an evaluation, so every run ends with one
-                self._log_row(stats, t0, t1, mark, last_iter, final=done())
+                # This iteration's statistics start their trip to the host; the previous iteration's,
+                # long arrived, are logged while the GPU works on this one, so it never waits on logging.
+                row = self._stage_row(stats)
+                if pending is not None:
+                    self._log_row(pending, last_iter, final=False)
+                pending = row
                 self.timer.lap("logging, evaluation, host read")
-                mark = time.perf_counter()
                 if self.iteration % self.cfg.save_gap == 0 and self.run_dir:
                     self.save()
+            if pending is not None:  # the last iteration always carries an evaluation
+                self._log_row(pending, last_iter, final=True)
         finally:
             if self.run_dir:
                 self.save()
         return self.history
 
-    def _log_row(self, stats: dict, t0: float, t1: float, mark: float, last_iter: int | None, final: bool) -> dict:
+    def _stage_row(self, stats: dict) -> dict:
+        """Queue the copy of an iteration's statistics to the host, without waiting for it."""
         keys = list(stats)
-        values = torch.stack([stats[k].float() for k in keys]).tolist()  # the iteration's one host read
+        values = torch.cat([torch.stack([stats[k].float() for k in keys]).double(), self.episodes.take(self.workers)])
+        pinned = self.device.type == "cuda"
+        host = torch.empty(values.shape, dtype=values.dtype, pin_memory=pinned)
+        host.copy_(values, non_blocking=pinned)
+        ready = None
+        if pinned:
+            ready = torch.cuda.Event()
+            ready.record()
+        return {"iteration": self.iteration, "samples": self.samples, "keys": keys, "host": host, "ready": ready}
+
+    def _log_row(self, staged: dict, last_iter: int | None, final: bool) -> dict:
+        if staged["ready"] is not None:
+            staged["ready"].synchronize()
+        values = staged["host"].tolist()
+        keys = staged["keys"]
         now = time.perf_counter()
-        row = {"iteration": self.iteration, "samples": self.samples, "time_s": round(self.elapsed(), 3),
-               "samples_per_s": self.spec.num_envs * self.cfg.horizon_len * self.workers.size / max(now - mark, 1e-9),
-               "collect_s": t1 - t0, "update_s": now - t1}
-        row.update(self.episodes.read_and_clear(self.workers))
-        row.update(dict(zip(keys, values)))
+        per_iter = self.spec.num_envs * self.cfg.horizon_len * self.workers.size
+        # wall-clock between consecutive rows: collection, update and logging; evaluations excluded
+        row = {"iteration": staged["iteration"], "samples": staged["samples"], "time_s": round(self.elapsed(), 3),
+               "samples_per_s": per_iter / max(now - self._mark, 1e-9), "iteration_s": now - self._mark}
+        self._mark = now
+        row.update(EpisodeTracker.summary(values[len(keys):]))
+        row.update(dict(zip(keys, values[: len(keys)])))
         if self.eval_env is not None and (final or self.elapsed() - self.last_eval_time >= self.cfg.eval_gap):
             t_eval = time.perf_counter()
             row.update(self.evaluate())
             row["eval_s"] = time.perf_counter() - t_eval
             row["time_s"] = round(self.elapsed(), 3)
+            self._mark += row["eval_s"]
         self.history.append(row)
         if self.logger:
             self.logger.log(row)

@@ -59,6 +59,8 @@ def parse_args(argv=None):
                     help="run everything eagerly: no CUDA graph of the rollout or of the PPO update")
     ap.add_argument("--no-rollout-graph", action="store_true",
                     help="launch each rollout step from Python instead of replaying one captured rollout")
+    ap.add_argument("--no-mathdx", action="store_true",
+                    help="compile Warp's tile Cholesky without libmathdx: a faster cold start (warpgym.preload)")
     ap.add_argument("--profile", action="store_true",
                     help="time each phase of an iteration (synchronises the GPU between phases: slower)")
     return ap.parse_args(argv)
@@ -200,6 +202,10 @@ def train(args, rank: int) -> int:
     say("building the envs; Warp compiles its kernels on first use (about a minute on a CPU, "
         "cached in ~/.cache/warp afterwards)", flush=True)
 
+    if args.no_mathdx:
+        from warpgym.preload import use_mathdx  # noqa: PLC0415
+
+        use_mathdx(False)
     env = cfg.env_class(**cfg.env_args)
     eval_env = None if args.no_eval else cfg.eval_env_class(**cfg.eval_env_args)
     assert isinstance(env, LocomotionVecEnv)

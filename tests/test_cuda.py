@@ -73,7 +73,9 @@ def test_captured_rollout_matches_the_eager_one():
     assert sum(int(r["truncated"].sum()) for r in captured[1:]) > 0  # the graph bootstrapped truncations
     for i, (a, b) in enumerate(zip(eager, captured)):
         for name in a:
-            torch.testing.assert_close(b[name], a[name], atol=1e-4, rtol=1e-4, msg=lambda m: f"rollout {i} {name}: {m}")
+            # MuJoCo Warp's float atomics differ run to run by ~1e-4 after a few dozen steps; a rollout
+            # that read a stale buffer or skipped a launch would be off by far more
+            torch.testing.assert_close(b[name], a[name], atol=1e-3, rtol=1e-3, msg=lambda m: f"rollout {i} {name}: {m}")
 
 
 def test_env_on_cuda_matches_the_torch_reference_from_another_stream():

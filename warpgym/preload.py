@@ -11,7 +11,9 @@ before the first step. Two things shorten that:
   nothing differentiates through them, and the adjoints are over half of that module's compile.
 
 MuJoCo Warp's specialised kernels, which its closures create during the solver's construction
-and first step, still compile one by one when they are first launched.
+and first step, still compile one by one when they are first launched. Five of them factor
+small matrices with Warp's tile Cholesky, which by default links NVIDIA's libmathdx and is the
+slowest part of a cold start; ``use_mathdx(False)`` compiles Warp's own implementation instead.
 """
 
 from __future__ import annotations
@@ -75,3 +77,9 @@ class Preload:
 
     def wait(self) -> None:
         self._thread.join()
+
+
+def use_mathdx(enabled: bool) -> None:
+    """Whether Warp's tile Cholesky (and other tile solvers) link libmathdx, for kernels compiled
+    from now on in this process. A process-wide Warp setting; call it before building any env."""
+    wp.config.enable_mathdx_solver = bool(enabled)
