@@ -169,7 +169,8 @@ class OnPolicyRunner:
             return self.workers.agree(stop, self.device)  # all processes stop at the same iteration
 
         self.last_eval_time = self.elapsed()
-        self._mark = time.perf_counter()
+        self._last_done = self._clock()
+        self._eval_s = 0.0  # evaluation time to leave out of the next row's interval
         pending = None
         try:
             while not done():
@@ -196,6 +197,21 @@ class OnPolicyRunner:
                 self.save()
         return self.history
 
+    def _clock(self):
+        """A mark of when the work queued so far is done: a CUDA event (the GPU's clock, so idle
+        gaps count too) or, on the CPU, where every op has finished on return, the time."""
+        if self.device.type != "cuda":
+            return time.perf_counter()
+        event = torch.cuda.Event(enable_timing=True)
+        event.record()
+        return event
+
+    def _seconds_between(self, a, b) -> float:
+        if self.device.type != "cuda":
+            return b - a
+        b.synchronize()
+        return a.elapsed_time(b) / 1e3
+
     def _stage_row(self, stats: dict) -> dict:
         """Queue the copy of an iteration's statistics to the host, without waiting for it."""
         keys = list(stats)
@@ -203,23 +219,18 @@ class OnPolicyRunner:
         pinned = self.device.type == "cuda"
         host = torch.empty(values.shape, dtype=values.dtype, pin_memory=pinned)
         host.copy_(values, non_blocking=pinned)
-        ready = None
-        if pinned:
-            ready = torch.cuda.Event()
-            ready.record()
-        return {"iteration": self.iteration, "samples": self.samples, "keys": keys, "host": host, "ready": ready}
+        return {"iteration": self.iteration, "samples": self.samples, "keys": keys, "host": host,
+                "done": self._clock()}
 
     def _log_row(self, staged: dict, last_iter: int | None, final: bool) -> dict:
-        if staged["ready"] is not None:
-            staged["ready"].synchronize()
+        # from the end of the previous iteration to the end of this one, minus evaluations between
+        seconds = self._seconds_between(self._last_done, staged["done"]) - self._eval_s
+        self._last_done, self._eval_s = staged["done"], 0.0
         values = staged["host"].tolist()
         keys = staged["keys"]
-        now = time.perf_counter()
         per_iter = self.spec.num_envs * self.cfg.horizon_len * self.workers.size
-        # wall-clock between consecutive rows: collection, update and logging; evaluations excluded
         row = {"iteration": staged["iteration"], "samples": staged["samples"], "time_s": round(self.elapsed(), 3),
-               "samples_per_s": per_iter / max(now - self._mark, 1e-9), "iteration_s": now - self._mark}
-        self._mark = now
+               "samples_per_s": per_iter / max(seconds, 1e-9), "iteration_s": seconds}
         row.update(EpisodeTracker.summary(values[len(keys):]))
         row.update(dict(zip(keys, values[: len(keys)])))
         if self.eval_env is not None and (final or self.elapsed() - self.last_eval_time >= self.cfg.eval_gap):
@@ -227,7 +238,7 @@ class OnPolicyRunner:
             row.update(self.evaluate())
             row["eval_s"] = time.perf_counter() - t_eval
             row["time_s"] = round(self.elapsed(), 3)
-            self._mark += row["eval_s"]
+            self._eval_s = row["eval_s"]
         self.history.append(row)
         if self.logger:
             self.logger.log(row)
