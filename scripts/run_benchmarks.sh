@@ -2,7 +2,7 @@
 # Produce the numbers in docs/benchmarks.md on one GPU machine. Usage: scripts/run_benchmarks.sh OUT_DIR
 # Writes logs, JSON and run directories under OUT_DIR. All runs share one Warp kernel cache that starts
 # empty, so the first run measures a fresh machine's cold start.
-#   QUICK=1  the runs behind issue 5's targets (~8 min on an H100): cold start, libmathdx on/off,
+#   QUICK=1  the runs behind issue 5's targets (~10 min on an H100): cold start, libmathdx on/off,
 #            GPU checks, Ant and Humanoid at 4096 envs
 #   default  also the env-step table at 1024-16384 envs, profiles and the Ant scaling runs (~30 min)
 set -uo pipefail
@@ -46,15 +46,16 @@ step "train: Humanoid 4096 envs, $hum_s s"
 python3 scripts/train.py --task Humanoid --num-envs 4096 --time-limit $hum_s --eval-gap 20 $flags \
   --run-dir "$out/humanoid_4096" > "$out/humanoid_4096.log" 2>&1
 
+step "train: Ant 4096 envs, 90 s, rollouts launched step by step (what the rollout graph buys)"
+python3 scripts/train.py --task Ant --num-envs 4096 --time-limit 90 --eval-gap 10 --no-rollout-graph $flags \
+  --run-dir "$out/ant_4096_no_rollout_graph" > "$out/ant_4096_no_rollout_graph.log" 2>&1
+
 if [ "$quick" != 1 ]; then
   for task in Ant Humanoid; do
     step "profile: $task 4096 envs, 40 iterations, rollouts launched step by step so each phase can be timed"
     python3 scripts/train.py --task "$task" --num-envs 4096 --max-iterations 40 --profile --no-eval --no-plots \
       --no-rollout-graph $flags --run-dir "$out/profile_$task" > "$out/profile_$task.log" 2>&1
   done
-  step "train: Ant 4096 envs, 90 s, rollouts launched step by step (what the rollout graph buys)"
-  python3 scripts/train.py --task Ant --num-envs 4096 --time-limit 90 --eval-gap 10 --no-rollout-graph $flags \
-    --run-dir "$out/ant_4096_no_rollout_graph" > "$out/ant_4096_no_rollout_graph.log" 2>&1
   for n in 1024 16384 32768; do
     step "train: Ant $n envs, 90 s"
     python3 scripts/train.py --task Ant --num-envs "$n" --time-limit 90 --eval-gap 10 $flags \
