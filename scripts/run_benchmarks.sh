@@ -41,7 +41,7 @@ step "train: Ant 4096 envs, 90 s"
 python3 scripts/train.py --task Ant --num-envs 4096 --time-limit 90 --eval-gap 10 $flags \
   --run-dir "$out/ant_4096" > "$out/ant_4096.log" 2>&1
 
-if [ "$quick" = 1 ]; then hum_s=150; else hum_s=300; fi
+if [ "$quick" = 1 ]; then hum_s=120; else hum_s=300; fi
 step "train: Humanoid 4096 envs, $hum_s s"
 python3 scripts/train.py --task Humanoid --num-envs 4096 --time-limit $hum_s --eval-gap 20 $flags \
   --run-dir "$out/humanoid_4096" > "$out/humanoid_4096.log" 2>&1
