@@ -169,3 +169,18 @@ def test_actor_starts_near_zero_mean_with_the_configured_noise():
     actions, log_prob, value, mean = ac.act(torch.randn(100, 6))
     assert mean.abs().max() < 0.1 and value.shape == (100,)
     assert actions.std().item() == pytest.approx(0.5, rel=0.2)
+
+
+def test_rows_logged_one_iteration_late_still_report_their_own_iteration():
+    # 8 envs whose 10-step episodes all end together, 4 steps per rollout: episodes finish during
+    # iterations 3 (step 10) and 5 (step 20) only
+    cfg = Config(net_dims=(8,), horizon_len=4, batch_size=32, repeat_times=1, eval_gap=1e9, save_gap=10**6)
+    runner = OnPolicyRunner(PointMassVecEnv(8, episode_length=10), cfg,
+                            eval_env=PointMassVecEnv(4, episode_length=10), print_fn=lambda s: None)
+    history = runner.learn(max_iterations=5)
+    assert [r["iteration"] for r in history] == [1, 2, 3, 4, 5]
+    assert [r["samples"] for r in history] == [32, 64, 96, 128, 160]
+    assert [r["episodes"] for r in history] == [0, 0, 8, 0, 8]
+    assert [r["length"] for r in history if r["episodes"]] == [10, 10]
+    assert all(r["samples_per_s"] > 0 and r["iteration_s"] > 0 for r in history)
+    assert ["eval/return" in r for r in history] == [False, False, False, False, True]  # the last row only
