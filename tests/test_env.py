@@ -200,3 +200,21 @@ def test_elegantrl_pair_from_the_seeds_env_args():
     assert isinstance(r, float) and isinstance(d, bool)
     with pytest.raises(ValueError, match="state_dim=61 but Ant has 60"):
         IsaacVecEnv("Ant", env_num=1, device_id=-1, state_dim=61)
+
+
+def test_replayed_cpu_graph_steps_exactly_like_launches_from_python():
+    # Warp records a CPU step's launches once and replays them in C++; nothing may be left out
+    # (a launch that ran only while recording would leave its buffer stale on every replay)
+    runs = []
+    for replay in (True, False):
+        env = LocomotionVecEnv("Ant", num_envs=4, device="cpu", seed=2, max_episode_steps=25)
+        if not replay:
+            env.sim.capture = lambda fn: None  # every step launched from Python
+        gen = torch.Generator().manual_seed(0)
+        out = []
+        for _ in range(40):  # falls, contacts and a truncation reset at step 25
+            obs, rew, term, trunc, info = env.step(torch.rand(4, 8, generator=gen) * 2 - 1)
+            out.append(torch.cat([obs, rew[:, None], trunc[:, None].float(), info["final_obs"]], 1).clone())
+        assert (env._graph is not None) == replay
+        runs.append(torch.stack(out))
+    assert torch.equal(runs[0], runs[1])

@@ -179,9 +179,10 @@ class Sim(TensorAPI):
             self.solver.step(self.state, self.state, self.control, None, self.sub_dt)
 
     def capture(self, fn):
-        """Capture ``fn``'s launches as one CUDA graph; return None on the CPU, or while torch is
-        capturing (``launch`` then records ``fn`` into torch's graph)."""
-        if not self.device.startswith("cuda") or self._order.torch_is_capturing():
+        """Capture ``fn``'s launches as one graph: a CUDA graph, or on the CPU Warp's recorded
+        launch list, replayed in C++ (a CPU step is mostly Python launch overhead otherwise).
+        Return None while torch is capturing: ``launch`` then records ``fn`` into torch's graph."""
+        if self._order.torch_is_capturing():
             return None
         with wp.ScopedCapture(device=self.device) as cap:
             fn()
