@@ -2,7 +2,7 @@
 
 Every buffer is allocated once. The Newton state is stepped in place (MuJoCo Warp reads
 ``joint_q``/``joint_qd`` at the start of a substep and writes them back at its end), so a torch view
-taken of it stays valid for the life of the Sim. On CUDA the substeps run as one captured graph.
+taken of it stays valid for the life of the Sim. The substeps run as one captured graph (CUDA) or one recorded launch list (CPU).
 """
 
 from __future__ import annotations
@@ -174,7 +174,7 @@ class Sim(TensorAPI):
         return self.dt / self.substeps
 
     def simulate(self) -> None:
-        """Advance one control step as plain launches (what the graph on CUDA holds)."""
+        """Advance one control step as plain launches (what the captured graph holds)."""
         for _ in range(self.substeps):
             self.solver.step(self.state, self.state, self.control, None, self.sub_dt)
 
@@ -189,7 +189,7 @@ class Sim(TensorAPI):
         return cap.graph
 
     def launch(self, graph, fn) -> None:
-        """Run ``fn`` (captured as ``graph`` on CUDA), ordered after and before torch's stream.
+        """Run ``fn`` (captured as ``graph``), ordered after and before torch's stream.
 
         While torch captures a CUDA graph, ``fn``'s launches are recorded into it instead."""
         if self._order.torch_is_capturing():

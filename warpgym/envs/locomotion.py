@@ -1,6 +1,6 @@
 """Ant and Humanoid as a Gymnasium vector environment whose every step is Warp kernels.
 
-A step is: copy the actions into a persistent buffer, then one CUDA graph launch (apply actions,
+A step is: copy the actions into a persistent buffer, then one graph launch (apply actions,
 physics substeps, contact and joint forces, observations, rewards, dones, masked resets). The
 returned tensors are persistent buffers that the next step overwrites: clone what you keep.
 """
