@@ -2,7 +2,8 @@
 
 Every buffer is allocated once. The Newton state is stepped in place (MuJoCo Warp reads
 ``joint_q``/``joint_qd`` at the start of a substep and writes them back at its end), so a torch view
-taken of it stays valid for the life of the Sim. The substeps run as one captured graph (CUDA) or one recorded launch list (CPU).
+taken of it stays valid for the life of the Sim. The substeps run as one captured graph: a CUDA
+graph, or on the CPU Warp's recorded launch list.
 """
 
 from __future__ import annotations
