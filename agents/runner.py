@@ -191,8 +191,14 @@ class OnPolicyRunner:
                 if self.iteration % self.cfg.save_gap == 0 and self.run_dir:
                     self.save()
             if pending is not None:  # the last iteration always carries an evaluation
-                self._log_row(pending, last_iter, final=True)
+                staged, pending = pending, None
+                self._log_row(staged, last_iter, final=True)
         finally:
+            if pending is not None:  # interrupted: keep the finished iteration's row, if it can be read
+                try:
+                    self._log_row(pending, last_iter, final=False, may_evaluate=False)
+                except Exception:  # noqa: BLE001  (the original error is the one to see)
+                    pass
             if self.run_dir:
                 self.save()
         return self.history
@@ -222,7 +228,7 @@ class OnPolicyRunner:
         return {"iteration": self.iteration, "samples": self.samples, "keys": keys, "host": host,
                 "done": self._clock()}
 
-    def _log_row(self, staged: dict, last_iter: int | None, final: bool) -> dict:
+    def _log_row(self, staged: dict, last_iter: int | None, final: bool, may_evaluate: bool = True) -> dict:
         # from the end of the previous iteration to the end of this one, minus evaluations between
         seconds = self._seconds_between(self._last_done, staged["done"]) - self._eval_s
         self._last_done, self._eval_s = staged["done"], 0.0
@@ -233,7 +239,8 @@ class OnPolicyRunner:
                "samples_per_s": per_iter / max(seconds, 1e-9), "iteration_s": seconds}
         row.update(EpisodeTracker.summary(values[len(keys):]))
         row.update(dict(zip(keys, values[: len(keys)])))
-        if self.eval_env is not None and (final or self.elapsed() - self.last_eval_time >= self.cfg.eval_gap):
+        due = final or self.elapsed() - self.last_eval_time >= self.cfg.eval_gap
+        if self.eval_env is not None and may_evaluate and due:
             t_eval = time.perf_counter()
             row.update(self.evaluate())
             row["eval_s"] = time.perf_counter() - t_eval

@@ -184,3 +184,21 @@ def test_rows_logged_one_iteration_late_still_report_their_own_iteration():
     assert [r["length"] for r in history if r["episodes"]] == [10, 10]
     assert all(r["samples_per_s"] > 0 and r["iteration_s"] > 0 for r in history)
     assert ["eval/return" in r for r in history] == [False, False, False, False, True]  # the last row only
+
+
+def test_an_interrupted_run_keeps_the_row_of_its_last_finished_iteration(tmp_path):
+    cfg = Config(net_dims=(8,), horizon_len=4, batch_size=32, repeat_times=1, eval_gap=1e9, save_gap=10**6)
+    runner = OnPolicyRunner(PointMassVecEnv(8), cfg, run_dir=str(tmp_path), print_fn=lambda s: None)
+    real_update = runner.update
+
+    def update_then_stop():
+        if runner.iteration == 3:
+            raise KeyboardInterrupt  # Ctrl-C during the fourth iteration's update
+        return real_update()
+
+    runner.update = update_then_stop
+    with pytest.raises(KeyboardInterrupt):
+        runner.learn(max_iterations=10)
+    rows = [r["iteration"] for r in __import__("agents.logger", fromlist=["x"]).read_metrics(str(tmp_path))]
+    assert rows == [1, 2, 3]  # the third was still waiting to be logged when the fourth was cut short
+    assert load(str(tmp_path / "checkpoint.pt"), torch.device("cpu"))["iteration"] == 3
