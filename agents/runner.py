@@ -109,7 +109,7 @@ class OnPolicyRunner:
     def _capture_rollout(self) -> torch.cuda.CUDAGraph | None:
         graph = torch.cuda.CUDAGraph()
         try:
-            with torch.cuda.graph(graph, capture_error_mode="thread_local"):
+            with torch.cuda.device(self.device), torch.cuda.graph(graph, capture_error_mode="thread_local"):
                 self._rollout(PhaseTimer(self.device))  # a synchronisation would break the capture
         except RuntimeError as e:
             # Nothing ran during the failed capture; the rollouts go on eagerly, a little slower.
@@ -209,7 +209,7 @@ class OnPolicyRunner:
         if self.device.type != "cuda":
             return time.perf_counter()
         event = torch.cuda.Event(enable_timing=True)
-        event.record()
+        event.record(torch.cuda.current_stream(self.device))
         return event
 
     def _seconds_between(self, a, b) -> float:
