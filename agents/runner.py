@@ -159,7 +159,7 @@ class OnPolicyRunner:
               time_limit: float | None = None) -> list[dict]:
         if max_iterations is None and total_steps is None and time_limit is None:
             raise ValueError("give at least one of max_iterations, total_steps, time_limit, or training never stops")
-        per_iter = self.spec.num_envs * self.cfg.horizon_len * self.workers.size  # samples of all processes
+        self._per_iter = per_iter = self.spec.num_envs * self.cfg.horizon_len * self.workers.size  # all processes
         goal = [max_iterations, None if total_steps is None else math.ceil(total_steps / per_iter)]
         last_iter = min([g for g in goal if g is not None], default=None)
 
@@ -170,7 +170,7 @@ class OnPolicyRunner:
 
         self.last_eval_time = self.elapsed()
         self._last_done = self._clock()
-        self._eval_s = 0.0  # evaluation time to leave out of the next row's interval
+        self._eval_ends = {}  # row whose interval an evaluation fell into -> mark of the evaluation's end
         pending = None
         try:
             while not done():
@@ -229,14 +229,15 @@ class OnPolicyRunner:
                 "done": self._clock()}
 
     def _log_row(self, staged: dict, last_iter: int | None, final: bool, may_evaluate: bool = True) -> dict:
-        # from the end of the previous iteration to the end of this one, minus evaluations between
-        seconds = self._seconds_between(self._last_done, staged["done"]) - self._eval_s
-        self._last_done, self._eval_s = staged["done"], 0.0
+        # from the end of the previous iteration to the end of this one; if an evaluation ran in
+        # between, from the end of the evaluation
+        start = self._eval_ends.pop(staged["iteration"], self._last_done)
+        seconds = self._seconds_between(start, staged["done"])
+        self._last_done = staged["done"]
         values = staged["host"].tolist()
         keys = staged["keys"]
-        per_iter = self.spec.num_envs * self.cfg.horizon_len * self.workers.size
         row = {"iteration": staged["iteration"], "samples": staged["samples"], "time_s": round(self.elapsed(), 3),
-               "samples_per_s": per_iter / max(seconds, 1e-9), "iteration_s": seconds}
+               "samples_per_s": self._per_iter / max(seconds, 1e-9), "iteration_s": seconds}
         row.update(EpisodeTracker.summary(values[len(keys):]))
         row.update(dict(zip(keys, values[: len(keys)])))
         due = final or self.elapsed() - self.last_eval_time >= self.cfg.eval_gap
@@ -245,7 +246,8 @@ class OnPolicyRunner:
             row.update(self.evaluate())
             row["eval_s"] = time.perf_counter() - t_eval
             row["time_s"] = round(self.elapsed(), 3)
-            self._eval_s = row["eval_s"]
+            # the iteration after the latest one staged is the one this evaluation delayed
+            self._eval_ends[self.iteration + 1] = self._clock()
         self.history.append(row)
         if self.logger:
             self.logger.log(row)

@@ -38,7 +38,7 @@ TASK_NAMES = {t.lower(): t for t in PRESETS}
 def parse_args(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--task", default="Ant", help="Ant or Humanoid")
-    ap.add_argument("--num-envs", type=int, default=None, help="default: 4096 on a GPU, 32 on the CPU")
+    ap.add_argument("--num-envs", type=int, default=None, help="default: 4096 on a GPU, 64 on the CPU")
     ap.add_argument("--device", default=None, help="default: cuda:0 when present, else cpu")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--max-iterations", type=int, default=None)
@@ -180,8 +180,7 @@ def train(args, rank: int) -> int:
             raise SystemExit(f"--task {args.task!r}: choose one of {sorted(TASK_NAMES.values())}")
         task = TASK_NAMES[args.task.lower()]
         device = resolve_device(args.device)
-        kind = "cuda" if device.startswith("cuda") else "cpu"
-        num_envs = args.num_envs or DEFAULT_ENVS[kind]
+        num_envs = args.num_envs or DEFAULT_ENVS["cuda" if device.startswith("cuda") else "cpu"]
         run_dir = args.run_dir or os.path.join("runs", f"{task}-{time.strftime('%Y%m%d-%H%M%S')}")
     kind = "cuda" if device.startswith("cuda") else "cpu"
     cfg = build_config(args, task, num_envs, device, saved)

@@ -202,3 +202,15 @@ def test_an_interrupted_run_keeps_the_row_of_its_last_finished_iteration(tmp_pat
     rows = [r["iteration"] for r in __import__("agents.logger", fromlist=["x"]).read_metrics(str(tmp_path))]
     assert rows == [1, 2, 3]  # the third was still waiting to be logged when the fourth was cut short
     assert load(str(tmp_path / "checkpoint.pt"), torch.device("cpu"))["iteration"] == 3
+
+
+def test_evaluation_time_is_left_out_of_the_iteration_it_delays():
+    # an evaluation after every row, each far longer than an iteration of 8 envs x 4 steps; the
+    # evaluation runs while the next iteration is already queued, so its time belongs to the one after
+    cfg = Config(net_dims=(8,), horizon_len=4, batch_size=32, repeat_times=1, eval_gap=0.0, save_gap=10**6)
+    runner = OnPolicyRunner(PointMassVecEnv(8), cfg, eval_env=PointMassVecEnv(4, episode_length=400),
+                            print_fn=lambda s: None)
+    history = runner.learn(max_iterations=6)
+    assert all("eval_s" in r for r in history)
+    steady = history[2:]
+    assert all(0 < r["iteration_s"] < 0.5 * min(h["eval_s"] for h in steady) for r in steady)

@@ -7,7 +7,7 @@ import warp as wp
 from warpgym import preload
 
 
-def test_sim_modules_compile_without_adjoint_code():
+def test_sim_modules_are_set_to_skip_adjoint_code():
     preload.Preload("cpu").wait()
     for name in ("kernels.actions", "kernels.locomotion", "kernels.resets", "kernels.tensor_api",
                  *preload.NO_BACKWARD):
