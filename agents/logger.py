@@ -1,8 +1,12 @@
-"""Scalar logs: JSON lines and CSV always, TensorBoard when it is installed."""
+"""Scalar logs: JSON lines and CSV always, TensorBoard when it is installed.
+
+Each row is appended and flushed whole, so a run killed at any moment leaves at most one torn
+last line, which ``read_metrics`` skips and a resume removes."""
 
 from __future__ import annotations
 
 import csv
+import io
 import json
 import os
 
@@ -10,37 +14,70 @@ COLUMNS = [
     "iteration", "samples", "time_s", "samples_per_s", "iteration_s", "episodes",
     "return", "length", "speed", "eval/return", "eval/length", "eval/speed", "eval_s",
     "loss/surrogate", "loss/value", "loss/entropy", "loss/bounds", "policy/kl", "policy/lr", "policy/noise_std",
+    "phase/idle_s", "phase/collect_s", "phase/normalizer_s", "phase/update_s", "phase/statistics_s",
 ]
 
 
 class MetricsLogger:
     def __init__(self, run_dir: str):
         os.makedirs(run_dir, exist_ok=True)
+        self.run_dir = run_dir
         self.jsonl_path = os.path.join(run_dir, "metrics.jsonl")
         self.csv_path = os.path.join(run_dir, "metrics.csv")
+        self._purge_step: int | None = None
+        self._tb = None
+        self._tb_tried = False
+        self._open()
+
+    def _open(self) -> None:
         new_csv = not os.path.exists(self.csv_path)
         self._csv_file = open(self.csv_path, "a", newline="")
         self._csv = csv.DictWriter(self._csv_file, fieldnames=COLUMNS, extrasaction="ignore")
         if new_csv:
             self._csv.writeheader()
+            self._csv_file.flush()
         self._jsonl = open(self.jsonl_path, "a")
-        try:
-            from torch.utils.tensorboard import SummaryWriter  # noqa: PLC0415
 
-            self._tb = SummaryWriter(os.path.join(run_dir, "tensorboard"))
-        except ImportError:
-            self._tb = None
+    def _tensorboard(self):
+        if not self._tb_tried:
+            self._tb_tried = True
+            try:
+                from torch.utils.tensorboard import SummaryWriter  # noqa: PLC0415
+
+                self._tb = SummaryWriter(os.path.join(self.run_dir, "tensorboard"), purge_step=self._purge_step)
+            except ImportError:
+                self._tb = None
+        return self._tb
 
     def log(self, row: dict) -> None:
         self._jsonl.write(json.dumps(row) + "\n")
         self._jsonl.flush()
         self._csv.writerow(row)
         self._csv_file.flush()
-        if self._tb is not None:
+        tb = self._tensorboard()
+        if tb is not None:
             step = row["samples"]
             for key, value in row.items():
                 if key not in ("iteration", "samples") and isinstance(value, (int, float)):
-                    self._tb.add_scalar(key, value, step)
+                    tb.add_scalar(key, value, step)
+
+    def drop_rows_after(self, iteration: int, samples: int) -> int:
+        """Keep the rows up to ``iteration`` (a resumed run's checkpoint) and drop the rest, which
+        the resumed run logs again, and any torn line; TensorBoard drops steps past ``samples``.
+        Both files are rewritten atomically. Returns how many rows were dropped."""
+        self.close()
+        rows = read_metrics(self.run_dir) if os.path.exists(self.jsonl_path) else []
+        kept = [r for r in rows if r.get("iteration", 0) <= iteration]
+        _rewrite(self.jsonl_path, "".join(json.dumps(r) + "\n" for r in kept))
+        buf = io.StringIO()
+        writer = csv.DictWriter(buf, fieldnames=COLUMNS, extrasaction="ignore")
+        writer.writeheader()
+        writer.writerows(kept)
+        _rewrite(self.csv_path, buf.getvalue())
+        self._purge_step = samples + 1
+        self._tb, self._tb_tried = None, False
+        self._open()
+        return len(rows) - len(kept)
 
     def close(self) -> None:
         self._jsonl.close()
@@ -49,9 +86,29 @@ class MetricsLogger:
             self._tb.close()
 
 
+def _rewrite(path: str, text: str) -> None:
+    tmp = f"{path}.tmp{os.getpid()}"
+    with open(tmp, "w", newline="") as f:
+        f.write(text)
+        f.flush()
+        os.fsync(f.fileno())
+    os.replace(tmp, path)
+
+
 def read_metrics(run_dir: str) -> list[dict]:
+    """The rows of a run; a torn last line (the process was killed mid-write) is skipped."""
     path = os.path.join(run_dir, "metrics.jsonl")
     if not os.path.isfile(path):
         raise FileNotFoundError(f"no metrics.jsonl in {run_dir}: pass a run directory written by scripts/train.py")
+    rows = []
     with open(path) as f:
-        return [json.loads(line) for line in f if line.strip()]
+        lines = f.read().split("\n")
+    for i, line in enumerate(lines):
+        if not line.strip():
+            continue
+        try:
+            rows.append(json.loads(line))
+        except json.JSONDecodeError:
+            if i < len(lines) - 1 and any(rest.strip() for rest in lines[i + 1 :]):
+                raise ValueError(f"{path} line {i + 1} is not JSON and not the last line: the file is damaged") from None
+    return rows

@@ -54,9 +54,9 @@ class PPO:
         self.lr = torch.tensor(cfg.learning_rate, dtype=torch.float32, device=device)
         is_cuda = device.type == "cuda"
         self.optimizer = torch.optim.Adam(policy.parameters(), lr=self.lr, fused=True, capturable=is_cuda)
-        # Across several processes the step all-reduces gradients; it then runs eagerly, since NCCL
-        # inside a captured graph has not been checked on this project's machines.
-        self.use_graph = cuda_graph and is_cuda and not self.workers.active
+        # Across several processes the captured step holds its NCCL all-reduce (tests/test_cuda.py
+        # checks it against the eager step on 2 GPUs).
+        self.use_graph = cuda_graph and is_cuda
         self._graph = None
         self._batch: dict[str, torch.Tensor] | None = None
 
@@ -78,9 +78,7 @@ class PPO:
         cfg, policy, b, idx = self.cfg, self.policy, self._batch, self._idx
         log_prob, entropy, values, mean = policy.evaluate(b["obs"][idx], b["actions"][idx])
         with torch.no_grad():
-            kl = self.workers.mean_(gaussian_kl(b["means"][idx], self._old_log_std, mean, policy.log_std).mean())
-            if cfg.desired_kl > 0:
-                self.lr.copy_(adapted_lr(self.lr, kl, cfg.desired_kl))
+            kl = gaussian_kl(b["means"][idx], self._old_log_std, mean, policy.log_std).mean()
         surr = surrogate_loss(log_prob, b["log_probs"][idx], b["adv"][idx], cfg.clip_ratio)
         v_loss = value_loss(values, b["values"][idx], b["returns"][idx], cfg.value_clip)
         ent = entropy.mean()
@@ -88,14 +86,18 @@ class PPO:
         loss = surr + cfg.value_coef * v_loss - cfg.entropy_coef * ent + cfg.bounds_coef * b_loss
         self.optimizer.zero_grad(set_to_none=False)
         loss.backward()
-        self.workers.mean_grads_(policy.parameters())
+        # one collective per mini-batch: every process's gradients and KL, averaged
+        (kl,) = self.workers.mean_grads_(policy.parameters(), kl)
+        if cfg.desired_kl > 0:
+            self.lr.copy_(adapted_lr(self.lr, kl, cfg.desired_kl))
         torch.nn.utils.clip_grad_norm_(policy.parameters(), cfg.max_grad_norm, foreach=True)
         self.optimizer.step()
         self._sums += torch.stack([surr.detach(), v_loss.detach(), ent.detach(), kl, b_loss.detach()])
 
     def _capture(self) -> None:
         graph = torch.cuda.CUDAGraph()
-        with torch.cuda.graph(graph):
+        # thread_local: the NCCL watchdog thread queries events while this thread captures
+        with torch.cuda.graph(graph, capture_error_mode="thread_local"):
             self._step()
         self._graph = graph
 

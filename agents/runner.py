@@ -10,12 +10,15 @@ iteration k are copied out while iteration k+1 runs, so the GPU never waits on l
 from __future__ import annotations
 
 import math
+import os
 import time
+from dataclasses import dataclass
 
 import torch
 
 from agents.actor_critic import ActorCritic
-from agents.checkpoint import load, rng_state, save_atomic, set_rng_state
+from agents.checkpoint import load_bytes, read_checkpoint_bytes, rng_state, save_atomic, set_rng_state
+from agents.clock import IterationClock, Lap
 from agents.config import Config
 from agents.distributed import Workers
 from agents.evaluate import evaluate
@@ -62,7 +65,10 @@ class OnPolicyRunner:
         self.last_eval_time = 0.0  # set when learn() starts: the first evaluation waits eval_gap
         self.history: list[dict] = []
         self.last_raw_obs: torch.Tensor | None = None  # the env's latest observation, not yet acted on
-        self.timer = PhaseTimer(self.device, enabled=profile)
+        self.timer = PhaseTimer(self.device, enabled=profile)  # --profile: synchronising, per step
+        self.clock = IterationClock(self.device)  # always on: events, read one iteration late
+        self._stop_request = torch.zeros(1, dtype=torch.float64, device=self.device)
+        self._stop_requested = False
         # Only an env that declares it (agents.protocol) is captured; the normaliser update stays
         # outside the graph, since across processes it all-reduces.
         self.rollout_graph = rollout_graph and cuda_graph and self.device.type == "cuda" and spec.graph_capturable
@@ -89,6 +95,7 @@ class OnPolicyRunner:
             self.normalizer.update(obs, self.workers)
         timer = self.timer
         timer.start()
+        self._old_log_std = self.policy.log_std.detach().clone()  # the noise the rollout is drawn with
         if self._rollout_graph is not None:
             self._rollout_graph.replay()
             timer.lap("collect: rollout graph (policy, env step, storage, GAE)")
@@ -102,8 +109,10 @@ class OnPolicyRunner:
         else:
             self._rollout(timer)
             self._rollouts_eager += 1
+        self.clock.mark("collect")
         if self.cfg.normalize_obs:
             self.normalizer.update(self.storage.raw_obs.flatten(0, 1), self.workers)
+        self.clock.mark("normalizer")
         timer.lap("normaliser update")
 
     def _capture_rollout(self) -> torch.cuda.CUDAGraph | None:
@@ -157,88 +166,86 @@ class OnPolicyRunner:
     # ------------------------------------------------------------------ loop
     def learn(self, max_iterations: int | None = None, total_steps: int | None = None,
               time_limit: float | None = None) -> list[dict]:
+        """Train until ``max_iterations``, ``total_steps`` samples or ``time_limit`` seconds since
+        the process started. A time limit is read with the statistics, one iteration late, so every
+        process stops after the same iteration without a host synchronisation of its own."""
         if max_iterations is None and total_steps is None and time_limit is None:
             raise ValueError("give at least one of max_iterations, total_steps, time_limit, or training never stops")
         self._per_iter = per_iter = self.spec.num_envs * self.cfg.horizon_len * self.workers.size  # all processes
         goal = [max_iterations, None if total_steps is None else math.ceil(total_steps / per_iter)]
         last_iter = min([g for g in goal if g is not None], default=None)
-
-        def done() -> bool:
-            stop = ((last_iter is not None and self.iteration >= last_iter)
-                    or (time_limit is not None and self.elapsed() >= time_limit))
-            return self.workers.agree(stop, self.device)  # all processes stop at the same iteration
-
         self.last_eval_time = self.elapsed()
-        self._last_done = self._clock()
-        self._eval_ends = {}  # row whose interval an evaluation fell into -> mark of the evaluation's end
-        pending = None
+        self.clock.restart()
+        in_flight: StagedRow | None = None  # the previous iteration's row, on its way to the host
+        stop = False
+        finished = True  # the state is that of a finished iteration: safe to checkpoint
         try:
-            while not done():
-                self._old_log_std = self.policy.log_std.detach().clone()
+            while not stop and (last_iter is None or self.iteration < last_iter):
+                finished = False
+                self.clock.mark("idle")  # the GPU waited this long for the host to queue the iteration
                 self.collect()
                 stats = self.update()
+                self.clock.mark("update")
                 self.timer.lap("PPO update")
                 self.iteration += 1
                 self.timer.iterations += 1
                 self.samples += per_iter
-                # This iteration's statistics start their trip to the host; the previous iteration's,
-                # long arrived, are logged while the GPU works on this one, so it never waits on logging.
-                row = self._stage_row(stats)
-                if pending is not None:
-                    self._log_row(pending, last_iter, final=False)
-                pending = row
+                wants_stop = self._stop_requested or (time_limit is not None and self.elapsed() >= time_limit)
+                staged = self._stage_row(stats, wants_stop)
+                finished = True
+                if in_flight is not None:  # arrived long ago: logging never makes the GPU wait
+                    stop = self._log_row(in_flight, last_iter)
+                in_flight = staged
                 self.timer.lap("logging, evaluation, host read")
                 if self.iteration % self.cfg.save_gap == 0 and self.run_dir:
                     self.save()
-            if pending is not None:  # the last iteration always carries an evaluation
-                staged, pending = pending, None
+            if in_flight is not None:  # the last iteration always carries an evaluation
+                staged, in_flight = in_flight, None
                 self._log_row(staged, last_iter, final=True)
         finally:
-            if pending is not None:  # interrupted: keep the finished iteration's row, if it can be read
+            if in_flight is not None:  # interrupted: keep the finished iteration's row, if it can be read
                 try:
-                    self._log_row(pending, last_iter, final=False, may_evaluate=False)
+                    self._log_row(in_flight, last_iter, may_evaluate=False)
                 except Exception:  # noqa: BLE001  (the original error is the one to see)
                     pass
-            if self.run_dir:
+            # An error inside an iteration may leave the policy half updated: the last checkpoint
+            # written between iterations stands (at most save_gap iterations are lost).
+            if self.run_dir and finished:
                 self.save()
         return self.history
 
-    def _clock(self):
-        """A mark of when the work queued so far is done: a CUDA event (the GPU's clock, so idle
-        gaps count too) or, on the CPU, where every op has finished on return, the time."""
-        if self.device.type != "cuda":
-            return time.perf_counter()
-        event = torch.cuda.Event(enable_timing=True)
-        event.record(torch.cuda.current_stream(self.device))
-        return event
+    def request_stop(self) -> None:
+        """Stop after the iteration in flight and save (safe to call from a signal handler). Under
+        several processes the request travels with the statistics, so all stop at one iteration."""
+        self._stop_requested = True
 
-    def _seconds_between(self, a, b) -> float:
-        if self.device.type != "cuda":
-            return b - a
-        b.synchronize()
-        return a.elapsed_time(b) / 1e3
+    @property
+    def stop_requested(self) -> bool:
+        return self._stop_requested
 
-    def _stage_row(self, stats: dict) -> dict:
-        """Queue the copy of an iteration's statistics to the host, without waiting for it."""
+    def _stage_row(self, stats: dict, wants_stop: bool) -> StagedRow:
+        """Queue the copy of an iteration's statistics to the host, without waiting for it. The
+        episode sums and the stop request travel in one collective, summed over the processes."""
+        self._stop_request.fill_(1.0 if wants_stop else 0.0)
+        shared = self.workers.sum_(torch.cat([self.episodes.take(), self._stop_request]))
         keys = list(stats)
-        values = torch.cat([torch.stack([stats[k].float() for k in keys]).double(), self.episodes.take(self.workers)])
+        values = torch.cat([torch.stack([stats[k].float() for k in keys]).double(), shared])
+        self.clock.mark("statistics")
         pinned = self.device.type == "cuda"
         host = torch.empty(values.shape, dtype=values.dtype, pin_memory=pinned)
         host.copy_(values, non_blocking=pinned)
-        return {"iteration": self.iteration, "samples": self.samples, "keys": keys, "host": host,
-                "done": self._clock()}
+        return StagedRow(self.iteration, self.samples, keys, host, self.clock.finish())
 
-    def _log_row(self, staged: dict, last_iter: int | None, final: bool, may_evaluate: bool = True) -> dict:
-        # from the end of the previous iteration to the end of this one; if an evaluation ran in
-        # between, from the end of the evaluation
-        start = self._eval_ends.pop(staged["iteration"], self._last_done)
-        seconds = self._seconds_between(start, staged["done"])
-        self._last_done = staged["done"]
-        values = staged["host"].tolist()
-        keys = staged["keys"]
-        row = {"iteration": staged["iteration"], "samples": staged["samples"], "time_s": round(self.elapsed(), 3),
-               "samples_per_s": self._per_iter / max(seconds, 1e-9), "iteration_s": seconds}
-        row.update(EpisodeTracker.summary(values[len(keys):]))
+    def _log_row(self, staged: StagedRow, last_iter: int | None, final: bool = False,
+                 may_evaluate: bool = True) -> bool:
+        """Log a staged row (evaluating first when one is due); return whether any process asked to stop."""
+        seconds = self.clock.seconds(staged.lap)
+        values = staged.host.tolist()
+        keys = staged.keys
+        row = {"iteration": staged.iteration, "samples": staged.samples, "time_s": round(self.elapsed(), 3),
+               "samples_per_s": self._per_iter / max(seconds["iteration"], 1e-9), "iteration_s": seconds["iteration"]}
+        row.update({f"phase/{k}_s": v for k, v in seconds.items() if k != "iteration"})
+        row.update(EpisodeTracker.summary(values[len(keys) : -1]))
         row.update(dict(zip(keys, values[: len(keys)])))
         due = final or self.elapsed() - self.last_eval_time >= self.cfg.eval_gap
         if self.eval_env is not None and may_evaluate and due:
@@ -246,13 +253,12 @@ class OnPolicyRunner:
             row.update(self.evaluate())
             row["eval_s"] = time.perf_counter() - t_eval
             row["time_s"] = round(self.elapsed(), 3)
-            # the iteration after the latest one staged is the one this evaluation delayed
-            self._eval_ends[self.iteration + 1] = self._clock()
+            self.clock.restart()  # the iteration queued before the evaluation is timed without it
         self.history.append(row)
         if self.logger:
             self.logger.log(row)
         self.print(progress_line(row, last_iter))
-        return row
+        return values[-1] > 0
 
     def evaluate(self) -> dict:
         self.last_eval_time = self.elapsed()
@@ -270,14 +276,18 @@ class OnPolicyRunner:
         }
 
     def save(self, path: str | None = None) -> str:
-        import os  # noqa: PLC0415
-
         path = path or os.path.join(self.run_dir, "checkpoint.pt")
         save_atomic(self.state_dict(), path)
         return path
 
     def load(self, path: str, resume: bool = True) -> None:
-        ckpt = load(path, self.device)
+        """Load a checkpoint that rank 0 can read (other processes, on other machines, get its bytes).
+
+        With ``resume``, the run goes on from it: counters, optimiser, learning rate and random state,
+        and the metrics logged after it are dropped, since they will be logged again. Any number of
+        processes may resume a run; every process but rank 0 draws new exploration noise."""
+        data = read_checkpoint_bytes(path) if self.workers.is_main else None
+        ckpt = load_bytes(self.workers.broadcast_bytes(data, self.device), path, self.device)
         want = (self.spec.num_obs, self.spec.num_actions)
         have = (ckpt["spec"]["num_obs"], ckpt["spec"]["num_actions"])
         if want != have:
@@ -291,6 +301,21 @@ class OnPolicyRunner:
             self.elapsed_before = ckpt["elapsed_s"]
             self.start_time = time.time()
             set_rng_state(ckpt["rng"], self.device)
+            if not self.workers.is_main:
+                torch.manual_seed(self.cfg.seed + 7919 * self.workers.rank + 104729 * self.iteration)
+            if self.logger:
+                self.logger.drop_rows_after(self.iteration, self.samples)
+
+
+@dataclass
+class StagedRow:
+    """An iteration's statistics on their way to pinned host memory, and its clock marks."""
+
+    iteration: int
+    samples: int
+    keys: list[str]
+    host: torch.Tensor
+    lap: Lap
 
 
 def progress_line(row: dict, last_iter: int | None) -> str:

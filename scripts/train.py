@@ -109,9 +109,13 @@ def write_json(path: str, obj) -> None:
 
 def summarize(history: list[dict], device_name: str, cfg: Config) -> dict:
     """Steady-state throughput and the first time each forward speed was reached."""
-    steady = [r["samples_per_s"] for r in history[len(history) // 5 :]] or [0.0]
+    rows = history[len(history) // 5 :]
+    steady = [r["samples_per_s"] for r in rows] or [0.0]
     out = {"device": device_name, "num_envs": cfg.env_args["num_envs"], "iterations": len(history),
-           "steady_samples_per_s_median": statistics.median(steady)}
+           "workers": int(os.environ.get("WORLD_SIZE", "1")), "steady_samples_per_s_median": statistics.median(steady)}
+    phases = sorted({k for r in rows for k in r if k.startswith("phase/")} | {"iteration_s"})
+    out["steady_phase_s_median"] = {k: statistics.median(r[k] for r in rows if k in r) for k in phases
+                                    if any(k in r for r in rows)}
     if history:
         out["final"] = {k: history[-1].get(k) for k in ("time_s", "samples", "return", "speed")}
     evals = [r for r in history if "eval/return" in r]
@@ -129,36 +133,118 @@ def summarize(history: list[dict], device_name: str, cfg: Config) -> dict:
 
 
 def start_workers(args) -> tuple[int, str | None]:
-    """Under torchrun (WORLD_SIZE > 1): join the process group; return (rank, this process's device)."""
+    """Under torchrun (WORLD_SIZE > 1): join the process group; return (rank, this process's device).
+
+    On several machines each process takes the GPU of its LOCAL_RANK, and ranks are global."""
     if int(os.environ.get("WORLD_SIZE", "1")) <= 1:
         return 0, args.device
     import torch  # noqa: PLC0415
     import torch.distributed as dist  # noqa: PLC0415
 
+    from agents.distributed import init_workers  # noqa: PLC0415
+
     local = int(os.environ.get("LOCAL_RANK", "0"))
     on_cpu = args.device == "cpu" or (args.device is None and not torch.cuda.is_available())
     if on_cpu:
-        device = "cpu"
-    else:
-        device = f"cuda:{local}"
-        torch.cuda.set_device(local)
-    dist.init_process_group("gloo" if on_cpu else "nccl")
-    return dist.get_rank(), device
+        init_workers("gloo")
+        return dist.get_rank(), "cpu"
+    if local >= torch.cuda.device_count():
+        raise SystemExit(f"LOCAL_RANK={local} but this machine has {torch.cuda.device_count()} GPUs: "
+                         "pass torchrun --nproc_per_node <= the number of GPUs")
+    torch.cuda.set_device(local)
+    init_workers("nccl", torch.device(f"cuda:{local}"))
+    return dist.get_rank(), f"cuda:{local}"
+
+
+def watch_peers(rank: int):
+    """Under torchrun, end this process with a message when another worker goes silent (see
+    agents.distributed.PeerWatch); WARPGYM_PEER_TIMEOUT sets the seconds of silence allowed."""
+    from agents.distributed import PeerWatch, job_store  # noqa: PLC0415
+
+    size = int(os.environ.get("WORLD_SIZE", "1"))
+    store = job_store() if size > 1 else None
+    if store is None:
+        return None
+    timeout = float(os.environ.get("WARPGYM_PEER_TIMEOUT", "30"))
+    return PeerWatch(store, rank, size, timeout=timeout)
+
+
+def resume_hint(run_dir: str) -> str:
+    """How to go on, as rank 0 sees it (its machine holds the checkpoint)."""
+    if not os.path.isfile(os.path.join(run_dir, "checkpoint.pt")):
+        return f"No checkpoint was written to {run_dir} yet."
+    return (f"The run's last checkpoint is in {run_dir}; continue it with: python scripts/train.py --resume "
+            f"{run_dir} (or torchrun ... scripts/train.py --resume {run_dir}, on any number of GPUs)")
 
 
 def main(argv=None) -> int:
-    args = parse_args(argv)
+    import signal  # noqa: PLC0415
+
     import torch.distributed as dist  # noqa: PLC0415
 
+    args = parse_args(argv)
     rank, args.device = start_workers(args)
+    watch = watch_peers(rank)
+    live: dict = {}  # train() puts its runner here, for the signal handler
+
+    def on_signal(signum, frame):
+        runner = live.get("runner")
+        if runner is None or runner.stop_requested:
+            raise SystemExit(128 + signum)
+        # Ctrl-C, a cluster's pre-emption, or torchrun ending the job because a worker failed
+        sys.stderr.write(f"\nwarpgym worker {rank}: signal {signum}: stopping after this iteration and saving "
+                         "(send it again to stop at once)\n")
+        runner.request_stop()
+
+    previous = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
+    finished = False
     try:
-        return train(args, rank)
+        code = train(args, rank, watch, live)
+        finished = True
+        return code
+    except BaseException as e:
+        if args.run_dir and not (isinstance(e, SystemExit) and e.code in (0, None)):
+            why = f"{type(e).__name__}: {str(e).splitlines()[0][:300]}" if str(e) else type(e).__name__
+            hint = resume_hint(args.run_dir) if rank == 0 else "Rank 0's output says how to resume."
+            sys.stderr.write(f"\nwarpgym worker {rank}: training stopped ({why}). {hint}\n")
+        raise
     finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+        if watch is not None:
+            watch.stop(finished=finished)
         if dist.is_available() and dist.is_initialized():
             dist.destroy_process_group()
 
 
-def train(args, rank: int) -> int:
+def same_on_every_worker(text: str, device: str) -> str:
+    import torch  # noqa: PLC0415
+
+    from agents.distributed import Workers  # noqa: PLC0415
+
+    workers = Workers()
+    return workers.broadcast_bytes(text.encode() if workers.is_main else None, torch.device(device)).decode()
+
+
+def read_run_config(run_dir: str, device: str | None) -> dict:
+    """The config.json of the run to resume. Only rank 0 needs the file: on several machines the
+    others receive its bytes."""
+    import torch  # noqa: PLC0415
+
+    from agents.distributed import Workers  # noqa: PLC0415
+
+    workers = Workers()
+    data = None
+    if workers.is_main:
+        path = os.path.join(run_dir, "config.json")
+        if not os.path.isfile(path):
+            raise SystemExit(f"--resume {run_dir}: no config.json there; pass a run directory written by scripts/train.py")
+        with open(path, "rb") as f:
+            data = f.read()
+    return json.loads(workers.broadcast_bytes(data, torch.device(device or "cpu")))
+
+
+def train(args, rank: int, watch=None, live: dict | None = None) -> int:
     import torch  # noqa: PLC0415
 
     import warpgym  # noqa: PLC0415,F401  (registers the envs, quiets Warp)
@@ -167,8 +253,7 @@ def train(args, rank: int) -> int:
 
     saved = None
     if args.resume:
-        with open(os.path.join(args.resume, "config.json")) as f:
-            saved = json.load(f)
+        saved = read_run_config(args.resume, args.device)
         task, run_dir = saved["task"], args.resume
         device = resolve_device(args.device or saved["device"])
         num_envs = saved["num_envs"]
@@ -182,6 +267,7 @@ def train(args, rank: int) -> int:
         device = resolve_device(args.device)
         num_envs = args.num_envs or DEFAULT_ENVS["cuda" if device.startswith("cuda") else "cpu"]
         run_dir = args.run_dir or os.path.join("runs", f"{task}-{time.strftime('%Y%m%d-%H%M%S')}")
+        run_dir = same_on_every_worker(run_dir, device)  # a default name could differ by a second
     kind = "cuda" if device.startswith("cuda") else "cpu"
     cfg = build_config(args, task, num_envs, device, saved)
     if rank > 0:  # each process draws its own reset noise; rank 0 alone logs, evaluates and saves
@@ -190,8 +276,11 @@ def train(args, rank: int) -> int:
     if args.max_iterations is None and args.total_steps is None and args.time_limit is None:
         args.max_iterations = DEFAULT_ITERATIONS[kind][task]
 
+    args.run_dir = run_dir
     if rank == 0:
         os.makedirs(run_dir, exist_ok=True)
+    if watch is not None:
+        watch.hint = resume_hint(run_dir)
     device_name = torch.cuda.get_device_name(torch.device(device)) if kind == "cuda" else "cpu"
     if not args.resume and rank == 0:
         write_json(os.path.join(run_dir, "config.json"),
@@ -213,10 +302,14 @@ def train(args, rank: int) -> int:
     runner = OnPolicyRunner(env, cfg, run_dir=run_dir, eval_env=eval_env, start_time=PROCESS_START,
                             print_fn=lambda s: print(s, flush=True), profile=args.profile,
                             cuda_graph=not args.no_cuda_graph, rollout_graph=not args.no_rollout_graph)
+    if live is not None:
+        live["runner"] = runner
     if args.resume:
         runner.load(os.path.join(run_dir, "checkpoint.pt"), resume=True)
         say(f"resumed at iteration {runner.iteration} ({runner.samples} samples)", flush=True)
     history = runner.learn(args.max_iterations, args.total_steps, args.time_limit)
+    if watch is not None:  # every process has left the collectives: peers may end at their own pace
+        watch.stop(finished=True)
     if rank > 0:
         return 0
     summary = summarize(history, device_name, cfg)

@@ -12,9 +12,10 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 from agents import Config, OnPolicyRunner  # noqa: E402
+from agents.distributed import init_workers  # noqa: E402
 from point_mass import PointMassVecEnv  # noqa: E402
 
-dist.init_process_group("gloo")
+init_workers("gloo")
 rank = dist.get_rank()
 out = sys.argv[1]
 env = PointMassVecEnv(32, seed=rank)

@@ -123,8 +123,9 @@ def test_ppo_learns_a_point_mass_within_seconds():
 
 def test_checkpoint_write_is_atomic_and_round_trips(tmp_path):
     path = str(tmp_path / "ck.pt")
-    save_atomic({"a": torch.arange(3)}, path)
-    save_atomic({"a": torch.arange(4)}, path)
+    base = {"iteration": 1, "samples": 2, "policy": {}, "normalizer": {}, "config": {}, "spec": {}}
+    save_atomic({**base, "a": torch.arange(3)}, path)
+    save_atomic({**base, "a": torch.arange(4)}, path)
     assert os.listdir(tmp_path) == ["ck.pt"]
     assert load(path, torch.device("cpu"))["a"].tolist() == [0, 1, 2, 3]
     with pytest.raises(FileNotFoundError, match="no checkpoint"):
@@ -186,8 +187,8 @@ def test_rows_logged_one_iteration_late_still_report_their_own_iteration():
     assert ["eval/return" in r for r in history] == [False, False, False, False, True]  # the last row only
 
 
-def test_an_interrupted_run_keeps_the_row_of_its_last_finished_iteration(tmp_path):
-    cfg = Config(net_dims=(8,), horizon_len=4, batch_size=32, repeat_times=1, eval_gap=1e9, save_gap=10**6)
+def test_an_error_inside_an_iteration_keeps_its_rows_and_the_last_clean_checkpoint(tmp_path):
+    cfg = Config(net_dims=(8,), horizon_len=4, batch_size=32, repeat_times=1, eval_gap=1e9, save_gap=2)
     runner = OnPolicyRunner(PointMassVecEnv(8), cfg, run_dir=str(tmp_path), print_fn=lambda s: None)
     real_update = runner.update
 
@@ -201,7 +202,33 @@ def test_an_interrupted_run_keeps_the_row_of_its_last_finished_iteration(tmp_pat
         runner.learn(max_iterations=10)
     rows = [r["iteration"] for r in __import__("agents.logger", fromlist=["x"]).read_metrics(str(tmp_path))]
     assert rows == [1, 2, 3]  # the third was still waiting to be logged when the fourth was cut short
-    assert load(str(tmp_path / "checkpoint.pt"), torch.device("cpu"))["iteration"] == 3
+    # the fourth iteration had collected (and moved the normaliser) before it stopped: saving then
+    # would mix two iterations, so the checkpoint of iteration 2 stands
+    assert load(str(tmp_path / "checkpoint.pt"), torch.device("cpu"))["iteration"] == 2
+
+
+def test_a_stop_request_ends_the_run_after_an_iteration_and_saves_it(tmp_path):
+    cfg = Config(net_dims=(8,), horizon_len=4, batch_size=32, repeat_times=1, eval_gap=1e9, save_gap=10**6)
+    runner = OnPolicyRunner(PointMassVecEnv(8), cfg, run_dir=str(tmp_path), print_fn=lambda s: None)
+    real_update = runner.update
+
+    def update_and_ask_to_stop():
+        if runner.iteration == 3:
+            runner.request_stop()  # what a SIGTERM handler does, mid-update
+        return real_update()
+
+    runner.update = update_and_ask_to_stop
+    history = runner.learn(max_iterations=100)
+    # the request is read with iteration 4's statistics, during iteration 5: every process stops there
+    assert [r["iteration"] for r in history] == [1, 2, 3, 4, 5]
+    assert load(str(tmp_path / "checkpoint.pt"), torch.device("cpu"))["iteration"] == 5
+
+
+def test_a_time_limit_stops_every_process_after_the_same_iteration():
+    cfg = Config(net_dims=(8,), horizon_len=4, batch_size=32, repeat_times=1, eval_gap=1e9, save_gap=10**6)
+    runner = OnPolicyRunner(PointMassVecEnv(8), cfg, print_fn=lambda s: None)
+    history = runner.learn(time_limit=0.0)  # over at once: read with iteration 1's row, during iteration 2
+    assert [r["iteration"] for r in history] == [1, 2]
 
 
 def test_evaluation_time_is_left_out_of_the_iteration_it_delays():

@@ -1,6 +1,9 @@
 """Checks that need a GPU: they run on the CUDA machine (`pytest tests/test_cuda.py`) and skip in CI."""
 
 import copy
+import os
+import subprocess
+import sys
 
 import pytest
 import torch
@@ -46,6 +49,28 @@ def test_graph_captured_update_matches_the_eager_one():
     torch.testing.assert_close(p_graph, p_eager, atol=1e-5, rtol=1e-4)
     for key in s_eager:
         torch.testing.assert_close(s_graph[key], s_eager[key], atol=1e-5, rtol=1e-4)
+
+
+@pytest.mark.skipif(torch.cuda.device_count() < 2, reason="needs 2 GPUs")
+def test_captured_update_with_nccl_in_the_graph_matches_the_eager_one_on_two_gpus(tmp_path):
+    """Two processes, one GPU each: the mini-batch step replayed from a CUDA graph that holds the
+    gradient/KL all-reduce gives the eager step's policy, and both ranks hold the same policy."""
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    cmd = [sys.executable, "-m", "torch.distributed.run", "--standalone", "--nproc_per_node=2",
+           "tests/dist_update_worker.py", str(tmp_path)]
+    done = subprocess.run(cmd, cwd=root, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
+    r0, r1 = (torch.load(tmp_path / f"rank{r}.pt", weights_only=True) for r in (0, 1))
+    assert r0["graph"]["captured"] and r1["graph"]["captured"] and not r0["eager"]["captured"]
+    for r in (r0, r1):
+        torch.testing.assert_close(r["graph"]["params"], r["eager"]["params"], atol=1e-5, rtol=1e-4)
+        for key in r["eager"]["stats"]:
+            torch.testing.assert_close(r["graph"]["stats"][key], r["eager"]["stats"][key], atol=1e-5, rtol=1e-4)
+    # the all-reduce ran inside every replay: one policy, though each rank trained on its own data
+    # (a graph without the collective would leave each rank with its own)
+    assert torch.equal(r0["graph"]["params"], r1["graph"]["params"])
+    assert torch.equal(r0["eager"]["params"], r1["eager"]["params"])
+    assert not torch.equal(r0["graph"]["stats"]["loss/value"], r1["graph"]["stats"]["loss/value"])
 
 
 def test_captured_rollout_matches_the_eager_one():

@@ -1,35 +1,69 @@
-"""Worker parallelism: two processes (torchrun, gloo on the CPU) train one policy."""
+"""Worker parallelism on the CPU (gloo): processes of one torchrun job train one policy, on one
+machine or on two "machines" (two torchrun agents on localhost), a lost worker stops the job, and
+a killed run resumes with another number of processes."""
 
 import os
+import signal
 import subprocess
 import sys
+import threading
+import time
+from datetime import timedelta
 
+import pytest
 import torch
+import torch.distributed as dist
 
+from agents.checkpoint import load
+from agents.distributed import PeerWatch
 from agents.logger import read_metrics
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+ENV = dict(os.environ, OMP_NUM_THREADS="1")
 
 
-def torchrun(*args, timeout=300):
-    cmd = [sys.executable, "-m", "torch.distributed.run", "--standalone", "--nproc_per_node=2", *args]
-    env = dict(os.environ, OMP_NUM_THREADS="1")
-    done = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=timeout, env=env)
+def torchrun_args(nproc: int = 2):
+    return [sys.executable, "-m", "torch.distributed.run", "--standalone", f"--nproc_per_node={nproc}"]
+
+
+def torchrun(*args, nproc=2, timeout=300):
+    done = subprocess.run([*torchrun_args(nproc), *args], cwd=ROOT, capture_output=True, text=True,
+                          timeout=timeout, env=ENV)
     assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
     return done
 
 
-def test_two_processes_keep_one_policy_and_share_statistics(tmp_path):
-    torchrun("tests/dist_worker.py", str(tmp_path), "5")
-    a, b = (torch.load(tmp_path / f"rank{r}.pt", weights_only=False) for r in (0, 1))
+def check_one_policy(out, iterations):
+    a, b = (torch.load(out / f"rank{r}.pt", weights_only=False) for r in (0, 1))
     assert not torch.equal(a["first_obs"], b["first_obs"])  # each process has its own envs
     torch.testing.assert_close(a["params"], b["params"], atol=1e-6, rtol=0)  # yet one policy
     torch.testing.assert_close(a["mean"], b["mean"])
-    assert a["count"].item() == b["count"].item() == 2 * 32 * (1 + 5 * 10)  # both processes' samples
+    assert a["count"].item() == b["count"].item() == 2 * 32 * (1 + iterations * 10)  # both processes' samples
     assert a["lr"].item() == b["lr"].item()
     # rank 0 logs the samples of both processes, and only rank 0 writes: one row per iteration
-    assert [r["samples"] for r in a["history"]] == [2 * 32 * 10 * i for i in range(1, 6)]
-    assert len(read_metrics(str(tmp_path / "run"))) == 5
+    assert [r["samples"] for r in a["history"]] == [2 * 32 * 10 * i for i in range(1, iterations + 1)]
+    assert len(read_metrics(str(out / "run"))) == iterations
+
+
+def test_two_processes_keep_one_policy_and_share_statistics(tmp_path):
+    torchrun("tests/dist_worker.py", str(tmp_path), "5")
+    check_one_policy(tmp_path, 5)
+
+
+def test_two_machines_on_localhost_keep_one_policy(tmp_path):
+    """Two torchrun agents, one process each, meet through a c10d rendezvous as two nodes would.
+    The rendezvous store is held here, on a port the OS picked, so no port can be taken twice."""
+    store = dist.TCPStore("127.0.0.1", 0, is_master=True, wait_for_workers=False, timeout=timedelta(seconds=60))
+    nodes = []
+    for node in range(2):
+        cmd = [sys.executable, "-m", "torch.distributed.run", "--nnodes=2", "--nproc_per_node=1",
+               "--rdzv-backend=c10d", f"--rdzv-endpoint=127.0.0.1:{store.port}", "--rdzv-id=two-nodes",
+               "--rdzv-conf=is_host=false", "tests/dist_worker.py", str(tmp_path), "4"]
+        log = open(tmp_path / f"node{node}.log", "w")
+        nodes.append(subprocess.Popen(cmd, cwd=ROOT, stdout=log, stderr=subprocess.STDOUT, env=ENV))
+    for node, p in enumerate(nodes):
+        assert p.wait(timeout=300) == 0, (tmp_path / f"node{node}.log").read_text()[-3000:]
+    check_one_policy(tmp_path, 4)
 
 
 def test_train_script_under_torchrun_on_the_cpu(tmp_path):
@@ -39,6 +73,82 @@ def test_train_script_under_torchrun_on_the_cpu(tmp_path):
                     "--no-eval", "--no-plots", "--run-dir", str(run))
     assert "x 2 processes" in done.stdout
     summary = (run / "summary.json").read_text()
-    assert '"iterations": 2' in summary
+    assert '"iterations": 2' in summary and '"workers": 2' in summary
     rows = (run / "metrics.jsonl").read_text().splitlines()
     assert len(rows) == 2 and '"samples": 64' in rows[1]  # 2 processes x 4 envs x 4 steps x 2 iterations
+
+
+def test_a_silent_peer_is_noticed_and_a_finished_one_is_not():
+    store = dist.TCPStore("127.0.0.1", 0, is_master=True, wait_for_workers=False, timeout=timedelta(seconds=10))
+    lost: list[tuple[int, str]] = []
+    heard = threading.Event()
+
+    def on_lost(rank):
+        def record(why):
+            lost.append((rank, why))
+            heard.set()
+        return record
+
+    def watches():
+        return [PeerWatch(store, r, 3, interval=0.05, timeout=0.5, on_lost=on_lost(r)) for r in range(3)]
+
+    w = watches()
+    w[2].stop(finished=True)  # ended on purpose: nobody waits for it any more
+    time.sleep(1.5)
+    assert lost == []
+    w[1].stop(finished=False)  # died: its beats stop, with no word
+    assert heard.wait(5.0)
+    assert lost[0][0] == 0 and "worker 1 has not been heard from" in lost[0][1]
+    w[0].stop(finished=True)
+
+
+def worker_pids(agent_pid: int) -> dict[int, int]:
+    """RANK -> pid of the worker processes a torchrun agent started (read from /proc)."""
+    found = {}
+    for pid in filter(str.isdigit, os.listdir("/proc")):
+        try:
+            with open(f"/proc/{pid}/stat") as f:
+                ppid = int(f.read().rsplit(")", 1)[1].split()[1])
+            if ppid != agent_pid:
+                continue
+            with open(f"/proc/{pid}/environ", "rb") as f:
+                env = dict(kv.split(b"=", 1) for kv in f.read().split(b"\0") if b"=" in kv)
+            found[int(env[b"RANK"])] = int(pid)
+        except (OSError, KeyError, ValueError, IndexError):
+            continue
+    return found
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc"), reason="finds the worker processes through /proc")
+def test_a_killed_worker_stops_the_job_and_the_run_resumes_on_one_process(tmp_path):
+    run = tmp_path / "ant"
+    common = ["--horizon-len", "4", "--episode-length", "20", "--no-eval", "--no-plots"]
+    log = open(tmp_path / "job.log", "w")
+    job = subprocess.Popen([*torchrun_args(2), "scripts/train.py", "--task", "Ant", "--device", "cpu", "--num-envs",
+                            "4", "--max-iterations", "100000", "--save-gap", "3", "--run-dir", str(run), *common],
+                           cwd=ROOT, stdout=log, stderr=subprocess.STDOUT, env=dict(ENV, WARPGYM_PEER_TIMEOUT="20"))
+    deadline = time.time() + 240
+    while time.time() < deadline and job.poll() is None:
+        if (run / "checkpoint.pt").exists() and (run / "metrics.jsonl").exists() and len(read_metrics(str(run))) >= 7:
+            break
+        time.sleep(0.2)
+    assert job.poll() is None, (tmp_path / "job.log").read_text()[-3000:]
+    os.kill(worker_pids(job.pid)[1], signal.SIGKILL)
+    killed = time.time()
+    code = job.wait(timeout=120)
+    assert time.time() - killed < 60
+    out = (tmp_path / "job.log").read_text()
+    assert code != 0 and "--resume" in out, out[-3000:]
+
+    saved = load(str(run / "checkpoint.pt"), torch.device("cpu"))
+    start = saved["iteration"]
+    assert start >= 3 and start % 3 == 0 and saved["samples"] == start * 32  # 2 processes x 4 envs x 4 steps
+    # the same run on one process: it goes on from the checkpoint, and rows after it are logged once
+    done = subprocess.run([sys.executable, "scripts/train.py", "--resume", str(run), "--max-iterations",
+                           str(start + 3)], cwd=ROOT, capture_output=True, text=True, timeout=300, env=ENV)
+    assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
+    assert f"resumed at iteration {start}" in done.stdout
+    rows = read_metrics(str(run))
+    assert [r["iteration"] for r in rows] == list(range(1, start + 4))
+    assert [r["samples"] for r in rows[start:]] == [start * 32 + 16 * k for k in (1, 2, 3)]  # now 1 x 4 x 4
+    assert load(str(run / "checkpoint.pt"), torch.device("cpu"))["iteration"] == start + 3
