@@ -47,9 +47,12 @@ def wait(procs: list[subprocess.Popen], logs: list[str]) -> None:
             raise SystemExit(f"{' '.join(map(str, p.args))} failed ({p.returncode}):\n{tail}")
 
 
+TRAIN_FLAGS: list[str] = []  # --train-flags: passed to every training run
+
+
 def train_args(task: str, num_envs: int, seconds: float, run_dir: str, seed: int) -> list[str]:
     return ["scripts/train.py", "--task", task, "--num-envs", str(num_envs), "--time-limit", str(seconds),
-            "--eval-gap", "10", "--seed", str(seed), "--run-dir", run_dir, "--no-plots"]
+            "--eval-gap", "10", "--seed", str(seed), "--run-dir", run_dir, "--no-plots", *TRAIN_FLAGS]
 
 
 def summary_of(run_dir: str) -> dict:
@@ -119,8 +122,10 @@ def main(argv=None) -> int:
     ap.add_argument("--gpus", type=int, nargs="+", default=None, help="GPU counts (default: 1 and every GPU)")
     ap.add_argument("--num-envs", type=int, default=4096, help="envs per GPU")
     ap.add_argument("--seconds", type=float, default=60.0, help="wall-clock length of each training run")
+    ap.add_argument("--train-flags", default="", help="more scripts/train.py flags, e.g. '--no-cuda-graph'")
     ap.add_argument("--comms-worker", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
+    TRAIN_FLAGS[:] = args.train_flags.split()
     if args.comms_worker:
         comms_worker(args.task, args.num_envs, os.path.join(args.out, "comms.json"))
         return 0
@@ -142,7 +147,8 @@ def main(argv=None) -> int:
     wait([run([sys.executable, "scripts/train.py", "--task", task, "--num-envs", "256", "--max-iterations", "3",
                "--run-dir", warm, "--no-plots"], warm + ".log", {"CUDA_VISIBLE_DEVICES": "0"})], [warm + ".log"])
 
-    results: dict = {"task": task, "num_envs_per_gpu": n, "seconds": args.seconds, "gpus": {}}
+    results: dict = {"task": task, "num_envs_per_gpu": n, "seconds": args.seconds, "train_flags": TRAIN_FLAGS,
+                     "gpus": {}}
     say(f"1 GPU: {available} runs side by side, one per GPU")
     dirs = [os.path.join(runs, f"gpu1_seed{k}") for k in range(available)]
     procs = [run([sys.executable, *train_args(task, n, args.seconds, d, k)], d + ".log",
