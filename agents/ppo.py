@@ -94,6 +94,11 @@ class PPO:
         self.optimizer.step()
         self._sums += torch.stack([surr.detach(), v_loss.detach(), ent.detach(), kl, b_loss.detach()])
 
+    def release_graph(self) -> None:
+        """Free the captured step. Under NCCL a communicator cannot be destroyed while a graph that
+        holds one of its collectives lives: destroy_process_group would wait for ever."""
+        self._graph = None
+
     def _capture(self) -> None:
         graph = torch.cuda.CUDAGraph()
         # thread_local: the NCCL watchdog thread queries events while this thread captures

@@ -214,6 +214,13 @@ class OnPolicyRunner:
                 self.save()
         return self.history
 
+    def close(self) -> None:
+        """Free the CUDA graphs (before ``destroy_process_group``: see ``PPO.release_graph``)."""
+        self.ppo.release_graph()
+        self._rollout_graph = None
+        if self.device.type == "cuda":
+            torch.cuda.synchronize(self.device)
+
     def request_stop(self) -> None:
         """Stop after the iteration in flight and save (safe to call from a signal handler). Under
         several processes the request travels with the statistics, so all stop at one iteration."""

@@ -108,6 +108,7 @@ def comms_worker(task: str, num_envs: int, out: str, replays: int = 50) -> None:
         end.record()
         end.synchronize()
         times.append(start.elapsed_time(end) / replays)
+    del graph  # a graph holding NCCL work must go before its communicator
     if workers.is_main:
         with open(out, "w") as f:
             json.dump({"ms_per_iteration": statistics.median(times), "all_reduces_per_iteration": steps + 2,
@@ -123,12 +124,16 @@ def main(argv=None) -> int:
     ap.add_argument("--num-envs", type=int, default=4096, help="envs per GPU")
     ap.add_argument("--seconds", type=float, default=60.0, help="wall-clock length of each training run")
     ap.add_argument("--train-flags", default="", help="more scripts/train.py flags, e.g. '--no-cuda-graph'")
+    ap.add_argument("--report-only", action="store_true",
+                    help="rewrite the table and figures in --out from its scaling_<task>.json and runs_<task>.tar.gz")
     ap.add_argument("--comms-worker", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     TRAIN_FLAGS[:] = args.train_flags.split()
     if args.comms_worker:
         comms_worker(args.task, args.num_envs, os.path.join(args.out, "comms.json"))
         return 0
+    if args.report_only:
+        return report(os.path.abspath(args.out), args.task)
 
     import torch  # noqa: PLC0415
 
@@ -180,24 +185,44 @@ def main(argv=None) -> int:
     for entry in results["gpus"].values():
         entry["speedup"] = entry["samples_per_s"] / base
     results["device"] = next(iter(results["gpus"]["1"]["runs"].values()))["device"]
-    results["learning"] = learning_table(runs, results)
+    with tarfile.open(os.path.join(out, f"runs_{task}.tar.gz"), "w:gz") as tar:
+        tar.add(runs, arcname=f"runs_{task}",
+                filter=lambda ti: None if ti.name.endswith(".pt") or "/tensorboard" in ti.name else ti)
+    write_report(out, runs, results)
+    shutil.rmtree(runs)
+    return 0
 
+
+def write_report(out: str, runs: str, results: dict) -> None:
+    """scaling_<task>.json and .md and the two figures, from the results and the run directories."""
+    task = results["task"]
+    results["learning"] = learning_table(runs, results)
     with open(os.path.join(out, f"scaling_{task}.json"), "w") as f:
         json.dump(results, f, indent=1)
     table = markdown(results)
     with open(os.path.join(out, f"scaling_{task}.md"), "w") as f:
         f.write(table)
     figures(runs, out, results)
-    with tarfile.open(os.path.join(out, f"runs_{task}.tar.gz"), "w:gz") as tar:
-        tar.add(runs, arcname=f"runs_{task}",
-                filter=lambda ti: None if ti.name.endswith(".pt") or "/tensorboard" in ti.name else ti)
-    shutil.rmtree(runs)
     print(table, flush=True)
+
+
+def report(out: str, task: str) -> int:
+    with open(os.path.join(out, f"scaling_{task}.json")) as f:
+        results = json.load(f)
+    with tarfile.open(os.path.join(out, f"runs_{task}.tar.gz")) as tar:
+        tar.extractall(out, filter="data")
+    runs = os.path.join(out, f"runs_{task}")
+    write_report(out, runs, results)
+    shutil.rmtree(runs)
     return 0
 
 
+def mark_times(seconds: float) -> list[int]:
+    return [t for t in (20, 30, 45, 60, 90, 120, 180, 300) if t <= seconds + 5]
+
+
 def learning_table(runs: str, results: dict) -> dict:
-    """Evaluation return and speed of each run at a few common wall-clock times."""
+    """Each run's latest evaluation (deterministic policy) at a few common wall-clock times."""
     from agents.logger import read_metrics  # noqa: PLC0415
 
     out = {}
@@ -205,7 +230,7 @@ def learning_table(runs: str, results: dict) -> dict:
         for name in entry["runs"]:
             evals = [r for r in read_metrics(os.path.join(runs, name)) if "eval/return" in r]
             marks = {}
-            for t in (30, 45, 60, 90, 120):
+            for t in mark_times(results["seconds"]):
                 before = [r for r in evals if r["time_s"] <= t]
                 if before:
                     marks[str(t)] = {"eval/return": before[-1]["eval/return"], "eval/speed": before[-1]["eval/speed"],
@@ -226,12 +251,13 @@ def markdown(results: dict) -> str:
             if "comms" in e else "-"
         lines.append(f"| {g} | {e['samples_per_s'] / 1e6:.3f} M | {e['speedup']:.3f}x | {ph['iteration']:.2f} | "
                      + " | ".join(f"{ph[p]:.2f}" for p in PHASES) + f" | {comms} |")
-    lines += ["", f"1-GPU baseline: median of {len(g1['runs'])} runs side by side, one per GPU.", "",
-              "| run | " + " | ".join(f"eval at {t} s" for t in ("30", "45", "60", "90", "120")) + " |",
-              "|---|" + "---:|" * 5]
+    times = [str(t) for t in mark_times(results["seconds"])]
+    each = ", ".join(f"{r['steady_samples_per_s_median'] / 1e6:.3f} M" for r in g1["runs"].values())
+    lines += ["", f"1-GPU baseline: median of {len(g1['runs'])} runs side by side, one per GPU ({each}).", "",
+              "Latest evaluation (deterministic policy, 64 envs) by wall-clock time since process start:", "",
+              "| run | " + " | ".join(f"{t} s" for t in times) + " |", "|---|" + "---:|" * len(times)]
     for name, marks in results["learning"].items():
-        cells = [f"{m['eval/return']:.0f} @ {m['eval/speed']:.2f} m/s" if (m := marks.get(t)) else "-"
-                 for t in ("30", "45", "60", "90", "120")]
+        cells = [f"{m['eval/return']:.0f} @ {m['eval/speed']:.2f} m/s" if (m := marks.get(t)) else "-" for t in times]
         lines.append(f"| {name} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 

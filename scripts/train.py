@@ -307,7 +307,12 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
     if args.resume:
         runner.load(os.path.join(run_dir, "checkpoint.pt"), resume=True)
         say(f"resumed at iteration {runner.iteration} ({runner.samples} samples)", flush=True)
-    history = runner.learn(args.max_iterations, args.total_steps, args.time_limit)
+    try:
+        history = runner.learn(args.max_iterations, args.total_steps, args.time_limit)
+    finally:
+        runner.close()
+        if live is not None:
+            live.clear()
     if watch is not None:  # every process has left the collectives: peers may end at their own pace
         watch.stop(finished=True)
     if rank > 0:

@@ -52,6 +52,7 @@ def main() -> None:
             "stats": {k: v.detach().cpu() for k, v in stats.items()},
             "captured": ppo._graph is not None,
         }
+        ppo.release_graph()  # before destroy_process_group, which waits for graphs holding NCCL work
     torch.save(results, os.path.join(sys.argv[1], f"rank{rank}.pt"))
     dist.destroy_process_group()
 
