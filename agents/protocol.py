@@ -8,6 +8,11 @@ holds their last observation, masked by ``info["_final_obs"]``. Optional:
 ``info["episode"] = {"r": return, "l": length, "s": mean forward speed, "_r": mask}`` for logging,
 and ``max_episode_steps`` for evaluation.
 
+Optional: ``fault_counters() -> {name: device tensor}``, running totals of things that should
+never happen (NaN actions, physics blow-ups, dropped constraints), with ``FAULT_HELP = {name: text}``.
+The runner logs them in every row (``faults/<name>``, summed over processes) and warns once per
+counter when it first rises above zero.
+
 Optional too: ``graph_capturable = True`` declares that ``step`` can be recorded into a torch CUDA
 graph and replayed: it never waits on the host, and its outputs are persistent tensors that each
 step overwrites. The runner then captures whole rollouts.

@@ -12,6 +12,8 @@ class EpisodeTracker:
     step; for others the tracker sums rewards itself.
     """
 
+    SUMS = 5  # the length of take()'s vector
+
     def __init__(self, horizon: int, num_envs: int, device: torch.device):
         self.ended = torch.zeros(horizon, 3, num_envs, device=device)  # r, l, s of episodes ending at t
         self.has_speed = False

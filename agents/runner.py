@@ -68,6 +68,10 @@ class OnPolicyRunner:
         self.timer = PhaseTimer(self.device, enabled=profile)  # --profile: synchronising, per step
         self.clock = IterationClock(self.device)  # always on: events, read one iteration late
         self._stop_request = torch.zeros(1, dtype=torch.float64, device=self.device)
+        # running totals of things that should never happen (agents.protocol), logged every row
+        self._faults = env.fault_counters() if hasattr(env, "fault_counters") else {}
+        self._fault_help = getattr(env, "FAULT_HELP", {})
+        self._faults_reported: set[str] = set()
         self._stop_requested = False
         # Only an env that declares it (agents.protocol) is captured; the normaliser update stays
         # outside the graph, since across processes it all-reduces.
@@ -234,7 +238,8 @@ class OnPolicyRunner:
         """Queue the copy of an iteration's statistics to the host, without waiting for it. The
         episode sums and the stop request travel in one collective, summed over the processes."""
         self._stop_request.fill_(1.0 if wants_stop else 0.0)
-        shared = self.workers.sum_(torch.cat([self.episodes.take(), self._stop_request]))
+        faults = [t.reshape(1).to(torch.float64) for t in self._faults.values()]
+        shared = self.workers.sum_(torch.cat([self.episodes.take(), *faults, self._stop_request]))
         keys = list(stats)
         values = torch.cat([torch.stack([stats[k].float() for k in keys]).double(), shared])
         self.clock.mark("statistics")
@@ -252,8 +257,15 @@ class OnPolicyRunner:
         row = {"iteration": staged.iteration, "samples": staged.samples, "time_s": round(self.elapsed(), 3),
                "samples_per_s": self._per_iter / max(seconds["iteration"], 1e-9), "iteration_s": seconds["iteration"]}
         row.update({f"phase/{k}_s": v for k, v in seconds.items() if k != "iteration"})
-        row.update(EpisodeTracker.summary(values[len(keys) : -1]))
         row.update(dict(zip(keys, values[: len(keys)])))
+        episode_end = len(keys) + EpisodeTracker.SUMS
+        row.update(EpisodeTracker.summary(values[len(keys) : episode_end]))
+        for name, count in zip(self._faults, values[episode_end:-1]):
+            row[f"faults/{name}"] = int(count)
+            if count > 0 and name not in self._faults_reported:  # once per run: not a line per step
+                self._faults_reported.add(name)
+                self.print(f"warning: {name} = {int(count)} by iteration {staged.iteration} (all processes): "
+                           f"{self._fault_help.get(name, 'see the env documentation')}")
         due = final or self.elapsed() - self.last_eval_time >= self.cfg.eval_gap
         if self.eval_env is not None and may_evaluate and due:
             t_eval = time.perf_counter()

@@ -77,11 +77,12 @@ def gpu_memory_used(device: str) -> int:
     return total - free
 
 
-def bench_one(robot: str, num_envs: int, device: str, steps: int, repeats: int, iters: int, ls_iters: int) -> dict:
+def bench_one(robot: str, num_envs: int, device: str, steps: int, repeats: int, iters: int, ls_iters: int,
+              njmax: int | None = None) -> dict:
     mem0 = gpu_memory_used(device)
     t0 = time.perf_counter()
     env = LocomotionVecEnv(TASK_OF_ROBOT[robot], num_envs=num_envs, device=device, seed=0,
-                           sim_options={"solver_iterations": iters, "ls_iterations": ls_iters})
+                           sim_options={"solver_iterations": iters, "ls_iterations": ls_iters, "njmax": njmax})
     build_s = time.perf_counter() - t0
     sim = env.sim
     gen = torch.Generator(device=device).manual_seed(0)
@@ -102,7 +103,7 @@ def bench_one(robot: str, num_envs: int, device: str, steps: int, repeats: int, 
     warmup_s = time.perf_counter() - t0
     mem1 = gpu_memory_used(device)
 
-    result = {"robot": robot, "num_envs": num_envs, "steps": steps, "repeats": repeats,
+    result = {"robot": robot, "num_envs": num_envs, "njmax": sim.njmax, "steps": steps, "repeats": repeats,
               "build_s": round(build_s, 2), "warmup_s": round(warmup_s, 2),
               "gpu_mem_mib": round((mem1 - mem0) / 2**20, 1)}
     for name, fn in (("raw", raw), ("physics", sim.step), ("env", env_step)):
@@ -127,6 +128,8 @@ def main(argv=None) -> int:
     ap.add_argument("--repeats", type=int, default=5, help="timings per figure; the median is reported")
     ap.add_argument("--solver-iterations", type=int, default=8)
     ap.add_argument("--ls-iterations", type=int, default=8)
+    ap.add_argument("--njmax", type=int, nargs="+", default=[None],
+                    help="constraint rows per world to compare (default: each robot's, warpgym/robots.py)")
     ap.add_argument("--no-mathdx", action="store_true",
                     help="compile Warp's tile Cholesky without libmathdx (faster to compile; see the timings)")
     ap.add_argument("--out", default=None, help="JSON file to write (default: print only)")
@@ -139,15 +142,17 @@ def main(argv=None) -> int:
     rows = []
     for robot in args.robots:
         for n in args.num_envs:
-            r = bench_one(robot, n, device, args.steps, args.repeats, args.solver_iterations, args.ls_iterations)
-            rows.append(r)
-            print(json.dumps(r), flush=True)
+            for njmax in args.njmax:
+                r = bench_one(robot, n, device, args.steps, args.repeats, args.solver_iterations,
+                              args.ls_iterations, njmax)
+                rows.append(r)
+                print(json.dumps(r), flush=True)
 
     print(f"\n{gpu}, {args.steps} steps x {args.repeats} repeats, median env-steps/s")
-    print("| robot | envs | raw Newton | warpgym physics | physics/raw | env (task) | env/physics | MiB/1k envs |")
-    print("|---|---:|---:|---:|---:|---:|---:|---:|")
+    print("| robot | envs | njmax | raw Newton | warpgym physics | physics/raw | env (task) | env/physics | MiB/1k envs |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
     for r in rows:
-        print(f"| {r['robot']} | {r['num_envs']} | {r['raw_steps_per_s'] / 1e6:.2f}M | "
+        print(f"| {r['robot']} | {r['num_envs']} | {r['njmax']} | {r['raw_steps_per_s'] / 1e6:.2f}M | "
               f"{r['physics_steps_per_s'] / 1e6:.2f}M | {r['physics_over_raw']:.3f} | "
               f"{r['env_steps_per_s'] / 1e6:.2f}M | {r['env_over_physics']:.3f} | "
               f"{r['gpu_mem_mib'] / r['num_envs'] * 1000:.0f} |")

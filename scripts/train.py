@@ -318,6 +318,9 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
     if rank > 0:
         return 0
     summary = summarize(history, device_name, cfg)
+    summary["solver_load"] = env.sim.solver_load()  # this process's envs, over the whole run
+    summary["faults"] = {k[len("faults/"):]: v for k, v in (history[-1] if history else {}).items()
+                         if k.startswith("faults/")}
     if args.profile:
         summary["profile"] = runner.timer.table()
         print("| phase | ms / iteration | share |\n|---|---:|---:|")

@@ -241,3 +241,34 @@ def test_evaluation_time_is_left_out_of_the_iteration_it_delays():
     assert all("eval_s" in r for r in history)
     steady = history[2:]
     assert all(0 < r["iteration_s"] < 0.5 * min(h["eval_s"] for h in steady) for r in steady)
+
+
+class FaultyPointMass(PointMassVecEnv):
+    """A point mass whose env reports a fault counter (agents.protocol) that rises at step 10."""
+
+    FAULT_HELP = {"glitches": "the test env glitched"}
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.steps = 0
+        self.glitches = torch.zeros((), dtype=torch.int64)
+
+    def fault_counters(self):
+        return {"glitches": self.glitches}
+
+    def step(self, actions):
+        self.steps += 1
+        if self.steps >= 10:
+            self.glitches += 1
+        return super().step(actions)
+
+
+def test_fault_counters_are_logged_every_row_and_warned_once():
+    lines = []
+    cfg = Config(net_dims=(8,), horizon_len=4, batch_size=32, repeat_times=1, eval_gap=1e9, save_gap=10**6)
+    runner = OnPolicyRunner(FaultyPointMass(8), cfg, print_fn=lines.append)
+    history = runner.learn(max_iterations=5)
+    # steps 1-4, 5-8: none; step 9-12: 3 (steps 10, 11, 12); then 4 more per iteration
+    assert [r["faults/glitches"] for r in history] == [0, 0, 3, 7, 11]
+    warnings = [line for line in lines if line.startswith("warning: glitches")]
+    assert len(warnings) == 1 and "= 3 by iteration 3" in warnings[0] and "the test env glitched" in warnings[0]

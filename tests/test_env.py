@@ -117,11 +117,13 @@ def test_same_seed_same_trajectory(ant_env):
 
 def test_nan_actions_are_zeroed_and_counted(ant_env):
     ant_env.reset(seed=5)
+    before = int(ant_env.fault_counters()["nan_actions"])
     actions = torch.zeros(4, 8)
     actions[2, 3] = float("nan")
     actions[2, 5] = float("inf")
     obs, rew, term, trunc, info = ant_env.step(actions)
     assert info["nan_actions"].tolist() == [0, 0, 2, 0]
+    assert int(ant_env.fault_counters()["nan_actions"]) == before + 2  # the running total the runner logs
     assert torch.isfinite(obs).all() and torch.isfinite(rew).all()
     assert ant_env.actions[2].abs().max() == 0  # what reached the physics
 
@@ -130,8 +132,10 @@ def test_diverged_state_is_reset_and_flagged(ant_env):
     ant_env.reset(seed=6)
     ant_env.sim.dof_vel[0, 2] = float("nan")
     ant_env.sim.root_vel[3, 0] = 1e6  # a blow-up that stays finite
+    before = int(ant_env.fault_counters()["diverged_resets"])
     obs, rew, term, trunc, info = ant_env.step(torch.zeros(4, 8))
     assert info["diverged"].tolist() == [True, False, False, True]
+    assert int(ant_env.fault_counters()["diverged_resets"]) == before + 2
     assert term[0] and term[3] and rew[0] == 0 and rew[3] == 0
     assert torch.isfinite(obs).all() and torch.isfinite(info["final_obs"]).all()
     assert torch.isfinite(ant_env.sim.dof_vel).all()

@@ -141,6 +141,25 @@ def test_joint_torque_turns_the_joint_its_way(ant_sim):
     assert ant_sim.acquire_dof_force_tensor().view(-1, k)[0, 0] > 1.0  # the applied torque is reported
 
 
+def test_full_constraint_buffers_are_counted_per_world_and_substep():
+    """An Ant standing on its four feet needs about 20 constraint rows; with room for 8 every world
+    loses constraints in every substep, and the Sim counts it instead of printing."""
+    from warpgym import Sim
+
+    small = Sim("ant", num_envs=2, device="cpu", njmax=8)
+    for _ in range(20):
+        small.step()
+    load = small.solver_load()
+    assert load["njmax"] == 8 and load["peak_constraints_per_world"] > 8
+    assert small.solver_overflows.numpy().tolist() == [small.substeps] * 2
+    roomy = Sim("ant", num_envs=2, device="cpu")  # the default: room for the worst case on a plane
+    for _ in range(20):
+        roomy.step()
+    load = roomy.solver_load()
+    assert 8 < load["peak_constraints_per_world"] <= load["njmax"] == 128
+    assert roomy.solver_overflows.numpy().tolist() == [0, 0]
+
+
 def test_worlds_evolve_independently(ant_sim):
     put(ant_sim, z=0.7)
     gen = torch.Generator().manual_seed(3)

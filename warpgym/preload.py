@@ -40,6 +40,7 @@ SIM_MODULES = (
     "kernels.locomotion",
     "kernels.resets",
     "kernels.tensor_api",
+    "kernels.solver_load",
 )
 # Dependencies' modules compiled without adjoints (warpgym's own set this in their source).
 NO_BACKWARD = ("newton._src.solvers.mujoco.kernels",)

@@ -20,7 +20,8 @@ class RobotSpec:
     # Body names (last path component of Newton's body label) whose contact wrench is observed.
     feet: tuple[str, ...]
     # MuJoCo Warp buffer sizes per world (contacts, constraint rows). None: Newton's estimate from the
-    # start pose, which is too small for a Humanoid lying on the ground tangled in itself.
+    # start pose, which is too small for a robot lying on the ground tangled in itself: a world that
+    # needs more rows loses constraints for that substep (counted in Sim.solver_overflows).
     nconmax: int | None = None
     njmax: int | None = None
     # Device memory per 1000 envs [MiB], measured on an H100 (docs/benchmarks.md), for the check
@@ -34,6 +35,11 @@ ROBOTS: dict[str, RobotSpec] = {
         mjcf="nv_ant.xml",
         start_height=0.55,
         feet=("front_left_foot", "front_right_foot", "left_back_foot", "right_back_foot"),
+        # Newton's estimate (64 rows) overflowed in fast training runs. On the plane the Ant has at
+        # most 25 contacts (the torso sphere 1, 12 leg capsules 2 each) of 4 pyramid rows, plus 8
+        # joint limits: 108 rows.
+        njmax=128,
+        mib_per_1000_envs=70.0,
     ),
     "humanoid": RobotSpec(
         name="humanoid",

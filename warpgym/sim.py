@@ -15,6 +15,7 @@ import torch
 import warp as wp
 
 from kernels import tensor_api as k_api
+from kernels.solver_load import track_solver_load
 from warpgym.device import resolve_device
 from warpgym.preload import Preload
 from warpgym.robots import RobotSpec, hinge_joint_names, mjcf_path, motor_gears, robot_spec
@@ -43,6 +44,8 @@ class Sim(TensorAPI):
         dt: control step [s]; one ``step()`` advances this much.
         substeps: physics substeps per control step.
         solver_iterations, ls_iterations: MuJoCo Warp's Newton-solver and line-search iteration caps.
+        njmax, nconmax: constraint rows and contacts per world that MuJoCo Warp makes room for
+            (default: the robot's, see ``warpgym/robots.py``); a world that needs more loses the rest.
         check_inputs: validate index tensors on the host (one synchronisation per indexed set).
     """
 
@@ -56,6 +59,8 @@ class Sim(TensorAPI):
         substeps: int = 2,
         solver_iterations: int = 8,
         ls_iterations: int = 8,
+        njmax: int | None = None,
+        nconmax: int | None = None,
         check_inputs: bool = True,
     ):
         self.spec: RobotSpec = robot_spec(robot)
@@ -65,6 +70,8 @@ class Sim(TensorAPI):
             raise ValueError(f"dt={dt!r} must be a positive number of seconds, e.g. 1/60")
         _check_positive_int("solver_iterations", solver_iterations, "pass a positive iteration cap, e.g. 8")
         _check_positive_int("ls_iterations", ls_iterations, "pass a positive iteration cap, e.g. 8")
+        self.njmax = self.spec.njmax if njmax is None else _check_positive_int("njmax", njmax, "pass e.g. 128")
+        self.nconmax = self.spec.nconmax if nconmax is None else _check_positive_int("nconmax", nconmax, "pass e.g. 48")
         self.device = resolve_device(device)
         self.torch_device = torch.device(self.device)
         self.seed = int(seed)
@@ -144,15 +151,21 @@ class Sim(TensorAPI):
             model,
             iterations=solver_iterations,
             ls_iterations=ls_iterations,
-            nconmax=self.spec.nconmax,
-            njmax=self.spec.njmax,
+            nconmax=self.nconmax,
+            njmax=self.njmax,
             disable_sensors=True,
         )
-        # The iteration caps are a deliberate speed/accuracy trade, not an error worth a printf per world.
-        from mujoco_warp import OverflowType  # noqa: PLC0415
+        # The iteration caps are a deliberate speed/accuracy trade, not an error worth a printf per
+        # world. Dropped constraints and contacts are errors, but they are counted on the device
+        # every substep (solver_overflows, solver_load()) and reported once, not printed per world.
+        from mujoco_warp import OverflowType as OF  # noqa: PLC0415
 
+        self._drop_bits = int(OF.NEFC | OF.NJMAX_NNZ | OF.BROADPHASE | OF.NARROWPHASE)
         opt = self.solver.mjw_model.opt
-        opt.warn_overflow = int(opt.warn_overflow) & ~int(OverflowType.ITERATIONS | OverflowType.LS_ITERATIONS)
+        opt.warn_overflow = int(opt.warn_overflow) & ~int(OF.ITERATIONS | OF.LS_ITERATIONS | self._drop_bits)
+        self._peak_nefc = wp.zeros(n, dtype=wp.int32, device=self.device)
+        self._peak_nacon = wp.zeros(1, dtype=wp.int32, device=self.device)
+        self._overflowed = wp.zeros(n, dtype=wp.int32, device=self.device)
         self.state = model.state()
         self.control = model.control()
         self.control.joint_f.zero_()
@@ -176,8 +189,32 @@ class Sim(TensorAPI):
 
     def simulate(self) -> None:
         """Advance one control step as plain launches (what the captured graph holds)."""
-        for _ in range(self.substeps):
+        d = self.solver.mjw_data
+        for i in range(self.substeps):
             self.solver.step(self.state, self.state, self.control, None, self.sub_dt)
+            wp.launch(track_solver_load, dim=self.num_envs,
+                      inputs=[d.nefc, d.nacon, self._drop_bits, int(i == 0)],
+                      outputs=[d.overflow, self._peak_nefc, self._peak_nacon, self._overflowed], device=self.device)
+
+    @property
+    def solver_overflows(self) -> wp.array:
+        """(N,) int32: substeps of the last step in which each world lost constraints or contacts
+        because MuJoCo Warp's buffers (``njmax``, ``naconmax``) were full."""
+        return self._overflowed
+
+    def solver_load(self) -> dict:
+        """How full the constraint and contact buffers have been since the Sim was built (or
+        ``reset_solver_load()``): the most constraint rows of any world against ``njmax``, and the
+        most contacts of all worlds in one substep against ``naconmax``. One host read."""
+        d = self.solver.mjw_data
+        peak_nacon = int(self._peak_nacon.numpy()[0])
+        return {"njmax": int(d.njmax), "peak_constraints_per_world": int(self._peak_nefc.numpy().max()),
+                "naconmax": int(d.naconmax), "peak_contacts": peak_nacon,
+                "peak_contacts_per_world_mean": peak_nacon / self.num_envs}
+
+    def reset_solver_load(self) -> None:
+        self._peak_nefc.zero_()
+        self._peak_nacon.zero_()
 
     def capture(self, fn):
         """Capture ``fn``'s launches as one graph: a CUDA graph, or on the CPU Warp's recorded

@@ -17,6 +17,7 @@ from gymnasium.vector.utils import batch_space
 from kernels.actions import apply_actions
 from kernels.locomotion import advance_rng, locomotion_step
 from kernels.resets import reset_finished_envs
+from kernels.solver_load import count_faults
 from warpgym.checks import check_float_tensor
 from warpgym.sim import Sim
 from warpgym.tasks import LocomotionTask, get_task
@@ -31,7 +32,7 @@ class LocomotionVecEnv(VectorEnv):
         device: "cpu" or "cuda:N" (default: cuda:0 when present).
         seed: seed of the reset noise; ``reset(seed=...)`` replaces it.
         max_episode_steps: episode length (default: the task's, 1000).
-        sim_options: extra ``Sim`` arguments (solver_iterations, ls_iterations, check_inputs).
+        sim_options: extra ``Sim`` arguments (solver_iterations, ls_iterations, njmax, nconmax, check_inputs).
         **task_overrides: any ``LocomotionTask`` field, e.g. ``termination_height=0.25``.
     """
 
@@ -91,6 +92,7 @@ class LocomotionVecEnv(VectorEnv):
         self._done, self._diverged = buf(n, wp.bool), buf(n, wp.bool)
         self._ep_length, self._ep_return, self._ep_forward = buf(n, wp.int32), buf(n), buf(n)
         self._stat_length, self._stat_return, self._stat_speed = buf(n, wp.int32), buf(n), buf(n)
+        self._fault_totals = buf(3, wp.int64)  # non-finite actions, diverged worlds, overflowed substeps
 
         if task.contact_force_scale != 0.0:
             sim.enable_contact_forces()
@@ -117,7 +119,10 @@ class LocomotionVecEnv(VectorEnv):
             "_episode": done,
             "nan_actions": t(self._nan_count),
             "diverged": t(self._diverged),
+            "solver_overflows": t(sim.solver_overflows),
         }
+        totals = t(self._fault_totals)
+        self._fault_views = {name: totals[i] for i, name in enumerate(self.FAULTS)}
         self._graph = None
         self._reset_all()
 
@@ -145,6 +150,8 @@ class LocomotionVecEnv(VectorEnv):
             device=dev,
         )
         self._launch_reset(force_all=0)
+        wp.launch(count_faults, dim=n, inputs=[self._nan_count, self._diverged, sim.solver_overflows],
+                  outputs=[self._fault_totals], device=dev)
         wp.launch(advance_rng, dim=1, inputs=[self._rng_state], device=dev)
 
     def _launch_reset(self, force_all: int) -> None:
@@ -182,6 +189,20 @@ class LocomotionVecEnv(VectorEnv):
             self._graph = self.sim.capture(self._launch_step)
         self.sim.launch(self._graph, self._launch_step)
         return self.obs, self.reward, self.terminated, self.truncated, self.info
+
+    FAULTS = ("nan_actions", "diverged_resets", "solver_overflows")
+    FAULT_HELP = {
+        "nan_actions": "the policy sent NaN/inf actions; they were applied as 0",
+        "diverged_resets": "a world's physics blew up (NaN or beyond max_speed); it was reset with reward 0",
+        "solver_overflows": "MuJoCo Warp's constraint or contact buffers were full and a world lost constraints "
+                            "for a substep; raise njmax/nconmax (sim_options) above the peak in Sim.solver_load()",
+    }
+
+    def fault_counters(self) -> dict[str, torch.Tensor]:
+        """Running totals since the env was built of things that should never happen (agents.protocol):
+        non-finite action entries, diverged worlds, and world-substeps that lost constraints. Device
+        tensors; reading them costs nothing until they are copied to the host."""
+        return self._fault_views
 
     def close(self, **kwargs) -> None:
         self._graph = None
