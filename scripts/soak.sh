@@ -21,5 +21,6 @@ for task in $tasks; do
   python3 scripts/train.py --task "$task" --num-envs 4096 --time-limit "$seconds" --eval-gap 30 --no-plots \
     --run-dir "$out/$task" > "$out/$task.log" 2>&1
   python3 -c "import json; s = json.load(open('$out/$task/summary.json')); print(json.dumps({'task': '$task', **{k: s.get(k) for k in ('device', 'iterations', 'solver_load', 'faults', 'steady_samples_per_s_median', 'final', 'best_eval')}}))" >> "$out/soak.jsonl"
+  tar -C "$out" --exclude=checkpoint.pt --exclude=tensorboard -czf "$out/run_$task.tar.gz" "$task" && rm -rf "${out:?}/$task"
 done
 tail -n 5 "$out/soak.jsonl"
