@@ -46,6 +46,9 @@ def read_checkpoint_bytes(path: str) -> bytes:
 def load_bytes(data: bytes, path: str, device: torch.device) -> dict:
     """A checkpoint from its bytes (``path`` names it in errors). Refuses anything that is not a
     torch file of tensors and plain values with a warpgym checkpoint's keys, and runs no code."""
+    if not data.startswith(b"PK\x03\x04"):  # torch.save writes a zip archive
+        raise ValueError(f"{path} is not a readable torch checkpoint (not a zip archive as torch.save writes; "
+                         "another kind of file, or empty); use a checkpoint written by scripts/train.py")
     try:
         ckpt = torch.load(io.BytesIO(data), map_location=device, weights_only=True)
     except pickle.UnpicklingError as e:

@@ -272,3 +272,52 @@ def test_fault_counters_are_logged_every_row_and_warned_once():
     assert [r["faults/glitches"] for r in history] == [0, 0, 3, 7, 11]
     warnings = [line for line in lines if line.startswith("warning: glitches")]
     assert len(warnings) == 1 and "= 3 by iteration 3" in warnings[0] and "the test env glitched" in warnings[0]
+
+
+class _Payload:
+    """Unpickling this would run code: it records that it ran."""
+
+    def __reduce__(self):
+        return (os.makedirs, ("/tmp/warpgym-pickle-ran",))
+
+
+def test_checkpoints_never_run_code_and_bad_files_name_themselves(tmp_path):
+    base = {"iteration": 1, "samples": 2, "policy": {}, "normalizer": {}, "config": {}, "spec": {}}
+    evil = tmp_path / "evil.pt"
+    torch.save({**base, "rng": _Payload()}, str(evil))
+    if os.path.isdir("/tmp/warpgym-pickle-ran"):
+        os.rmdir("/tmp/warpgym-pickle-ran")
+    with pytest.raises(ValueError, match=r"evil\.pt holds pickled objects"):
+        load(str(evil), torch.device("cpu"))
+    assert not os.path.exists("/tmp/warpgym-pickle-ran")  # refused before anything ran
+
+    good = tmp_path / "good.pt"
+    save_atomic(base, str(good))
+    truncated = tmp_path / "truncated.pt"
+    truncated.write_bytes(good.read_bytes()[: good.stat().st_size // 2])
+    with pytest.raises(ValueError, match=r"truncated\.pt is not a readable torch checkpoint"):
+        load(str(truncated), torch.device("cpu"))
+    text = tmp_path / "notes.pt"
+    text.write_text("not a checkpoint\n")
+    with pytest.raises(ValueError, match=r"notes\.pt is not a readable torch checkpoint"):
+        load(str(text), torch.device("cpu"))
+    other = tmp_path / "weights.pt"
+    torch.save({"weight": torch.zeros(2)}, str(other))
+    with pytest.raises(ValueError, match=r"weights\.pt is a torch file but not a warpgym checkpoint"):
+        load(str(other), torch.device("cpu"))
+
+
+def test_a_failed_checkpoint_write_keeps_the_previous_one(tmp_path, monkeypatch):
+    path = str(tmp_path / "ck.pt")
+    base = {"iteration": 1, "samples": 2, "policy": {}, "normalizer": {}, "config": {}, "spec": {}}
+    save_atomic(base, path)
+
+    def disk_full(*args, **kwargs):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(torch, "save", disk_full)
+    with pytest.raises(OSError, match="the previous checkpoint there is intact"):
+        save_atomic({**base, "iteration": 2}, path)
+    monkeypatch.undo()
+    assert load(path, torch.device("cpu"))["iteration"] == 1
+    assert os.listdir(tmp_path) == ["ck.pt"]  # no temporary file left behind

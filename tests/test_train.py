@@ -12,6 +12,7 @@ sys.path.insert(0, os.path.join(ROOT, "scripts"))
 import play  # noqa: E402
 import train  # noqa: E402
 
+from agents.checkpoint import load  # noqa: E402
 from agents.logger import read_metrics  # noqa: E402
 
 
@@ -28,7 +29,7 @@ def test_short_cpu_run_writes_logs_checkpoint_plots_resumes_and_plays(tmp_path, 
     assert [r["iteration"] for r in rows] == [1, 2, 3]
     assert all(r["samples"] == 64 * r["iteration"] for r in rows)
     assert all("eval/return" in r for r in rows) and rows[-1]["episodes"] >= 0
-    assert torch.load(os.path.join(run, "checkpoint.pt"), weights_only=False)["iteration"] == 3
+    assert load(os.path.join(run, "checkpoint.pt"), torch.device("cpu"))["iteration"] == 3
     saved = json.load(open(os.path.join(run, "config.json")))
     assert saved["num_envs"] == 8 and saved["batch_size"] == 32  # 8 envs x 8 steps, two mini-batches
 
@@ -36,7 +37,7 @@ def test_short_cpu_run_writes_logs_checkpoint_plots_resumes_and_plays(tmp_path, 
     rows = read_metrics(run)
     assert [r["iteration"] for r in rows] == [1, 2, 3, 4, 5]
     assert rows[3]["time_s"] > rows[2]["time_s"]  # the wall-clock axis carries on across processes
-    assert torch.load(os.path.join(run, "checkpoint.pt"), weights_only=False)["samples"] == 5 * 64
+    assert load(os.path.join(run, "checkpoint.pt"), torch.device("cpu"))["samples"] == 5 * 64
 
     # the deterministic policy of that run plays full 40-step episodes and reports return and speed
     assert play.main([run, "--device", "cpu", "--num-envs", "2"]) == 0
