@@ -68,8 +68,8 @@ class Workers:
     def mean_grads_(self, params, *extras: torch.Tensor) -> tuple[torch.Tensor, ...]:
         """Average the gradients and a few scalars (the KL) across processes in one all-reduce.
 
-        No host synchronisation and no allocation that changes between calls, so the mini-batch
-        step that calls it can be captured in a CUDA graph, collective included (NCCL >= 2.9)."""
+        No host synchronisation and the same shapes every call, so the mini-batch step that calls
+        it can be captured in a CUDA graph, collective included (NCCL >= 2.9)."""
         if not self.active:
             return extras
         grads = [p.grad for p in params if p.grad is not None]

@@ -12,7 +12,7 @@ For one task it runs, with the same envs per GPU and a warm kernel cache:
            waiting on a slower peer.
 It writes OUT/scaling_<task>.json and .md (throughput, speed-up, per-iteration phase times) and the
 two figures OUT/<task>_gpus_reward_vs_time.png and ..._vs_samples.png; the run directories (metrics,
-summaries, logs; no checkpoints) go into OUT/runs_<task>.tar.gz. `--comms-worker` is the comms
+summaries, logs; no checkpoints) go into OUT/runs_<task>.tar.gz. `--comms-worker CHECKPOINT` is the comms
 measurement itself, started by this script under torchrun.
 """
 
@@ -60,13 +60,27 @@ def summary_of(run_dir: str) -> dict:
         return json.load(f)
 
 
-def comms_worker(task: str, num_envs: int, out: str, replays: int = 50) -> None:
-    """Under torchrun: time one iteration's collectives, captured in a CUDA graph, on this host."""
+def run_shape(checkpoint: str) -> dict:
+    """What a run's collectives carry, read from its checkpoint: the policy's sizes and how many
+    mini-batch steps (one gradient all-reduce each) an iteration makes on each process."""
+    import torch  # noqa: PLC0415
+
+    from agents.checkpoint import load  # noqa: PLC0415
+
+    ckpt = load(checkpoint, torch.device("cpu"))
+    cfg = ckpt["config"]
+    samples = cfg["env_args"]["num_envs"] * cfg["horizon_len"]
+    return {"num_obs": ckpt["spec"]["num_obs"], "num_actions": ckpt["spec"]["num_actions"],
+            "net_dims": tuple(cfg["net_dims"]), "steps": cfg["repeat_times"] * (samples // cfg["batch_size"])}
+
+
+def comms_worker(checkpoint: str, out: str, replays: int = 50) -> None:
+    """Under torchrun: time one iteration's collectives of the run that wrote ``checkpoint``,
+    captured in a CUDA graph, on this host."""
     import torch  # noqa: PLC0415
     import torch.distributed as dist  # noqa: PLC0415
 
     from agents.actor_critic import ActorCritic  # noqa: PLC0415
-    from agents.config import Config  # noqa: PLC0415
     from agents.distributed import Workers, init_workers  # noqa: PLC0415
 
     local = int(os.environ["LOCAL_RANK"])
@@ -74,13 +88,12 @@ def comms_worker(task: str, num_envs: int, out: str, replays: int = 50) -> None:
     torch.cuda.set_device(device)
     init_workers("nccl", device)
     workers = Workers()
-    cfg = Config.for_task(task)
-    num_obs, num_actions = {"Ant": (60, 8), "Humanoid": (108, 21)}[task]
-    policy = ActorCritic(num_obs, num_actions, cfg.net_dims).to(device)
+    shape = run_shape(checkpoint)
+    num_obs, steps = shape["num_obs"], shape["steps"]
+    policy = ActorCritic(num_obs, shape["num_actions"], shape["net_dims"]).to(device)
     for p in policy.parameters():
         p.grad = torch.randn_like(p)
     kl = torch.zeros((), device=device)
-    steps = cfg.repeat_times * cfg.check_batch(num_envs)
     moments = torch.zeros(2 * num_obs + 1, dtype=torch.float64, device=device)
     sums = torch.zeros(6, dtype=torch.float64, device=device)
 
@@ -126,11 +139,11 @@ def main(argv=None) -> int:
     ap.add_argument("--train-flags", default="", help="more scripts/train.py flags, e.g. '--no-cuda-graph'")
     ap.add_argument("--report-only", action="store_true",
                     help="rewrite the table and figures in --out from its scaling_<task>.json and runs_<task>.tar.gz")
-    ap.add_argument("--comms-worker", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--comms-worker", metavar="CHECKPOINT", default=None, help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     TRAIN_FLAGS[:] = args.train_flags.split()
     if args.comms_worker:
-        comms_worker(args.task, args.num_envs, os.path.join(args.out, "comms.json"))
+        comms_worker(args.comms_worker, os.path.join(args.out, "comms.json"))
         return 0
     if args.report_only:
         return report(os.path.abspath(args.out), args.task)
@@ -168,7 +181,7 @@ def main(argv=None) -> int:
                   {"CUDA_VISIBLE_DEVICES": ",".join(map(str, range(g)))})], [d + ".log"])
         results["gpus"][str(g)] = {"runs": {os.path.basename(d): summary_of(d)}}
         say(f"{g} GPUs: the collectives alone")
-        wait([run([*torchrun, "scripts/scaling.py", "--comms-worker", "--task", task, "--num-envs", str(n),
+        wait([run([*torchrun, "scripts/scaling.py", "--comms-worker", os.path.join(d, "checkpoint.pt"),
                    "--out", runs], os.path.join(runs, f"comms{g}.log"))], [os.path.join(runs, f"comms{g}.log")])
         with open(os.path.join(runs, "comms.json")) as f:
             results["gpus"][str(g)]["comms"] = json.load(f)

@@ -35,11 +35,14 @@ ROBOTS: dict[str, RobotSpec] = {
         mjcf="nv_ant.xml",
         start_height=0.55,
         feet=("front_left_foot", "front_right_foot", "left_back_foot", "right_back_foot"),
-        # Newton's estimate (64 rows) overflowed in fast training runs. On the plane the Ant has at
-        # most 25 contacts (the torso sphere 1, 12 leg capsules 2 each) of 4 pyramid rows, plus 8
-        # joint limits: 108 rows.
+        # Newton's estimate (64 rows) overflowed in fast training runs. With the ground alone the Ant
+        # has at most 25 contacts (the torso sphere 1, 12 capsules 2 each) of 4 pyramid rows, plus 8
+        # joint limits: 108 rows; contacts between its own legs would add to that. A 5-minute
+        # training run peaked at 69 (docs/benchmarks.md).
         njmax=128,
-        mib_per_1000_envs=70.0,
+        # Not measured with njmax 128: bench.py read 89 MiB per 1000 envs with 64 (a process's first
+        # model, Warp's memory pools included) and 56 with 128 (its second model, pools reused).
+        mib_per_1000_envs=90.0,
     ),
     "humanoid": RobotSpec(
         name="humanoid",
