@@ -54,6 +54,7 @@ class Config:
     eval_gap: float = 30.0
     eval_envs: int = 64
     save_gap: int = 50
+    keep_checkpoints: bool = False  # also keep checkpoint-<iteration>.pt at every save
 
     @classmethod
     def for_task(cls, task: str, **overrides) -> Config:

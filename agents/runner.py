@@ -295,8 +295,11 @@ class OnPolicyRunner:
         }
 
     def save(self, path: str | None = None) -> str:
+        state = self.state_dict()
+        if path is None and self.cfg.keep_checkpoints:  # rsl_rl's model_<it>.pt: policies to compare later
+            save_atomic(state, os.path.join(self.run_dir, f"checkpoint-{self.iteration}.pt"))
         path = path or os.path.join(self.run_dir, "checkpoint.pt")
-        save_atomic(self.state_dict(), path)
+        save_atomic(state, path)
         return path
 
     def load(self, path: str, resume: bool = True) -> None:

@@ -158,3 +158,14 @@ def gather_force_sensors(
     row = env * bodies_per_env + sensor_bodies[k]
     for i in range(6):
         out[env * sensor_bodies.shape[0] + k, i] = contact_wrench[row, i]
+
+
+@wp.kernel
+def clamp_dof_speed(
+    max_speed: float,  # [rad/s]
+    joint_qd: wp.array2d[float],  # (N, D) in/out
+):
+    # PhysX clamps articulation joint speeds after each solve; this does the same between substeps.
+    env, dof = wp.tid()
+    i = ROOT_DOFS + dof
+    joint_qd[env, i] = wp.clamp(joint_qd[env, i], -max_speed, max_speed)

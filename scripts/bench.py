@@ -26,6 +26,7 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 from warpgym.device import resolve_device  # noqa: E402
 from warpgym.envs import LocomotionVecEnv  # noqa: E402
+from warpgym.physics import parse_setting  # noqa: E402
 
 TASK_OF_ROBOT = {"ant": "Ant", "humanoid": "Humanoid"}
 
@@ -77,12 +78,12 @@ def gpu_memory_used(device: str) -> int:
     return total - free
 
 
-def bench_one(robot: str, num_envs: int, device: str, steps: int, repeats: int, iters: int, ls_iters: int,
+def bench_one(robot: str, num_envs: int, device: str, steps: int, repeats: int, physics: dict,
               njmax: int | None = None) -> dict:
     mem0 = gpu_memory_used(device)
     t0 = time.perf_counter()
     env = LocomotionVecEnv(TASK_OF_ROBOT[robot], num_envs=num_envs, device=device, seed=0,
-                           sim_options={"solver_iterations": iters, "ls_iterations": ls_iters, "njmax": njmax})
+                           physics=physics, sim_options={"njmax": njmax})
     build_s = time.perf_counter() - t0
     sim = env.sim
     gen = torch.Generator(device=device).manual_seed(0)
@@ -126,8 +127,8 @@ def main(argv=None) -> int:
     ap.add_argument("--device", default=None)
     ap.add_argument("--steps", type=int, default=200, help="steps per timing")
     ap.add_argument("--repeats", type=int, default=5, help="timings per figure; the median is reported")
-    ap.add_argument("--solver-iterations", type=int, default=8)
-    ap.add_argument("--ls-iterations", type=int, default=8)
+    ap.add_argument("--physics", action="append", default=[], metavar="NAME=VALUE",
+                    help="a warpgym.physics.Physics setting, e.g. solver_iterations=4 (default: the task's)")
     ap.add_argument("--njmax", type=int, nargs="+", default=[None],
                     help="constraint rows per world to compare (default: each robot's, warpgym/robots.py)")
     ap.add_argument("--no-mathdx", action="store_true",
@@ -136,6 +137,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     if args.no_mathdx:
         wp.config.enable_mathdx_solver = False
+    physics = dict(parse_setting(text) for text in args.physics)
     device = resolve_device(args.device)
     gpu = torch.cuda.get_device_name(torch.device(device)) if device.startswith("cuda") else platform.processor()
 
@@ -143,8 +145,7 @@ def main(argv=None) -> int:
     for robot in args.robots:
         for n in args.num_envs:
             for njmax in args.njmax:
-                r = bench_one(robot, n, device, args.steps, args.repeats, args.solver_iterations,
-                              args.ls_iterations, njmax)
+                r = bench_one(robot, n, device, args.steps, args.repeats, physics, njmax)
                 rows.append(r)
                 print(json.dumps(r), flush=True)
 

@@ -55,7 +55,11 @@ def parse_args(argv=None):
     ap.add_argument("--repeat-times", type=int, default=None)
     ap.add_argument("--learning-rate", type=float, default=None)
     ap.add_argument("--episode-length", type=int, default=None, help="steps per episode (task default: 1000)")
-    ap.add_argument("--substeps", type=int, default=None, help="physics substeps per 1/60 s step (task default: 2)")
+    ap.add_argument("--substeps", type=int, default=None, help="physics substeps per 1/60 s step (default: the task's)")
+    ap.add_argument("--physics", action="append", default=[], metavar="NAME=VALUE",
+                    help="a physics setting (warpgym/physics.py), e.g. --physics armature=0.05; repeat for more")
+    ap.add_argument("--keep-checkpoints", action="store_true",
+                    help="keep checkpoint-<iteration>.pt at every save, not only the latest checkpoint.pt")
     ap.add_argument("--no-plots", action="store_true")
     ap.add_argument("--no-cuda-graph", action="store_true",
                     help="run everything eagerly: no CUDA graph of the rollout or of the PPO update")
@@ -65,7 +69,15 @@ def parse_args(argv=None):
                     help="compile Warp's tile Cholesky without libmathdx: a faster cold start (warpgym.preload)")
     ap.add_argument("--profile", action="store_true",
                     help="time each phase of an iteration (synchronises the GPU between phases: slower)")
-    return ap.parse_args(argv)
+    args = ap.parse_args(argv)
+    from warpgym.physics import Physics, parse_setting  # noqa: PLC0415
+
+    try:
+        args.physics = dict(parse_setting(text) for text in args.physics)
+        Physics.from_dict(args.physics)
+    except ValueError as e:
+        ap.error(f"--physics: {e}")
+    return args
 
 
 def build_config(args, task: str, num_envs: int, device: str, saved: dict | None = None) -> Config:
@@ -78,7 +90,7 @@ def build_config(args, task: str, num_envs: int, device: str, saved: dict | None
     changes = {k: v for k, v in {
         "horizon_len": args.horizon_len, "repeat_times": args.repeat_times, "learning_rate": args.learning_rate,
         "save_gap": args.save_gap, "eval_gap": args.eval_gap, "eval_envs": args.eval_envs,
-        "batch_size": args.batch_size,
+        "batch_size": args.batch_size, "keep_checkpoints": args.keep_checkpoints or None,
     }.items() if v is not None}
     if saved is None and "eval_envs" not in changes and device == "cpu":
         changes["eval_envs"] = 4
@@ -92,6 +104,8 @@ def build_config(args, task: str, num_envs: int, device: str, saved: dict | None
     common = {"task": task, "device": device, "max_episode_steps": args.episode_length}
     if args.substeps is not None:
         common["substeps"] = args.substeps
+    if args.physics:
+        common["physics"] = args.physics
     return cfg.replace(
         batch_size=batch,
         env_class=LocomotionVecEnv,
@@ -260,6 +274,7 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
         args.seed = saved["seed"]
         args.episode_length = saved["env_args"].get("max_episode_steps")
         args.substeps = saved["env_args"].get("substeps")
+        args.physics = saved["env_args"].get("physics") or {}
     else:
         if args.task.lower() not in TASK_NAMES:
             raise SystemExit(f"--task {args.task!r}: choose one of {sorted(TASK_NAMES.values())}")

@@ -160,7 +160,7 @@ def test_bad_actions_are_refused(ant_env, actions, error, text):
 
 def test_task_settings_reach_the_sim():
     env = LocomotionVecEnv("Ant", num_envs=1, device="cpu", substeps=4, max_episode_steps=7,
-                           sim_options={"solver_iterations": 3})
+                           physics={"solver_iterations": 3})
     assert env.sim.substeps == 4 and env.sim.sub_dt == pytest.approx(1 / 240)
     assert env.task.episode_length == 7 and env.sim.solver.mjw_model.opt.iterations == 3
 

@@ -17,6 +17,7 @@ import warp as wp
 from kernels import tensor_api as k_api
 from kernels.solver_load import track_solver_load
 from warpgym.device import resolve_device
+from warpgym.physics import Physics
 from warpgym.preload import Preload
 from warpgym.robots import RobotSpec, hinge_joint_names, mjcf_path, motor_gears, robot_spec
 from warpgym.streams import StreamOrder
@@ -43,7 +44,8 @@ class Sim(TensorAPI):
         seed: seed for the tasks built on this Sim (the bare Sim itself draws no random numbers).
         dt: control step [s]; one ``step()`` advances this much.
         substeps: physics substeps per control step.
-        solver_iterations, ls_iterations: MuJoCo Warp's Newton-solver and line-search iteration caps.
+        physics: a ``Physics`` (or a dict of its fields): integrator, iteration caps, armature, joint
+            speed clamp, contact time constant. Default: ``Physics()``.
         njmax, nconmax: constraint rows and contacts per world that MuJoCo Warp makes room for
             (default: the robot's, see ``warpgym/robots.py``); a world that needs more loses the rest.
         check_inputs: validate index tensors on the host (one synchronisation per indexed set).
@@ -57,8 +59,7 @@ class Sim(TensorAPI):
         seed: int = 0,
         dt: float = 1.0 / 60.0,
         substeps: int = 2,
-        solver_iterations: int = 8,
-        ls_iterations: int = 8,
+        physics: Physics | dict | None = None,
         njmax: int | None = None,
         nconmax: int | None = None,
         check_inputs: bool = True,
@@ -68,8 +69,7 @@ class Sim(TensorAPI):
         self.substeps = _check_positive_int("substeps", substeps, "pass substeps >= 1 (2 is the default)")
         if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0):
             raise ValueError(f"dt={dt!r} must be a positive number of seconds, e.g. 1/60")
-        _check_positive_int("solver_iterations", solver_iterations, "pass a positive iteration cap, e.g. 8")
-        _check_positive_int("ls_iterations", ls_iterations, "pass a positive iteration cap, e.g. 8")
+        self.physics = physics if isinstance(physics, Physics) else Physics.from_dict(physics)
         self.njmax = self.spec.njmax if njmax is None else _check_positive_int("njmax", njmax, "pass e.g. 128")
         self.nconmax = self.spec.nconmax if nconmax is None else _check_positive_int("nconmax", nconmax, "pass e.g. 48")
         self.device = resolve_device(device)
@@ -79,7 +79,7 @@ class Sim(TensorAPI):
         self.check_inputs = bool(check_inputs)
         self._order = StreamOrder(self.device)
 
-        self._build(solver_iterations, ls_iterations)
+        self._build()
         self._graph = None
         self._contact_forces = False
         self._tensors: dict[str, tuple[wp.array, torch.Tensor]] = {}
@@ -97,7 +97,7 @@ class Sim(TensorAPI):
                 f"{self.device}, which has {free / 2**30:.1f} GiB free: pass num_envs <= {fits}"
             )
 
-    def _build(self, solver_iterations: int, ls_iterations: int) -> None:
+    def _build(self) -> None:
         import newton  # noqa: PLC0415
 
         self._check_memory()
@@ -145,12 +145,18 @@ class Sim(TensorAPI):
         q[:, 7:] = self.default_dof_pos_np
         model.joint_q.assign(q.reshape(-1))
         model.joint_qd.zero_()
+        phys = self.physics
+        if phys.armature is not None:
+            armature = model.joint_armature.numpy().reshape(n, self.dofs_per_env)
+            armature[:, k_api.ROOT_DOFS :] = phys.armature
+            model.joint_armature.assign(armature.reshape(-1))
 
         preload.wait()
         self.solver = newton.solvers.SolverMuJoCo(
             model,
-            iterations=solver_iterations,
-            ls_iterations=ls_iterations,
+            iterations=phys.solver_iterations,
+            ls_iterations=phys.ls_iterations,
+            integrator=phys.integrator,
             nconmax=self.nconmax,
             njmax=self.njmax,
             disable_sensors=True,
@@ -161,6 +167,10 @@ class Sim(TensorAPI):
         from mujoco_warp import OverflowType as OF  # noqa: PLC0415
 
         self._drop_bits = int(OF.NEFC | OF.NJMAX_NNZ | OF.BROADPHASE | OF.NARROWPHASE)
+        if phys.contact_timeconst is not None:
+            solref = self.solver.mjw_model.geom_solref.numpy()
+            solref[..., 0] = phys.contact_timeconst
+            self.solver.mjw_model.geom_solref.assign(solref)
         opt = self.solver.mjw_model.opt
         opt.warn_overflow = int(opt.warn_overflow) & ~int(OF.ITERATIONS | OF.LS_ITERATIONS | self._drop_bits)
         self._peak_nefc = wp.zeros(n, dtype=wp.int32, device=self.device)
@@ -192,6 +202,9 @@ class Sim(TensorAPI):
         d = self.solver.mjw_data
         for i in range(self.substeps):
             self.solver.step(self.state, self.state, self.control, None, self.sub_dt)
+            if self.physics.max_joint_speed is not None:
+                wp.launch(k_api.clamp_dof_speed, dim=(self.num_envs, self.num_dofs),
+                          inputs=[self.physics.max_joint_speed], outputs=[self.joint_qd], device=self.device)
             wp.launch(track_solver_load, dim=self.num_envs,
                       inputs=[d.nefc, d.nacon, self._drop_bits, int(i == 0)],
                       outputs=[d.overflow, self._peak_nefc, self._peak_nacon, self._overflowed], device=self.device)
@@ -274,4 +287,4 @@ class Sim(TensorAPI):
 
     def __repr__(self) -> str:
         return (f"Sim(robot={self.spec.name!r}, num_envs={self.num_envs}, device={self.device!r}, "
-                f"dt={self.dt:.5g}, substeps={self.substeps}, dofs={self.num_dofs}, bodies={self.bodies_per_env})")
+                f"dt={self.dt:.5g}, substeps={self.substeps}, physics={self.physics}, dofs={self.num_dofs}, bodies={self.bodies_per_env})")

@@ -32,8 +32,9 @@ class LocomotionVecEnv(VectorEnv):
         device: "cpu" or "cuda:N" (default: cuda:0 when present).
         seed: seed of the reset noise; ``reset(seed=...)`` replaces it.
         max_episode_steps: episode length (default: the task's, 1000).
-        sim_options: extra ``Sim`` arguments (solver_iterations, ls_iterations, njmax, nconmax, check_inputs).
-        **task_overrides: any ``LocomotionTask`` field, e.g. ``termination_height=0.25``.
+        sim_options: extra ``Sim`` arguments (njmax, nconmax, check_inputs).
+        **task_overrides: any ``LocomotionTask`` field, e.g. ``termination_height=0.25``, ``substeps=4`` or
+            ``physics={"armature": 0.05}`` (merged into the task's ``Physics``).
     """
 
     metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
@@ -59,7 +60,7 @@ class LocomotionVecEnv(VectorEnv):
         task.validate()
         self.task = task
         self.sim = sim = Sim(task.robot, num_envs, device, seed, dt=task.dt, substeps=task.substeps,
-                             **(sim_options or {}))
+                             physics=task.physics, **(sim_options or {}))
         self.num_envs = n = sim.num_envs
         self.device = sim.torch_device
         self.num_actions = a = sim.num_dofs

@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 
 import warp as wp
 
 from kernels.params import LocomotionParams
+from warpgym.physics import Physics
 
 
 @dataclass(frozen=True)
@@ -16,6 +17,7 @@ class LocomotionTask:
     episode_length: int = 1000  # control steps; reaching it truncates
     dt: float = 1.0 / 60.0  # control step [s]
     substeps: int = 2
+    physics: Physics = field(default_factory=Physics)  # integrator, iterations, armature, ...
     target: tuple[float, float, float] = (1000.0, 0.0, 0.0)
     power_scale: float = 1.0
     angular_velocity_scale: float = 1.0
@@ -47,18 +49,29 @@ class LocomotionTask:
         return 12 + per_dof * num_dofs + 6 * num_feet
 
     def replace(self, **changes) -> LocomotionTask:
-        fields = asdict(self)
-        unknown = sorted(set(changes) - set(fields))
+        """A copy with these fields changed; ``physics`` may be a dict of the settings to change."""
+        values = {name: getattr(self, name) for name in self.__dataclass_fields__}
+        unknown = sorted(set(changes) - set(values))
         if unknown:
-            raise ValueError(f"unknown task setting(s) {unknown}: choose from {sorted(fields)}")
-        fields.update(changes)
-        return LocomotionTask(**fields)
+            raise ValueError(f"unknown task setting(s) {unknown}: choose from {sorted(values)}")
+        physics = changes.pop("physics", None)
+        if isinstance(physics, dict):
+            physics = self.physics.replace(**physics)
+        values.update(changes)
+        if physics is not None:
+            values["physics"] = physics
+        return LocomotionTask(**values)
+
+    def to_dict(self) -> dict:
+        return asdict(self)
 
     def validate(self) -> None:
         if not isinstance(self.episode_length, int) or self.episode_length < 1:
             raise ValueError(f"episode_length={self.episode_length!r} must be a positive integer, e.g. 1000")
         if not (self.dt > 0):
             raise ValueError(f"dt={self.dt!r} must be positive, e.g. 1/60")
+        if isinstance(self.substeps, bool) or not isinstance(self.substeps, int) or self.substeps < 1:
+            raise ValueError(f"substeps={self.substeps!r} must be a positive integer, e.g. 2")
         if not (0.0 < self.joint_limit_threshold < 1.0):
             raise ValueError(f"joint_limit_threshold={self.joint_limit_threshold!r} must lie in (0, 1)")
 
