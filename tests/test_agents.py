@@ -2,6 +2,7 @@
 
 import ast
 import os
+import statistics
 import subprocess
 import sys
 
@@ -237,10 +238,14 @@ def test_evaluation_time_is_left_out_of_the_iteration_it_delays():
     cfg = Config(net_dims=(8,), horizon_len=4, batch_size=32, repeat_times=1, eval_gap=0.0, save_gap=10**6)
     runner = OnPolicyRunner(PointMassVecEnv(8), cfg, eval_env=PointMassVecEnv(4, episode_length=400),
                             print_fn=lambda s: None)
-    history = runner.learn(max_iterations=6)
+    history = runner.learn(max_iterations=8)
     assert all("eval_s" in r for r in history)
     steady = history[2:]
-    assert all(0 < r["iteration_s"] < 0.5 * min(h["eval_s"] for h in steady) for r in steady)
+    # Medians: one iteration slowed by a busy machine must not fail the test, while an evaluation
+    # booked to the wrong row would put its time into every row after the second.
+    iteration = statistics.median(r["iteration_s"] for r in steady)
+    evaluation = statistics.median(r["eval_s"] for r in steady)
+    assert all(r["iteration_s"] > 0 for r in steady) and iteration < 0.5 * evaluation
 
 
 class FaultyPointMass(PointMassVecEnv):
