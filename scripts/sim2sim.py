@@ -30,7 +30,7 @@ import numpy as np  # noqa: E402
 class GaitMeter:
     """Per-episode gait statistics from per-step arrays of K robots; a robot counts until it first ends."""
 
-    def __init__(self, k: int, num_feet: int):
+    def __init__(self, k: int):
         self.k, self.steps = k, 0
         self.up = np.ones(k, bool)
         self.vx, self.z, self.up_steps, self.airborne = np.zeros(k), np.zeros(k), np.zeros(k), np.zeros(k)
@@ -74,7 +74,7 @@ def replay_warpgym(ckpt, env_args: dict, substeps: int, envs: int, steps: int, d
                            physics=env_args.get("physics") or {}, max_episode_steps=steps)
     policy, normalize = policy_from_checkpoint(ckpt, env.num_obs, env.num_actions, torch.device(device))
     feet = feet_columns(env.task, env.num_actions, env.sim.foot_bodies.shape[0])
-    meter = GaitMeter(envs, env.sim.foot_bodies.shape[0])
+    meter = GaitMeter(envs)
     fell = np.zeros(envs, bool)
     obs, _ = env.reset(seed=seed)
     with torch.no_grad():
@@ -103,7 +103,7 @@ def replay_native(ckpt, env_args: dict, substeps: int, copies: int, steps: int, 
     robot = NativeRobot(task, substeps=substeps, copies=copies)
     num_obs = task.observation_size(len(robot.dof_names), len(robot.feet))
     policy, normalize = policy_from_checkpoint(ckpt, num_obs, len(robot.dof_names), torch.device("cpu"))
-    meter = GaitMeter(copies, len(robot.feet))
+    meter = GaitMeter(copies)
     fell = np.zeros(copies, bool)
     robot.reset(np.random.default_rng(seed))
     actions = np.zeros((copies, len(robot.dof_names)))
