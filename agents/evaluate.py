@@ -6,9 +6,13 @@ import torch
 
 
 @torch.no_grad()
-def evaluate(env, policy, normalize, max_steps: int) -> dict:
-    """Mean return, length and forward speed of the first episode of every env (one host read)."""
+def evaluate(env, policy, normalize, max_steps: int, recorder=None) -> dict:
+    """Mean return, length and forward speed of the first episode of every env (one host read).
+
+    A ``recorder`` (agents.protocol) sees the env after the reset and after every step."""
     obs, _ = env.reset()
+    if recorder is not None:
+        recorder.capture(env)
     n = env.num_envs
     dev = obs.device
     finished = torch.zeros(n, dtype=torch.bool, device=dev)
@@ -17,6 +21,8 @@ def evaluate(env, policy, normalize, max_steps: int) -> dict:
     out_ret, out_len, out_speed = torch.zeros(n, device=dev), torch.zeros(n, device=dev), torch.zeros(n, device=dev)
     for _ in range(max_steps):
         obs, reward, terminated, truncated, info = env.step(policy.act_deterministic(normalize(obs)))
+        if recorder is not None:
+            recorder.capture(env)
         live = ~finished
         ret += reward * live
         length += live.float()

@@ -16,6 +16,11 @@ counter when it first rises above zero.
 Optional too: ``graph_capturable = True`` declares that ``step`` can be recorded into a torch CUDA
 graph and replayed: it never waits on the host, and its outputs are persistent tensors that each
 step overwrites. The runner then captures whole rollouts.
+
+An evaluation recorder (``OnPolicyRunner(eval_recorder=...)``, e.g. a video clip) has
+``capture(env)``, called after the evaluation's reset and after each of its steps, ``finish(iteration,
+samples)`` after the episode, and ``close()`` at the end of training. The runner waits for none of
+them: anything slow (drawing, encoding) belongs elsewhere.
 """
 
 from __future__ import annotations

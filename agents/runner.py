@@ -34,7 +34,7 @@ from agents.storage import RolloutStorage, compute_gae
 class OnPolicyRunner:
     def __init__(self, env, cfg: Config, run_dir: str | None = None, eval_env=None,
                  start_time: float | None = None, print_fn=print, profile: bool = False, cuda_graph: bool = True,
-                 rollout_graph: bool = True):
+                 rollout_graph: bool = True, eval_recorder=None):
         self.env, self.cfg, self.eval_env = env, cfg.validated(), eval_env
         self.spec = spec = env_spec(env)
         self.device = spec.device
@@ -58,6 +58,7 @@ class OnPolicyRunner:
         self.logger = MetricsLogger(run_dir) if run_dir and main else None
         self.print = print_fn if main else (lambda s: None)
         self.eval_env = eval_env if main else None
+        self.eval_recorder = eval_recorder if main else None
         self.start_time = start_time if start_time is not None else time.time()
         self.iteration = 0
         self.samples = 0
@@ -222,6 +223,8 @@ class OnPolicyRunner:
         """Free the CUDA graphs (before ``destroy_process_group``: see ``PPO.release_graph``)."""
         self.ppo.release_graph()
         self._rollout_graph = None
+        if self.eval_recorder is not None:
+            self.eval_recorder.close()
         if self.device.type == "cuda":
             torch.cuda.synchronize(self.device)
 
@@ -270,6 +273,8 @@ class OnPolicyRunner:
         if self.eval_env is not None and may_evaluate and due:
             t_eval = time.perf_counter()
             row.update(self.evaluate())
+            if self.eval_recorder is not None:
+                self.eval_recorder.finish(staged.iteration, staged.samples)
             row["eval_s"] = time.perf_counter() - t_eval
             row["time_s"] = round(self.elapsed(), 3)
             self.clock.restart()  # the iteration queued before the evaluation is timed without it
@@ -282,7 +287,7 @@ class OnPolicyRunner:
     def evaluate(self) -> dict:
         self.last_eval_time = self.elapsed()
         spec = env_spec(self.eval_env)
-        return evaluate(self.eval_env, self.policy, self.normalize, spec.max_episode_steps)
+        return evaluate(self.eval_env, self.policy, self.normalize, spec.max_episode_steps, self.eval_recorder)
 
     # ------------------------------------------------------------------ checkpoints
     def state_dict(self) -> dict:

@@ -60,6 +60,12 @@ def parse_args(argv=None):
                     help="a physics setting (warpgym/physics.py), e.g. --physics armature=0.05; repeat for more")
     ap.add_argument("--keep-checkpoints", action="store_true",
                     help="keep checkpoint-<iteration>.pt at every save, not only the latest checkpoint.pt")
+    ap.add_argument("--video", action="store_true",
+                    help="record a clip of the evaluation episode into RUN_DIR/videos and TensorBoard "
+                         "(drawn by a separate process; needs warpgym[video])")
+    ap.add_argument("--video-every", type=int, default=1, metavar="N", help="record every N-th evaluation (default 1)")
+    ap.add_argument("--video-length", type=int, default=300, metavar="STEPS",
+                    help="control steps per clip (default 300: 5 s)")
     ap.add_argument("--no-plots", action="store_true")
     ap.add_argument("--no-cuda-graph", action="store_true",
                     help="run everything eagerly: no CUDA graph of the rollout or of the PPO update")
@@ -77,7 +83,29 @@ def parse_args(argv=None):
         Physics.from_dict(args.physics)
     except ValueError as e:
         ap.error(f"--physics: {e}")
+    if args.video:
+        check_video_args(ap, args)
     return args
+
+
+def check_video_args(ap, args) -> None:
+    """--video fails here, before any model is built, if it cannot work."""
+    if args.no_eval:
+        ap.error("--video records the evaluation episode: drop --no-eval")
+    for flag, value in (("--video-every", args.video_every), ("--video-length", args.video_length)):
+        if value < 1:
+            ap.error(f"{flag} {value}: must be a positive integer")
+    try:
+        import av  # noqa: F401,PLC0415
+        import PIL  # noqa: F401,PLC0415
+
+        from warpgym.render import RendererUnavailable, probe_renderer  # noqa: PLC0415
+
+        probe_renderer()
+    except ImportError as e:
+        ap.error(f"--video needs the video extra ({e.name} is missing): pip install \"warpgym[video]\"")
+    except RendererUnavailable as e:
+        ap.error(f"--video: {e}")
 
 
 def build_config(args, task: str, num_envs: int, device: str, saved: dict | None = None) -> Config:
@@ -314,9 +342,16 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
     env = cfg.env_class(**cfg.env_args)
     eval_env = None if args.no_eval else cfg.eval_env_class(**cfg.eval_env_args)
     assert isinstance(env, LocomotionVecEnv)
+    recorder = None
+    if args.video and eval_env is not None:
+        from warpgym.clips import EvalVideoRecorder  # noqa: PLC0415
+
+        recorder = EvalVideoRecorder(run_dir, steps=args.video_length, every=args.video_every,
+                                     print_fn=lambda s: print(s, flush=True))
     runner = OnPolicyRunner(env, cfg, run_dir=run_dir, eval_env=eval_env, start_time=PROCESS_START,
                             print_fn=lambda s: print(s, flush=True), profile=args.profile,
-                            cuda_graph=not args.no_cuda_graph, rollout_graph=not args.no_rollout_graph)
+                            cuda_graph=not args.no_cuda_graph, rollout_graph=not args.no_rollout_graph,
+                            eval_recorder=recorder)
     if live is not None:
         live["runner"] = runner
     if args.resume:

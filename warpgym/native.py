@@ -61,8 +61,11 @@ def wxyz_to_xyzw(q: np.ndarray) -> np.ndarray:
 
 
 # ---------------------------------------------------------------- the model
-def load_native_model(robot: str, timestep: float, physics: Physics | None = None):
-    """The robot's MJCF compiled by MuJoCo itself, with warpgym's ground and physics settings."""
+def load_native_model(robot: str, timestep: float, physics: Physics | None = None, visual: bool = False):
+    """The robot's MJCF compiled by MuJoCo itself, with warpgym's ground and physics settings.
+
+    ``visual`` adds what only a camera sees (a checker floor, a sky, a light that follows no body):
+    the same physics, dressed for ``warpgym.render``."""
     physics = physics or Physics()
     if not (timestep > 0):
         raise ValueError(f"timestep={timestep!r} must be a positive number of seconds")
@@ -73,8 +76,10 @@ def load_native_model(robot: str, timestep: float, physics: Physics | None = Non
             spec.delete(geom)
     for sensor in list(spec.sensors):
         spec.delete(sensor)
-    spec.worldbody.add_geom(name="ground", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0.0, 0.0, 1.0],
-                            friction=list(GROUND_FRICTION), condim=3, margin=0.0)
+    ground = spec.worldbody.add_geom(name="ground", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0.0, 0.0, 1.0],
+                                     friction=list(GROUND_FRICTION), condim=3, margin=0.0)
+    if visual:
+        _dress_for_camera(mujoco, spec, ground)
     model = spec.compile()
     # nv_humanoid.xml's default class gives every joint stiffness 5, its free root joint too: a spring
     # pulling the torso towards the origin, which Newton (and Isaac Gym) do not import.
@@ -91,6 +96,25 @@ def load_native_model(robot: str, timestep: float, physics: Physics | None = Non
     return model
 
 
+def _dress_for_camera(mujoco, spec, ground) -> None:
+    """A 1 m checker floor (speed reads off it), a gradient sky and a fixed sun; offscreen buffers
+    large enough for a 1920x1080 frame."""
+    spec.add_texture(name="wg_sky", type=mujoco.mjtTexture.mjTEXTURE_SKYBOX, builtin=mujoco.mjtBuiltin.mjBUILTIN_GRADIENT,
+                     rgb1=[0.4, 0.6, 0.8], rgb2=[0.05, 0.05, 0.1], width=512, height=3072)
+    spec.add_texture(name="wg_floor", type=mujoco.mjtTexture.mjTEXTURE_2D, builtin=mujoco.mjtBuiltin.mjBUILTIN_CHECKER,
+                     rgb1=[0.22, 0.3, 0.38], rgb2=[0.14, 0.19, 0.25], width=512, height=512,
+                     mark=mujoco.mjtMark.mjMARK_EDGE, markrgb=[0.5, 0.55, 0.6])
+    material = spec.add_material(name="wg_floor", texrepeat=[1.0, 1.0], texuniform=True, reflectance=0.0)
+    material.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = "wg_floor"
+    ground.material = "wg_floor"
+    ground.rgba = [0.5, 0.5, 0.5, 1.0]  # MuJoCo's "unset" colour: the material's shows (the Ant's default is orange)
+    spec.worldbody.add_light(name="wg_sun", type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL, pos=[0.0, 0.0, 10.0],
+                             dir=[0.3, 0.4, -1.0], diffuse=[0.6, 0.6, 0.6], specular=[0.2, 0.2, 0.2], castshadow=False)
+    spec.visual.global_.offwidth = max(spec.visual.global_.offwidth, 1920)
+    spec.visual.global_.offheight = max(spec.visual.global_.offheight, 1080)
+    spec.visual.map.zfar = max(spec.visual.map.zfar, 60.0)
+
+
 class NativeRobot:
     """``copies`` independent copies of a task's robot in native MuJoCo, stepped one after another.
 
@@ -99,10 +123,11 @@ class NativeRobot:
         substeps: physics steps per control step (default: the task's).
         copies: how many robots (each its own ``MjData``).
         physics: a ``Physics`` or dict of its fields (default: the task's), applied as ``Sim`` applies it.
+        visual: dress the scene for a camera (``load_native_model``); the physics is the same.
     """
 
     def __init__(self, task: str | LocomotionTask = "Ant", substeps: int | None = None, copies: int = 1,
-                 physics: Physics | dict | None = None):
+                 physics: Physics | dict | None = None, visual: bool = False):
         mujoco = self._mj = _mujoco()
         self.task = get_task(task)
         self.spec = robot_spec(self.task.robot)
@@ -112,7 +137,7 @@ class NativeRobot:
         if isinstance(physics, dict):
             physics = self.task.physics.replace(**physics)
         self.physics = physics or self.task.physics
-        self.model = m = load_native_model(self.task.robot, self.task.dt / self.substeps, self.physics)
+        self.model = m = load_native_model(self.task.robot, self.task.dt / self.substeps, self.physics, visual)
         self.data = [mujoco.MjData(m) for _ in range(copies)]
         self.copies = copies
 

@@ -1,0 +1,154 @@
+"""Videos: frames show the robot, clips decode to the frames written, and a missing renderer or
+encoder names what to install. Drawn by Mesa's software EGL on a CPU-only machine."""
+
+import json
+import os
+import sys
+
+import numpy as np
+import pytest
+
+pytest.importorskip("av")
+pytest.importorskip("PIL")
+
+
+def _fixed_state(task: str, copies: int = 1, below_floor: bool = False) -> dict:
+    from warpgym.native import NativeRobot
+
+    robot = NativeRobot(task, copies=copies)
+    robot.reset(np.random.default_rng(0))
+    state = robot.state()
+    if below_floor:  # same camera (it follows x, y only), robot hidden under the opaque floor
+        state["root_pose"][:, 2] = -50.0
+    return state
+
+
+def _clip(state: dict, steps: int) -> dict:
+    """The state held for ``steps`` steps with the joints swinging, so no two frames are alike
+    (a GIF writer may merge equal frames into one)."""
+    clip = {k: np.repeat(v[None], steps, axis=0) for k, v in state.items()}
+    clip["dof_pos"] = clip["dof_pos"] + 0.3 * np.sin(np.arange(steps))[:, None, None]
+    return clip
+
+
+@pytest.mark.parametrize("task", ["Ant", "Humanoid"])
+def test_frames_have_the_stated_size_and_show_the_robot(task):
+    from warpgym.render import RobotRenderer
+
+    robot, empty = _fixed_state(task), _fixed_state(task, below_floor=True)
+    with RobotRenderer(task, width=160, height=120) as r:
+        frames = [r.render(**robot) for _ in range(10)]
+        blank = r.render(**empty)
+    assert all(f.shape == (120, 160, 3) and f.dtype == np.uint8 for f in frames)
+    assert all(np.array_equal(f, frames[0]) for f in frames)  # a fixed state draws the same picture
+    changed = np.abs(frames[0].astype(int) - blank.astype(int)).sum(axis=2) > 30
+    assert changed.mean() > 0.01, f"the robot covers {changed.mean():.4f} of the frame"
+    rows, cols = np.nonzero(changed)  # ... and it is in the middle, where the camera looks
+    assert 24 < rows.mean() < 100 and 40 < cols.mean() < 120
+
+
+def test_a_grid_draws_every_robot():
+    from warpgym.render import RobotRenderer, grid_offsets
+
+    offsets = grid_offsets(4, 2.5)
+    assert len({tuple(o) for o in offsets}) == 4 and np.ptp(offsets[:, 1]) == 2.5
+    state = _fixed_state("Ant", copies=4)
+    with RobotRenderer("Ant", copies=4, width=160, height=120) as r:
+        full = r.render(**state).astype(int)
+        state["root_pose"][3, 2] = -50.0
+        three = r.render(**state).astype(int)
+    assert (np.abs(full - three).sum(axis=2) > 30).mean() > 0.003  # the fourth robot is drawn
+
+
+def test_mp4_and_gif_decode_to_the_frames_written(tmp_path):
+    import av
+    from PIL import Image
+
+    from warpgym.video import render_clip
+
+    mp4, gif = str(tmp_path / "a.mp4"), str(tmp_path / "a.gif")
+    frames = render_clip("Ant", _clip(_fixed_state("Ant"), 10), {mp4: {"fps": 60}, gif: {"fps": 20, "width": 80}},
+                         width=160, height=120)
+    assert frames == {mp4: 10, gif: 4}  # 60 fps: every control step; 20 fps: every third
+    with av.open(mp4) as c:
+        decoded = [f.to_ndarray(format="rgb24") for f in c.decode(video=0)]
+        assert c.streams.video[0].average_rate == 60
+    assert len(decoded) == 10 and decoded[0].shape == (120, 160, 3)
+    with Image.open(gif) as im:
+        assert (im.n_frames, im.size, im.info["duration"]) == (4, (80, 60), 50)
+    assert not [p for p in os.listdir(tmp_path) if ".tmp" in p]  # no temporary files left behind
+
+
+def test_bad_video_settings_are_refused(tmp_path):
+    from warpgym.render import RobotRenderer
+    from warpgym.video import VideoWriter, frame_stride
+
+    with pytest.raises(ValueError, match="must end in .mp4 or .gif"):
+        VideoWriter(str(tmp_path / "a.avi"), 30)
+    with pytest.raises(ValueError, match="must divide 60"):
+        frame_stride(25)
+    with pytest.raises(ValueError, match="must divide 100"):
+        VideoWriter(str(tmp_path / "a.gif"), 30)
+    with pytest.raises(ValueError, match="must be even"):
+        RobotRenderer.check_size(641, 480)
+    with pytest.raises(ValueError, match="no frames"):
+        VideoWriter(str(tmp_path / "a.mp4"), 30).close()
+
+
+def test_a_missing_encoder_or_renderer_names_what_to_install(tmp_path, monkeypatch):
+    from warpgym import render
+    from warpgym.video import VideoWriter
+
+    monkeypatch.setitem(sys.modules, "av", None)  # as if PyAV were not installed
+    with pytest.raises(ImportError, match=r"warpgym\[video\]"):
+        VideoWriter(str(tmp_path / "a.mp4"), 30)
+    monkeypatch.setitem(sys.modules, "mujoco.egl", None)
+    monkeypatch.setitem(sys.modules, "mujoco.osmesa", None)
+    with pytest.raises(render.RendererUnavailable, match="tried egl.*osmesa.*MUJOCO_GL=egl"):
+        render.probe_renderer()
+
+
+def test_train_video_flag_fails_before_building_anything(monkeypatch, capsys):
+    sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(__file__)), "scripts"))
+    import train
+
+    with pytest.raises(SystemExit):
+        train.parse_args(["--video", "--no-eval"])
+    assert "drop --no-eval" in capsys.readouterr().err
+    monkeypatch.setitem(sys.modules, "av", None)
+    with pytest.raises(SystemExit):
+        train.parse_args(["--video"])
+    assert 'pip install "warpgym[video]"' in capsys.readouterr().err
+
+
+def test_evaluation_clip_is_drawn_off_the_training_process(ant_env, tmp_path):
+    """The recorder copies states on the device during the evaluation; a separate process draws
+    them into an MP4 and a TensorBoard GIF."""
+    import torch
+    from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
+
+    from agents.evaluate import evaluate
+    from warpgym.clips import EvalVideoRecorder
+
+    class Still:  # a policy that holds every joint at zero torque
+        def act_deterministic(self, obs):
+            return torch.zeros(obs.shape[0], ant_env.num_actions)
+
+    rec = EvalVideoRecorder(str(tmp_path), steps=6, every=2, fps=30, width=96, height=64, copies=2)
+    for evaluation in range(3):  # evaluations 0 and 2 are recorded
+        evaluate(ant_env, Still(), lambda o: o, max_steps=11, recorder=rec)
+        rec.finish(iteration=10 * evaluation, samples=1000 * evaluation)
+    rec.close()
+    videos = sorted(os.listdir(tmp_path / "videos"))
+    assert [v for v in videos if v.endswith(".mp4")] == ["eval-000000.mp4", "eval-000020.mp4"], videos
+    assert not [v for v in videos if v.endswith((".npz", ".gif"))]  # inputs and GIFs cleaned up
+    import av
+
+    with av.open(str(tmp_path / "videos" / "eval-000020.mp4")) as c:
+        assert sum(1 for _ in c.decode(video=0)) == 3  # 6 steps at 60 Hz kept at 30 fps
+    events = EventAccumulator(str(tmp_path / "tensorboard"), size_guidance={"images": 0})
+    events.Reload()
+    images = events.Images("eval/video")
+    assert [i.step for i in images] == [0, 2000] and images[0].encoded_image_string[:6] == b"GIF89a"
+    log = (tmp_path / "videos" / "render.log").read_text()
+    assert [json.loads(line)["iteration"] for line in log.splitlines() if line.startswith("{")] == [0, 20]

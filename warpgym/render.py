@@ -1,0 +1,171 @@
+"""Frames of warpgym robots, drawn by MuJoCo's OpenGL renderer from the same MJCF, headless.
+
+The physics stays in warpgym: each frame the robots' states (warpgym's layout, docs/tensor_api.md)
+are written into native MuJoCo copies of the robot (``warpgym.native``, the mapping
+``scripts/sim2sim.py`` uses) and drawn; nothing is simulated here. ``K`` robots are drawn side by
+side in one scene, as Isaac Gym's viewer shows its envs, each shifted by its place in a grid.
+
+OpenGL comes from EGL (an NVIDIA driver's on a GPU machine, Mesa's software renderer on a CPU-only
+one) or OSMesa, chosen here rather than by ``MUJOCO_GL`` at ``mujoco``'s import: by the time a
+clip is asked for, the physics solver has long imported ``mujoco``. ``MUJOCO_GL=egl|osmesa``
+still picks one; other values (GLFW needs a display) fall back to trying both.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass
+
+import numpy as np
+
+from warpgym.native import NativeRobot
+
+INSTALL_GL = ("install an OpenGL that needs no display: the NVIDIA driver's EGL on a GPU machine, Mesa's on "
+              "a CPU-only one (Debian/Ubuntu: apt install libegl1 libgl1-mesa-dri) or OSMesa "
+              "(apt install libosmesa6), then set MUJOCO_GL=egl or MUJOCO_GL=osmesa")
+
+
+class RendererUnavailable(RuntimeError):
+    """No headless OpenGL context could be made; the message says what was tried and what to install."""
+
+
+def _gl_context(width: int, height: int):
+    """An offscreen OpenGL context, current on this thread: the backend ``MUJOCO_GL`` names, else
+    EGL, then OSMesa."""
+    asked = os.environ.get("MUJOCO_GL", "").strip().lower()
+    # GLFW is left out: without a display it hands back a dead context instead of failing
+    backends = [asked] if asked in ("egl", "osmesa") else ["egl", "osmesa"]
+    tried = []
+    for backend in backends:
+        try:
+            if backend == "egl":
+                from mujoco.egl import GLContext  # noqa: PLC0415
+            else:
+                from mujoco.osmesa import GLContext  # noqa: PLC0415
+            context = GLContext(width, height)
+            context.make_current()
+            return context
+        except Exception as e:  # noqa: BLE001  (each backend fails its own way; all are reported)
+            tried.append(f"{backend}: {type(e).__name__}: {str(e).strip().splitlines()[0][:160] if str(e).strip() else ''}")
+    raise RendererUnavailable(f"no headless OpenGL context for MuJoCo's renderer (tried {'; '.join(tried)}); "
+                              f"{INSTALL_GL}")
+
+
+def probe_renderer() -> None:
+    """Raise ``RendererUnavailable`` now if no frame could be drawn later."""
+    _gl_context(16, 16).free()
+
+
+@dataclass
+class Camera:
+    """A camera that follows the robots: it looks at their mean position at a fixed height (the
+    torso's bobbing would shake the picture), from ``distance`` metres at the given angles (degrees;
+    azimuth 90 looks along +y, so a robot running along +x crosses the frame left to right)."""
+
+    distance: float = 4.0
+    azimuth: float = 110.0
+    elevation: float = -18.0
+    height: float = 0.4
+
+
+def grid_offsets(copies: int, spacing: float) -> np.ndarray:
+    """(copies, 3) shifts that lay robots out on a near-square grid, rows across the running direction."""
+    cols = math.ceil(math.sqrt(copies))
+    k = np.arange(copies)
+    out = np.zeros((copies, 3))
+    out[:, 0] = -(k // cols) * spacing
+    out[:, 1] = (k % cols - (cols - 1) / 2) * spacing
+    return out
+
+
+class RobotRenderer:
+    """Draws ``copies`` robots of a task from warpgym-layout states.
+
+    Args:
+        task: "Ant", "Humanoid" or a ``LocomotionTask``.
+        copies: robots per frame (a grid of them when more than one).
+        width, height: frame size in pixels (even numbers, as video encoders want them).
+        spacing: metres between neighbouring robots in the grid.
+        camera: a ``Camera``; the default frames one robot, further away for a grid.
+    """
+
+    def __init__(self, task="Ant", copies: int = 1, width: int = 640, height: int = 480,
+                 spacing: float | None = None, camera: Camera | None = None):
+        if not isinstance(copies, int) or copies < 1:
+            raise ValueError(f"copies={copies!r} must be a positive integer")
+        self.check_size(width, height)
+        import mujoco  # noqa: PLC0415
+
+        self._mj = mujoco
+        self.robot = NativeRobot(task, copies=copies, visual=True)
+        self.task = self.robot.task
+        self.copies, self.width, self.height = copies, width, height
+        tall = self.task.robot.lower().startswith("humanoid")
+        self.spacing = spacing if spacing is not None else (2.0 if tall else 2.5)
+        self.offsets = grid_offsets(copies, self.spacing)
+        cols = math.ceil(math.sqrt(copies))
+        self.camera = camera or Camera(distance=(4.5 if tall else 3.5) + 1.2 * self.spacing * (cols - 1),
+                                       height=0.9 if tall else 0.4)
+        model = self.robot.model
+        self._context = _gl_context(width, height)
+        self._scene = mujoco.MjvScene(model, maxgeom=max(1000, 2 * copies * model.ngeom + 100))
+        self._option = mujoco.MjvOption()
+        self._perturb = mujoco.MjvPerturb()
+        self._cam = mujoco.MjvCamera()
+        self._cam.type = mujoco.mjtCamera.mjCAMERA_FREE
+        self._gpu = mujoco.MjrContext(model, mujoco.mjtFontScale.mjFONTSCALE_150)
+        mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN, self._gpu)
+        self._rect = mujoco.MjrRect(0, 0, width, height)
+        self._warm = False
+
+    @staticmethod
+    def check_size(width: int, height: int) -> None:
+        ok = all(isinstance(v, int) and v >= 2 and v % 2 == 0 for v in (width, height))
+        if not ok or width > 1920 or height > 1080:
+            raise ValueError(f"frame size {width!r}x{height!r} must be even and at most 1920x1080 (video "
+                             "encoders want even sizes); pick e.g. --width 640 --height 480")
+
+    def render(self, root_pose, root_vel, dof_pos, dof_vel) -> np.ndarray:
+        """One (height, width, 3) uint8 frame of the robots in these states (one row per copy)."""
+        mj, robot = self._mj, self.robot
+        robot.set_state(root_pose, root_vel, dof_pos, dof_vel)
+        self._context.make_current()
+        center = (np.asarray(root_pose, np.float64)[:, :3] + self.offsets).mean(axis=0)
+        cam = self._cam
+        cam.lookat[:] = (center[0], center[1], self.camera.height)
+        cam.distance, cam.azimuth, cam.elevation = self.camera.distance, self.camera.azimuth, self.camera.elevation
+        for _ in range(1 if self._warm else 2):  # the first scene of a context draws a few levels off: twice
+            self._draw(cam)
+        self._warm = True
+        pixels = np.empty((self.height, self.width, 3), np.uint8)
+        mj.mjr_readPixels(pixels, None, self._rect, self._gpu)
+        return np.flipud(pixels).copy()  # OpenGL's rows run bottom to top
+
+    def _draw(self, cam) -> None:
+        mj, robot, scene = self._mj, self.robot, self._scene
+        # static geoms (the floor) once, then each robot's geoms shifted to its place in the grid
+        mj.mjv_updateScene(robot.model, robot.data[0], self._option, self._perturb, cam,
+                           mj.mjtCatBit.mjCAT_STATIC, scene)
+        for data, offset in zip(robot.data, self.offsets):
+            first = scene.ngeom
+            mj.mjv_addGeoms(robot.model, data, self._option, self._perturb, mj.mjtCatBit.mjCAT_DYNAMIC, scene)
+            if offset.any():
+                for i in range(first, scene.ngeom):
+                    scene.geoms[i].pos[:] += offset
+        mj.mjr_render(self._rect, scene, self._gpu)
+
+    def close(self) -> None:
+        """Free the OpenGL context now (left to the garbage collector at exit, EGL complains)."""
+        if getattr(self, "_gpu", None) is not None:
+            self._gpu.free()
+            self._gpu = None
+        if getattr(self, "_context", None) is not None:
+            self._context.free()
+            self._context = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
