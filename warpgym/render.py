@@ -47,7 +47,8 @@ def _gl_context(width: int, height: int):
             context.make_current()
             return context
         except Exception as e:  # noqa: BLE001  (each backend fails its own way; all are reported)
-            tried.append(f"{backend}: {type(e).__name__}: {str(e).strip().splitlines()[0][:160] if str(e).strip() else ''}")
+            first_line = (str(e).strip().splitlines() or [""])[0][:160]
+            tried.append(f"{backend}: {type(e).__name__}: {first_line}")
     raise RendererUnavailable(f"no headless OpenGL context for MuJoCo's renderer (tried {'; '.join(tried)}); "
                               f"{INSTALL_GL}")
 
