@@ -105,6 +105,8 @@ class LocomotionVecEnv(VectorEnv):
         self.obs, self.reward = t(self._obs), t(self._reward)
         self.terminated, self.truncated = t(self._terminated), t(self._truncated)
         self.actions = t(self._actions)
+        # steps into each env's episode (int32); writable, e.g. to spread the first episodes' ends
+        self.episode_steps = t(self._ep_length)
         done = t(self._done)
         self.info = {
             "final_obs": t(self._final_obs),
@@ -183,7 +185,12 @@ class LocomotionVecEnv(VectorEnv):
         self._reset_all()
         return self.obs, {}
 
-    def step(self, actions: torch.Tensor):
+    def step(self, actions: torch.Tensor | np.ndarray):
+        """Step every env. ``actions`` (num_envs, num_actions): a float32 tensor on the env's device
+        (the zero-copy path), or a numpy array as Gymnasium learners pass, copied to the device here
+        (one host-to-device copy per step)."""
+        if isinstance(actions, np.ndarray):
+            actions = torch.as_tensor(actions, dtype=torch.float32, device=self.device)
         actions = check_float_tensor("actions", actions, self.device, [(self.num_envs, self.num_actions)])
         self._actions_in_t.copy_(actions)
         if self._graph is None:

@@ -1,0 +1,127 @@
+"""Learner adapters: each trains a few iterations, counts the same episodes warpgym does, and
+hands the learner warpgym's own buffers wherever the learner allows it."""
+
+import os
+import sys
+
+import numpy as np
+import pytest
+import torch
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "scripts"))
+
+LEARNERS = {"rsl_rl": "rsl_rl", "skrl": "skrl", "rl_games": "rl_games", "sb3": "stable_baselines3"}
+
+
+def learner_returns(name: str, learner) -> list[float]:
+    """The episode returns the learner computed itself, from the rewards and dones it was handed."""
+    if name == "rsl_rl":
+        return list(learner.logger.rewbuffer)
+    if name == "skrl":
+        return np.asarray(list(learner._track_rewards)).reshape(-1).tolist()
+    if name == "sb3":
+        return [e["r"] for e in learner.ep_info_buffer]
+    return [float(np.asarray(learner.game_rewards.get_mean()).reshape(-1)[0])]  # rl_games keeps a running mean only
+
+
+@pytest.mark.parametrize("name", list(LEARNERS))
+def test_each_learner_trains_and_counts_warpgym_episodes(name, tmp_path):
+    pytest.importorskip(LEARNERS[name])
+    import train_with
+
+    from agents.logger import read_metrics
+
+    args = train_with.parse_args([name, "--num-envs", "4", "--iterations", "3", "--device", "cpu",
+                                  "--episode-length", "16", "--run-dir", str(tmp_path), "--no-plots", "--no-compile"])
+    args.keep_returns = True
+    assert train_with.main(args=args) == 0
+    ours = args.episode_log.returns
+    theirs = learner_returns(name, args.learner_object)
+    assert len(ours) >= 12, f"only {len(ours)} episodes ended"
+    if name == "rl_games":  # fewer episodes than its window: its mean is the mean of all of them
+        np.testing.assert_allclose(theirs[0], np.mean(ours), rtol=1e-4)
+    else:
+        assert len(theirs) == min(len(ours), 100)
+        np.testing.assert_allclose(theirs, ours[-len(theirs):], rtol=1e-4, atol=1e-4)
+    rows = read_metrics(str(tmp_path))
+    assert len(rows) >= 3 and rows[-1]["samples"] == 4 * args.episode_log.steps
+    assert any("return" in r for r in rows)
+
+
+def _outputs(name: str, adapter, actions: torch.Tensor) -> dict:
+    """What one step hands the learner, by the names of the adapter's SHARED table."""
+    if name == "rsl_rl":
+        obs, rew, done, extras = adapter.step(actions)
+        return {"obs": obs["policy"], "reward": rew, "done": done, "time_outs": extras["time_outs"]}
+    if name == "skrl":
+        obs, rew, term, trunc, _ = adapter.step(actions)
+        return {"obs": obs, "reward": rew, "terminated": term, "truncated": trunc}
+    if name == "rl_games":
+        obs, rew, done, infos = adapter.step(actions)
+        return {"obs": obs, "reward": rew, "done": done, "time_outs": infos["time_outs"]}
+    adapter.step_async(actions.numpy())
+    obs, rew, done, _ = adapter.step_wait()
+    return {"obs": obs, "reward": rew, "done": done}
+
+
+@pytest.mark.parametrize("name", list(LEARNERS))
+def test_adapters_hand_out_warpgym_buffers_or_say_why_not(name, ant_env):
+    pytest.importorskip(LEARNERS[name])
+    module = {"rsl_rl": "rsl_rl", "skrl": "skrl", "rl_games": "rl_games", "sb3": "sb3"}[name]
+    cls = {"rsl_rl": "RslRlVecEnv", "skrl": "SkrlVecEnv", "rl_games": "RlGamesVecEnv", "sb3": "Sb3VecEnv"}[name]
+    adapter_cls = getattr(__import__(f"warpgym.wrappers.{module}", fromlist=[cls]), cls)
+    adapter = adapter_cls(ant_env)
+    if name == "skrl":
+        adapter.reset()
+    elif name in ("rsl_rl",):
+        adapter.get_observations()
+    else:
+        adapter.reset()
+    out = _outputs(name, adapter, torch.zeros(ant_env.num_envs, ant_env.num_actions))
+    warpgym = {"obs": ant_env.obs, "reward": ant_env.reward, "done": ant_env.info["_final_obs"],
+               "time_outs": ant_env.truncated, "terminated": ant_env.terminated, "truncated": ant_env.truncated}
+    assert set(out) == set(adapter_cls.SHARED)
+    for key, shared in adapter_cls.SHARED.items():
+        if shared:
+            assert isinstance(out[key], torch.Tensor) and out[key].data_ptr() == warpgym[key].data_ptr(), key
+        else:
+            assert adapter_cls.WHY_COPIED.get(key), f"{cls} copies {key} without saying why"
+            if isinstance(out[key], torch.Tensor):
+                assert out[key].data_ptr() != warpgym[key].data_ptr()
+        np.testing.assert_array_equal(np.asarray(out[key]).reshape(-1), warpgym[key].numpy().reshape(-1))
+
+
+def test_gymnasium_conventions(ant_env):
+    """numpy actions are taken, the single env passes Gymnasium's checker, and Gymnasium's own
+    episode statistics agree with warpgym's through the numpy vector env."""
+    import gymnasium as gym
+    from gymnasium.utils.env_checker import check_env
+    from gymnasium.wrappers.vector import RecordEpisodeStatistics
+
+    import warpgym  # noqa: F401
+    from warpgym.envs import LocomotionVecEnv
+    from warpgym.wrappers.numpy_vec import NumpyVecEnv
+
+    obs, *_ = ant_env.step(np.zeros((ant_env.num_envs, ant_env.num_actions), np.float64))
+    assert isinstance(obs, torch.Tensor)
+    with pytest.raises(ValueError, match="shape"):
+        ant_env.step(np.zeros((ant_env.num_envs + 1, ant_env.num_actions), np.float32))
+
+    single = gym.make("warpgym/Ant-v0")
+    check_env(single.unwrapped, skip_render_check=True)
+    assert ant_env.metadata["autoreset_mode"] == gym.vector.AutoresetMode.SAME_STEP
+
+    env = RecordEpisodeStatistics(NumpyVecEnv(LocomotionVecEnv("Ant", num_envs=3, device="cpu", seed=1,
+                                                               max_episode_steps=8)), stats_key="gym_episode")
+    env.reset(seed=3)
+    rng = np.random.default_rng(0)
+    seen = 0
+    for _ in range(20):
+        _, reward, term, trunc, info = env.step(rng.uniform(-1, 1, (3, env.single_action_space.shape[0])))
+        assert isinstance(reward, np.ndarray) and reward.dtype == np.float64
+        if "gym_episode" in info:
+            mask = info["_gym_episode"]
+            np.testing.assert_allclose(info["gym_episode"]["r"][mask], info["episode"]["r"][mask], rtol=1e-5)
+            np.testing.assert_array_equal(info["gym_episode"]["l"][mask], info["episode"]["l"][mask])
+            seen += int(mask.sum())
+    assert seen >= 6

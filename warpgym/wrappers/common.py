@@ -1,0 +1,82 @@
+"""What every learner adapter shares: the warpgym env underneath, and the same episode metrics.
+
+A learner keeps its own statistics in its own format; ``EpisodeLog`` reads warpgym's episode
+statistics (``info["episode"]``) at every step into device-side sums and reports them every
+``every`` steps, so runs of different learners can be plotted on one figure. Reporting reads the
+device once per report, not once per step.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+import torch
+
+
+class TimeLimitReached(Exception):
+    """Raised from ``step`` once ``EpisodeLog.stop_after_s`` has passed: the one way to stop any
+    learner's loop at a wall-clock limit without touching its code. Catch it around ``learn``."""
+
+
+def base_env(env):
+    """The ``LocomotionVecEnv`` under a Gymnasium wrapper chain (or the env itself)."""
+    inner = getattr(env, "unwrapped", env)
+    if not hasattr(inner, "sim") or not hasattr(inner, "info"):
+        raise TypeError(f"{type(env).__name__} is not a warpgym LocomotionVecEnv (or a wrapper of one): build it "
+                        "with warpgym.envs.LocomotionVecEnv or gymnasium.make_vec('warpgym/Ant-v0', ...)")
+    return inner
+
+
+class EpisodeLog:
+    """Device-side sums of the episodes that end at each step, reported every ``every`` steps.
+
+    Args:
+        env: the warpgym vector env.
+        every: steps between reports (a learner's rollout length is a good choice).
+        sink: called with a row ``{"samples", "episodes", "return", "length", "speed", "steps_s"}``
+            (means over the episodes that ended since the last report; ``steps_s`` the wall-clock
+            seconds since then).
+        stop_after_s: raise ``TimeLimitReached`` at the first report this many seconds after
+            ``start`` (default: never).
+        start: the clock's origin (default: now).
+        keep_returns: also list every episode's return in ``returns`` (a host read per step: for checks).
+    """
+
+    def __init__(self, env, every: int, sink: Callable[[dict], None] | None = None,
+                 stop_after_s: float | None = None, start: float | None = None, keep_returns: bool = False):
+        if not isinstance(every, int) or every < 1:
+            raise ValueError(f"every={every!r} must be a positive number of steps")
+        self.env = base_env(env)
+        self.every, self.sink, self.stop_after_s = every, sink, stop_after_s
+        self.start = time.time() if start is None else start
+        self._last = time.time()
+        self._sums = torch.zeros(4, dtype=torch.float64, device=self.env.device)
+        self.steps = 0
+        self.keep_returns = keep_returns
+        self.returns: list[float] = []
+
+    def after_step(self, info: dict) -> None:
+        ep = info["episode"]
+        done = ep["_r"]
+        self._sums += torch.stack([done.sum(), (ep["r"] * done).sum(), (ep["l"] * done).sum(),
+                                   (ep["s"] * done).sum()]).double()
+        if self.keep_returns:  # every episode's return, in the order they ended (host reads: tests only)
+            self.returns.extend(ep["r"][done].tolist())
+        self.steps += 1
+        if self.steps % self.every == 0:
+            self.report()
+
+    def report(self) -> None:
+        episodes, ret, length, speed = self._sums.tolist()  # the one host read per report
+        self._sums.zero_()
+        now = time.time()
+        row = {"samples": self.steps * self.env.num_envs, "episodes": int(episodes), "steps_s": now - self._last,
+               "time_s": now - self.start}
+        if episodes:
+            row.update({"return": ret / episodes, "length": length / episodes, "speed": speed / episodes})
+        self._last = now
+        if self.sink is not None:
+            self.sink(row)
+        if self.stop_after_s is not None and now - self.start >= self.stop_after_s:
+            raise TimeLimitReached(f"{self.stop_after_s:g} s since start")
