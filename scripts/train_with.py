@@ -266,9 +266,12 @@ def main(argv=None, args=None) -> int:
     with open(os.path.join(run_dir, "summary.json"), "w") as f:
         json.dump(summary, f, indent=1)
     if not args.no_plots and rows:
-        from agents.plotting import plot_runs  # noqa: PLC0415
+        try:
+            from agents.plotting import plot_runs  # noqa: PLC0415
 
-        plot_runs([run_dir], run_dir, labels=[f"{args.learner} {num_envs} envs"], title=f"warpgym {args.task}")
+            plot_runs([run_dir], run_dir, labels=[f"{args.learner} {num_envs} envs"], title=f"warpgym {args.task}")
+        except ImportError:
+            print("matplotlib is not installed: pip install 'warpgym[train]' for the plots", flush=True)
     print(json.dumps(summary), flush=True)
     return 0
 

@@ -1,0 +1,137 @@
+"""Learners side by side on one machine: warpgym's PPO and each adapter (scripts/train_with.py),
+the same task, env count and wall-clock budget, one after another in one script run.
+
+    python scripts/learner_bench.py --out bench/learners --seconds 120                # all five
+    python scripts/learner_bench.py --out bench/learners --learners rl_games,sb3       # some
+    python scripts/learner_bench.py --report bench/learners bench/learners2 --figure docs/figures
+
+Each run writes its run directory under OUT and a row in OUT/learners.json: steady samples/s
+(median over the second half of the run's iterations), the time and samples at which the
+training episodes first averaged 3 m/s, and the last return and speed. ``--report`` merges the
+rows of several OUT dirs into one markdown table and one pair of plots.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.dirname(HERE))
+ALL = ("warpgym", "rsl_rl", "skrl", "rl_games", "sb3")
+
+
+def command(learner: str, task: str, seconds: float, num_envs: int, run_dir: str) -> list[str]:
+    common = ["--task", task, "--num-envs", str(num_envs), "--time-limit", str(seconds), "--run-dir", run_dir,
+              "--no-plots"]
+    if learner == "warpgym":
+        return [sys.executable, os.path.join(HERE, "train.py"), *common, "--max-iterations", "1000000"]
+    return [sys.executable, os.path.join(HERE, "train_with.py"), learner, *common, "--iterations", "1000000"]
+
+
+def row_of(learner: str, run_dir: str, wall_s: float, rc: int) -> dict:
+    from agents.logger import read_metrics  # noqa: PLC0415
+
+    row = {"learner": learner, "run_dir": run_dir, "rc": rc, "wall_s": round(wall_s, 1)}
+    try:
+        rows = read_metrics(run_dir)
+    except FileNotFoundError:
+        return {**row, "error": "no metrics"}
+    half = [r["samples_per_s"] for r in rows[len(rows) // 2:] if "samples_per_s" in r]
+    done = [r for r in rows if r.get("speed") is not None]
+    hit = next((r for r in done if r["speed"] >= 3.0), None)
+    row.update({"iterations": len(rows), "samples": rows[-1]["samples"] if rows else 0,
+                "samples_per_s": statistics.median(half) if half else None,
+                "first_iteration_s": rows[0]["time_s"] if rows else None,
+                "time_to_3ms_s": hit["time_s"] if hit else None, "samples_to_3ms": hit["samples"] if hit else None,
+                "final_return": done[-1]["return"] if done else None, "final_speed": done[-1]["speed"] if done else None})
+    return row
+
+
+def run(args) -> int:
+    os.makedirs(args.out, exist_ok=True)
+    results = []
+    for learner in args.learners:
+        run_dir = os.path.join(args.out, learner)
+        t0 = time.time()
+        with open(os.path.join(args.out, f"{learner}.log"), "w") as log:
+            rc = subprocess.run(command(learner, args.task, args.seconds, args.num_envs, run_dir), stdout=log,
+                                stderr=subprocess.STDOUT, check=False).returncode
+        results.append(row_of(learner, run_dir, time.time() - t0, rc))
+        print(json.dumps(results[-1]), flush=True)
+    device = "cpu"
+    try:
+        import torch  # noqa: PLC0415
+
+        device = torch.cuda.get_device_name(0) if torch.cuda.is_available() else "cpu"
+    except ImportError:
+        pass
+    summary = {"task": args.task, "num_envs": args.num_envs, "seconds": args.seconds, "device": device,
+               "date": time.strftime("%Y-%m-%d"), "rows": results}
+    with open(os.path.join(args.out, "learners.json"), "w") as f:
+        json.dump(summary, f, indent=1)
+    return 0
+
+
+def report(args) -> int:
+    rows, meta = [], None
+    for out in args.report:
+        with open(os.path.join(out, "learners.json")) as f:
+            data = json.load(f)
+        meta = meta or data
+        rows += [{**r, "run_dir": os.path.join(out, r["learner"])} for r in data["rows"]]
+    print(f"{meta['task']}, {meta['num_envs']} envs, {meta['seconds']:g} s per learner, {meta['device']}\n")
+    print("| learner | samples/s (median) | first iteration | training episodes reach 3 m/s | last return | last speed |")
+    print("|---|---:|---:|---:|---:|---:|")
+
+    def fmt(v, spec):
+        return "–" if v is None else format(v, spec)
+
+    for r in rows:
+        reach = ("not within the run" if r.get("time_to_3ms_s") is None
+                 else f"{r['time_to_3ms_s']:.0f} s ({r['samples_to_3ms'] / 1e6:.1f} M samples)")
+        sps = r.get("samples_per_s")
+        print(f"| {r['learner']} | {fmt(None if sps is None else sps / 1e6, '.3f')} M | "
+              f"{fmt(r.get('first_iteration_s'), '.0f')} s | {reach} | {fmt(r.get('final_return'), '.0f')} | "
+              f"{fmt(r.get('final_speed'), '.2f')} m/s |")
+    if args.figure:
+        from agents.plotting import plot_runs  # noqa: PLC0415
+
+        good = [r for r in rows if r.get("iterations")]
+        paths = plot_runs([r["run_dir"] for r in good], args.figure, labels=[r["learner"] for r in good],
+                          title=f"warpgym {meta['task']} {meta['num_envs']} envs: learners ({meta['device']})")
+        for p in paths:
+            os.replace(p, os.path.join(args.figure, f"{meta['task'].lower()}_learners_{os.path.basename(p)}"))
+    return 0
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--out", help="directory for the runs and learners.json")
+    ap.add_argument("--learners", default=",".join(ALL), help=f"comma-separated, from {', '.join(ALL)}")
+    ap.add_argument("--task", default="Ant")
+    ap.add_argument("--num-envs", type=int, default=4096)
+    ap.add_argument("--seconds", type=float, default=120.0, help="wall-clock budget per learner, from process start")
+    ap.add_argument("--report", nargs="+", metavar="OUT", help="print the table of these OUT dirs instead of running")
+    ap.add_argument("--figure", default=None, help="with --report: write the combined plots into this directory")
+    args = ap.parse_args(argv)
+    if args.report:
+        return report(args)
+    if not args.out:
+        ap.error("--out is required to run")
+    args.learners = [x.strip() for x in args.learners.split(",") if x.strip()]
+    bad = [x for x in args.learners if x not in ALL]
+    if bad:
+        ap.error(f"--learners: unknown {bad}; choose from {', '.join(ALL)}")
+    if args.num_envs < 1 or not args.seconds > 0:
+        ap.error("--num-envs and --seconds must be positive")
+    return run(args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
