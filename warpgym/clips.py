@@ -124,9 +124,13 @@ class EvalVideoRecorder(StateRecorder):
                 return
             cmd = self._queue.pop(0)
             package_root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-            env = {**os.environ, "PYTHONPATH": os.pathsep.join([package_root, os.environ.get("PYTHONPATH", "")])}
+            # Drawing yields to training: a lower CPU priority, and Mesa's software renderer (a
+            # CPU-only machine) on one thread instead of all of them.
+            env = {**os.environ, "PYTHONPATH": os.pathsep.join([package_root, os.environ.get("PYTHONPATH", "")]),
+                   "LP_NUM_THREADS": os.environ.get("LP_NUM_THREADS", "1")}
             with open(os.path.join(self.dir, "render.log"), "a") as log:
-                proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, env=env)
+                proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, env=env,
+                                        preexec_fn=lambda: os.nice(10) if hasattr(os, "nice") else None)
             self._running = (proc, cmd[cmd.index("--mp4") + 1])
 
     def close(self) -> None:
