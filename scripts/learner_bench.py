@@ -49,7 +49,8 @@ def row_of(learner: str, run_dir: str, wall_s: float, rc: int) -> dict:
                 "samples_per_s": statistics.median(half) if half else None,
                 "first_iteration_s": rows[0]["time_s"] if rows else None,
                 "time_to_3ms_s": hit["time_s"] if hit else None, "samples_to_3ms": hit["samples"] if hit else None,
-                "final_return": done[-1]["return"] if done else None, "final_speed": done[-1]["speed"] if done else None})
+                "final_return": done[-1]["return"] if done else None,
+                "final_speed": done[-1]["speed"] if done else None})
     return row
 
 
@@ -86,7 +87,8 @@ def report(args) -> int:
         meta = meta or data
         rows += [{**r, "run_dir": os.path.join(out, r["learner"])} for r in data["rows"]]
     print(f"{meta['task']}, {meta['num_envs']} envs, {meta['seconds']:g} s per learner, {meta['device']}\n")
-    print("| learner | samples/s (median) | first iteration | training episodes reach 3 m/s | last return | last speed |")
+    print("| learner | samples/s (median) | first iteration | training episodes reach 3 m/s | last return "
+          "| last speed |")
     print("|---|---:|---:|---:|---:|---:|")
 
     def fmt(v, spec):

@@ -99,12 +99,19 @@ def main(argv=None) -> int:
     if filming:
         from warpgym.video import render_clip  # noqa: PLC0415
 
+        states = recorder.states()
+        x = states["root_pose"][:, :, 0]  # evaluate() reports speed at an episode's end; a clip may end before
+        seconds = (x.shape[0] - 1) * env.task.dt
+        result["clip/forward_speed"] = float((x[-1] - x[0]).mean() / seconds) if seconds > 0 else 0.0
+        print(f"filmed {x.shape[0] - 1} steps ({seconds:.1f} s): the robots moved forward at "
+              f"{result['clip/forward_speed']:.2f} m/s (a reset within the clip lowers it)")
+
         outputs = {}
         if args.video:
             outputs[args.video] = {"fps": args.fps}
         if args.gif:
             outputs[args.gif] = {"fps": args.gif_fps, "width": min(args.gif_width, args.width)}
-        frames = render_clip(env.task, recorder.states(), outputs, args.width, args.height)
+        frames = render_clip(env.task, states, outputs, args.width, args.height)
         for out, count in frames.items():
             print(f"wrote {out}: {count} frames, {os.path.getsize(out) / 1e6:.2f} MB")
         result["videos"] = frames

@@ -38,7 +38,8 @@ def parse_args(argv=None):
     ap.add_argument("--num-envs", type=int, default=None, help="default: 4096 on a GPU, 64 on the CPU")
     ap.add_argument("--device", default=None, help="default: cuda:0 when present, else cpu")
     ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--iterations", type=int, default=None, help="learner updates (default: 20 on the CPU, 500 on a GPU)")
+    ap.add_argument("--iterations", type=int, default=None,
+                    help="learner updates (default: 20 on the CPU, 500 on a GPU)")
     ap.add_argument("--time-limit", type=float, default=None, help="stop after this many seconds since start")
     ap.add_argument("--episode-length", type=int, default=None, help="steps per episode (task default: 1000)")
     ap.add_argument("--run-dir", default=None, help="default: runs/<Task>-<learner>-<date>-<time>")
@@ -128,8 +129,9 @@ def run_skrl(env, args, horizon: int, run_dir: str) -> None:
     models = {"policy": Policy(env.observation_space, env.action_space, dev),
               "value": Value(env.observation_space, env.action_space, dev)}
     memory = RandomMemory(memory_size=horizon, num_envs=env.num_envs, device=dev)
-    cfg = PPO_CFG(rollouts=horizon, learning_epochs=4 if args.task == "Ant" else 5, mini_batches=2 if args.task == "Ant" else 4,
-                  discount_factor=0.99, gae_lambda=0.95, learning_rate=3e-4 if args.task == "Ant" else 5e-4,
+    ant = args.task == "Ant"
+    cfg = PPO_CFG(rollouts=horizon, learning_epochs=4 if ant else 5, mini_batches=2 if ant else 4,
+                  discount_factor=0.99, gae_lambda=0.95, learning_rate=3e-4 if ant else 5e-4,
                   learning_rate_scheduler=KLAdaptiveLR, learning_rate_scheduler_kwargs={"kl_threshold": 0.008},
                   observation_preprocessor=RunningStandardScaler,
                   observation_preprocessor_kwargs={"size": env.observation_space, "device": dev},

@@ -150,7 +150,7 @@ def test_diverged_state_is_reset_and_flagged(ant_env):
         (torch.zeros(8), ValueError, r"shape \(8,\)"),
         (torch.zeros(4, 8, dtype=torch.float64), TypeError, "float64"),
         (torch.zeros(4, 8, device="meta"), ValueError, "meta"),
-        (np.zeros((4, 8), np.float32), TypeError, "torch.Tensor"),
+        ([[0.0] * 8] * 4, TypeError, "torch.Tensor"),  # numpy arrays are taken (test_wrappers.py); lists are not
     ],
 )
 def test_bad_actions_are_refused(ant_env, actions, error, text):

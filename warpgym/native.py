@@ -99,9 +99,10 @@ def load_native_model(robot: str, timestep: float, physics: Physics | None = Non
 def _dress_for_camera(mujoco, spec, ground) -> None:
     """A 1 m checker floor (speed reads off it), a gradient sky and a fixed sun; offscreen buffers
     large enough for a 1920x1080 frame."""
-    spec.add_texture(name="wg_sky", type=mujoco.mjtTexture.mjTEXTURE_SKYBOX, builtin=mujoco.mjtBuiltin.mjBUILTIN_GRADIENT,
+    texture, builtin = mujoco.mjtTexture, mujoco.mjtBuiltin
+    spec.add_texture(name="wg_sky", type=texture.mjTEXTURE_SKYBOX, builtin=builtin.mjBUILTIN_GRADIENT,
                      rgb1=[0.4, 0.6, 0.8], rgb2=[0.05, 0.05, 0.1], width=512, height=3072)
-    spec.add_texture(name="wg_floor", type=mujoco.mjtTexture.mjTEXTURE_2D, builtin=mujoco.mjtBuiltin.mjBUILTIN_CHECKER,
+    spec.add_texture(name="wg_floor", type=texture.mjTEXTURE_2D, builtin=builtin.mjBUILTIN_CHECKER,
                      rgb1=[0.22, 0.3, 0.38], rgb2=[0.14, 0.19, 0.25], width=512, height=512,
                      mark=mujoco.mjtMark.mjMARK_EDGE, markrgb=[0.5, 0.55, 0.6])
     material = spec.add_material(name="wg_floor", texrepeat=[1.0, 1.0], texuniform=True, reflectance=0.0)
