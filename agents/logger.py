@@ -9,6 +9,7 @@ import csv
 import io
 import json
 import os
+import statistics
 
 COLUMNS = [
     "iteration", "samples", "time_s", "samples_per_s", "iteration_s", "episodes",
@@ -113,3 +114,16 @@ def read_metrics(run_dir: str) -> list[dict]:
             if i < len(lines) - 1 and any(rest.strip() for rest in lines[i + 1 :]):
                 raise ValueError(f"{path} line {i + 1} is not JSON and not the last line: the file is damaged") from None
     return rows
+
+
+def steady_median(rows: list[dict], key: str = "samples_per_s") -> float | None:
+    """The median of ``key`` once a run has settled: its first fifth (compiles, graph captures,
+    warm-up) left out. Every throughput this project reports is this."""
+    values = [r[key] for r in rows[len(rows) // 5 :] if r.get(key) is not None]
+    return statistics.median(values) if values else None
+
+
+def first_reaching(rows: list[dict], key: str, value: float) -> dict | None:
+    """When (``time_s``, ``samples``) the logged ``key`` first reached ``value``, or None."""
+    hit = next((r for r in rows if r.get(key) is not None and r[key] >= value), None)
+    return None if hit is None else {"time_s": hit["time_s"], "samples": hit["samples"]}

@@ -6,7 +6,7 @@ the same task, env count and wall-clock budget, one after another in one script 
     python scripts/learner_bench.py --report bench/learners bench/learners2 --figure docs/figures
 
 Each run writes its run directory under OUT and a row in OUT/learners.json: steady samples/s
-(median over the second half of the run's iterations), the time and samples at which the
+(``agents.logger.steady_median``: the first fifth of the iterations left out), the time and samples at which the
 training episodes first averaged 3 m/s, and the last return and speed. ``--report`` merges the
 rows of several OUT dirs into one markdown table and one pair of plots.
 """
@@ -16,7 +16,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import statistics
 import subprocess
 import sys
 import time
@@ -35,20 +34,18 @@ def command(learner: str, task: str, seconds: float, num_envs: int, run_dir: str
 
 
 def row_of(learner: str, run_dir: str, wall_s: float, rc: int) -> dict:
-    from agents.logger import read_metrics  # noqa: PLC0415
+    from agents.logger import first_reaching, read_metrics, steady_median  # noqa: PLC0415
 
     row = {"learner": learner, "run_dir": run_dir, "rc": rc, "wall_s": round(wall_s, 1)}
     try:
         rows = read_metrics(run_dir)
     except FileNotFoundError:
         return {**row, "error": "no metrics"}
-    half = [r["samples_per_s"] for r in rows[len(rows) // 2:] if "samples_per_s" in r]
     done = [r for r in rows if r.get("speed") is not None]
-    hit = next((r for r in done if r["speed"] >= 3.0), None)
+    hit = first_reaching(rows, "speed", 3.0) or {}
     row.update({"iterations": len(rows), "samples": rows[-1]["samples"] if rows else 0,
-                "samples_per_s": statistics.median(half) if half else None,
-                "first_iteration_s": rows[0]["time_s"] if rows else None,
-                "time_to_3ms_s": hit["time_s"] if hit else None, "samples_to_3ms": hit["samples"] if hit else None,
+                "samples_per_s": steady_median(rows), "first_iteration_s": rows[0]["time_s"] if rows else None,
+                "time_to_3ms_s": hit.get("time_s"), "samples_to_3ms": hit.get("samples"),
                 "final_return": done[-1]["return"] if done else None,
                 "final_speed": done[-1]["speed"] if done else None})
     return row
@@ -85,7 +82,8 @@ def report(args) -> int:
         with open(os.path.join(out, "learners.json")) as f:
             data = json.load(f)
         meta = meta or data
-        rows += [{**r, "run_dir": os.path.join(out, r["learner"])} for r in data["rows"]]
+        # recomputed from each run's metrics: the table follows agents.logger's definitions
+        rows += [row_of(r["learner"], os.path.join(out, r["learner"]), r["wall_s"], r["rc"]) for r in data["rows"]]
     print(f"{meta['task']}, {meta['num_envs']} envs, {meta['seconds']:g} s per learner, {meta['device']}\n")
     print("| learner | samples/s (median) | first iteration | training episodes reach 3 m/s | last return "
           "| last speed |")

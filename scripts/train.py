@@ -19,7 +19,6 @@ PROCESS_START = time.time()  # the wall-clock axis starts here: imports and kern
 import argparse  # noqa: E402
 import json  # noqa: E402
 import os  # noqa: E402
-import statistics  # noqa: E402
 import sys  # noqa: E402
 from dataclasses import fields  # noqa: E402
 
@@ -151,13 +150,14 @@ def write_json(path: str, obj) -> None:
 
 def summarize(history: list[dict], device_name: str, cfg: Config) -> dict:
     """Steady-state throughput and the first time each forward speed was reached."""
+    from agents.logger import first_reaching, steady_median  # noqa: PLC0415
+
     rows = history[len(history) // 5 :]
-    steady = [r["samples_per_s"] for r in rows] or [0.0]
     out = {"device": device_name, "num_envs": cfg.env_args["num_envs"], "iterations": len(history),
-           "workers": int(os.environ.get("WORLD_SIZE", "1")), "steady_samples_per_s_median": statistics.median(steady)}
+           "workers": int(os.environ.get("WORLD_SIZE", "1")),
+           "steady_samples_per_s_median": steady_median(history) or 0.0}
     phases = sorted({k for r in rows for k in r if k.startswith("phase/")} | {"iteration_s"})
-    out["steady_phase_s_median"] = {k: statistics.median(r[k] for r in rows if k in r) for k in phases
-                                    if any(k in r for r in rows)}
+    out["steady_phase_s_median"] = {k: steady_median(history, k) for k in phases if any(k in r for r in rows)}
     if history:
         out["final"] = {k: history[-1].get(k) for k in ("time_s", "samples", "return", "speed")}
     evals = [r for r in history if "eval/return" in r]
@@ -165,11 +165,9 @@ def summarize(history: list[dict], device_name: str, cfg: Config) -> dict:
         best = max(evals, key=lambda r: r["eval/return"])
         out["best_eval"] = {k: best[k] for k in ("time_s", "samples", "eval/return", "eval/speed")}
         for v in (1.0, 2.0, 3.0):
-            hit = next((r for r in evals if r["eval/speed"] >= v), None)
-            out[f"first_eval_speed_{v:g}ms"] = None if hit is None else {"time_s": hit["time_s"], "samples": hit["samples"]}
+            out[f"first_eval_speed_{v:g}ms"] = first_reaching(evals, "eval/speed", v)
     for v in (1.0, 2.0, 3.0):  # training episodes (stochastic policy), logged every iteration
-        hit = next((r for r in history if (r.get("speed") or 0.0) >= v), None)
-        out[f"first_train_speed_{v:g}ms"] = None if hit is None else {"time_s": hit["time_s"], "samples": hit["samples"]}
+        out[f"first_train_speed_{v:g}ms"] = first_reaching(history, "speed", v)
     out["first_iteration_time_s"] = history[0]["time_s"] if history else None
     return out
 

@@ -181,6 +181,7 @@ def run_rl_games(env, args, horizon: int, run_dir: str) -> None:
     from rl_games.common.algo_observer import DefaultAlgoObserver  # noqa: PLC0415
     from rl_games.torch_runner import Runner  # noqa: PLC0415
 
+    from warpgym.wrappers.common import base_env  # noqa: PLC0415
     from warpgym.wrappers.rl_games import register_rl_games  # noqa: PLC0415
 
     class KeepAgent(DefaultAlgoObserver):  # the Runner builds the agent inside run(): keep a handle on it
@@ -190,7 +191,8 @@ def run_rl_games(env, args, horizon: int, run_dir: str) -> None:
 
     register_rl_games(lambda: env)
     runner = Runner(algo_observer=KeepAgent())
-    runner.load(rl_games_config(args.task, env._base.num_envs, str(env._base.device), args.iterations, horizon, run_dir,
+    base = base_env(env)
+    runner.load(rl_games_config(args.task, base.num_envs, str(base.device), args.iterations, horizon, run_dir,
                                 torch_compile=not args.no_compile))
     runner.run({"train": True, "play": False})
 
@@ -199,10 +201,12 @@ def run_sb3(env, args, horizon: int, run_dir: str) -> None:
     from stable_baselines3 import PPO  # noqa: PLC0415
     from stable_baselines3.common.vec_env import VecMonitor  # noqa: PLC0415
 
+    from warpgym.wrappers.common import base_env  # noqa: PLC0415
+
     batch = env.num_envs * horizon
     # SB3 counts episodes itself (VecMonitor), from the rewards and dones it is handed
     model = PPO("MlpPolicy", VecMonitor(env), n_steps=horizon, batch_size=min(batch, max(64, batch // 4)), n_epochs=5,
-                learning_rate=3e-4, gamma=0.99, gae_lambda=0.95, seed=args.seed, device=str(env._base.device),
+                learning_rate=3e-4, gamma=0.99, gae_lambda=0.95, seed=args.seed, device=str(base_env(env).device),
                 policy_kwargs={"net_arch": [256, 128, 64]}, verbose=0)
     args.learner_object = model
     model.learn(total_timesteps=args.iterations * batch)
@@ -279,21 +283,16 @@ def main(argv=None, args=None) -> int:
 
 
 def summarize(rows: list[dict], args, device: str, num_envs: int, stopped: str) -> dict:
-    """Steady throughput (median over the second half of the run) and when training episodes first
-    reached 1, 2 and 3 m/s."""
-    import statistics  # noqa: PLC0415
+    """Steady throughput and when the training episodes first averaged 1, 2 and 3 m/s."""
+    from agents.logger import first_reaching, steady_median  # noqa: PLC0415
 
+    done = [r for r in rows if "speed" in r]
     out = {"learner": args.learner, "task": args.task, "device": device, "num_envs": num_envs, "stopped_by": stopped,
            "iterations": len(rows), "samples": rows[-1]["samples"] if rows else 0,
-           "time_s": rows[-1]["time_s"] if rows else 0.0}
-    half = rows[len(rows) // 2:]
-    out["samples_per_s"] = statistics.median(r["samples_per_s"] for r in half) if half else None
-    done = [r for r in rows if "speed" in r]
-    out["final_return"] = done[-1]["return"] if done else None
-    out["final_speed"] = done[-1]["speed"] if done else None
+           "time_s": rows[-1]["time_s"] if rows else 0.0, "samples_per_s": steady_median(rows),
+           "final_return": done[-1]["return"] if done else None, "final_speed": done[-1]["speed"] if done else None}
     for v in (1, 2, 3):
-        hit = next((r for r in done if r["speed"] >= v), None)
-        out[f"first_speed_{v}ms"] = None if hit is None else {"time_s": hit["time_s"], "samples": hit["samples"]}
+        out[f"first_speed_{v}ms"] = first_reaching(rows, "speed", v)
     return out
 
 

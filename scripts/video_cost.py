@@ -21,14 +21,13 @@ sys.path.insert(0, os.path.dirname(HERE))
 
 
 def measure(run_dir: str) -> dict:
-    from agents.logger import read_metrics  # noqa: PLC0415
+    from agents.logger import read_metrics, steady_median  # noqa: PLC0415
 
     rows = read_metrics(run_dir)
-    steady = [r["samples_per_s"] for r in rows[len(rows) // 10:]]
     evals = [r["eval_s"] for r in rows if "eval_s" in r]
     videos = os.path.join(run_dir, "videos")
     clips = sorted(f for f in os.listdir(videos) if f.endswith(".mp4")) if os.path.isdir(videos) else []
-    return {"iterations": len(rows), "samples_per_s": statistics.median(steady), "evaluations": len(evals),
+    return {"iterations": len(rows), "samples_per_s": steady_median(rows), "evaluations": len(evals),
             "eval_s": statistics.median(evals) if evals else None, "clips": clips}
 
 

@@ -89,6 +89,12 @@ def test_adapters_hand_out_warpgym_buffers_or_say_why_not(name, ant_env):
             if isinstance(out[key], torch.Tensor):
                 assert out[key].data_ptr() != warpgym[key].data_ptr()
         np.testing.assert_array_equal(np.asarray(out[key]).reshape(-1), warpgym[key].numpy().reshape(-1))
+    if not adapter_cls.SHARED["obs"]:  # the copy the learner acted on survives the next step
+        kept = out["obs"]
+        before = np.array(kept, copy=True)
+        _outputs(name, adapter, torch.rand(ant_env.num_envs, ant_env.num_actions) * 2 - 1)
+        np.testing.assert_array_equal(np.asarray(kept), before)
+        assert not np.array_equal(before, ant_env.obs.numpy())
 
 
 def test_gymnasium_conventions(ant_env):

@@ -40,15 +40,16 @@ class StateRecorder:
     def capture(self, env) -> None:
         if self.count >= self.steps:
             return
-        sim = env.sim
         if self._buffers is None:
             if self.copies > env.num_envs:
                 raise ValueError(f"copies={self.copies} but the env has {env.num_envs} robots")
             self.task = env.task
-            self._buffers = {k: torch.empty((self.steps, self.copies, getattr(sim, k).shape[1]),
-                                            dtype=torch.float32, device=env.device) for k in STATE_KEYS}
+            # views of the sim's persistent state, made once (each Tensor API property builds a new view)
+            self._sources = {k: getattr(env.sim, k)[: self.copies] for k in STATE_KEYS}
+            self._buffers = {k: torch.empty((self.steps, *v.shape), dtype=torch.float32, device=env.device)
+                             for k, v in self._sources.items()}
         for key, buf in self._buffers.items():
-            buf[self.count].copy_(getattr(sim, key)[: self.copies])
+            buf[self.count].copy_(self._sources[key])
         self.count += 1
 
     def states(self) -> dict[str, np.ndarray]:

@@ -19,9 +19,25 @@ class TimeLimitReached(Exception):
     learner's loop at a wall-clock limit without touching its code. Catch it around ``learn``."""
 
 
+class ObsCopies:
+    """Observations copied into two device buffers by turns, for learners that keep a reference to
+    the observation they acted on until after the next step (which overwrites warpgym's buffer).
+    The learner sees each copy live for two steps; nothing is allocated per step."""
+
+    def __init__(self, like: torch.Tensor):
+        self.buffers = (torch.empty_like(like), torch.empty_like(like))
+        self.index = 1
+
+    def __call__(self, obs: torch.Tensor) -> torch.Tensor:
+        self.index ^= 1
+        return self.buffers[self.index].copy_(obs)
+
+
 def base_env(env):
-    """The ``LocomotionVecEnv`` under a Gymnasium wrapper chain (or the env itself)."""
-    inner = getattr(env, "unwrapped", env)
+    """The ``LocomotionVecEnv`` under a Gymnasium wrapper chain or one of these adapters (or the env itself)."""
+    inner = getattr(env, "_base", None)
+    if inner is None:
+        inner = getattr(env, "unwrapped", env)
     if not hasattr(inner, "sim") or not hasattr(inner, "info"):
         raise TypeError(f"{type(env).__name__} is not a warpgym LocomotionVecEnv (or a wrapper of one): build it "
                         "with warpgym.envs.LocomotionVecEnv or gymnasium.make_vec('warpgym/Ant-v0', ...)")
@@ -59,8 +75,9 @@ class EpisodeLog:
     def after_step(self, info: dict) -> None:
         ep = info["episode"]
         done = ep["_r"]
-        self._sums += torch.stack([done.sum(), (ep["r"] * done).sum(), (ep["l"] * done).sum(),
-                                   (ep["s"] * done).sum()]).double()
+        w = done.float()
+        # one (4, N) @ (N,) product: episodes ended, and their summed return, length and speed
+        self._sums += torch.stack((w, ep["r"], ep["l"].float(), ep["s"])) @ w
         if self.keep_returns:  # every episode's return, in the order they ended (host reads: tests only)
             self.returns.extend(ep["r"][done].tolist())
         self.steps += 1

@@ -6,7 +6,8 @@
 
 Zero copy, except the observations: rsl_rl keeps a reference to the observation it acted on and
 stores it only after the next ``step``, which overwrites warpgym's observation buffer in place, so
-the adapter hands it a copy (one device-to-device copy per step). Rewards, dones and time-outs
+the adapter hands it a copy (one device-to-device copy per step, into two buffers used by
+turns). Rewards, dones and time-outs
 are warpgym's own buffers (rsl_rl copies them before the next step).
 """
 
@@ -20,7 +21,7 @@ try:
 except ImportError as e:  # pragma: no cover - the message is the point
     raise ImportError(f'the rsl_rl adapter needs rsl_rl: pip install "warpgym[rsl_rl]" ({e})') from e
 
-from warpgym.wrappers.common import EpisodeLog, base_env
+from warpgym.wrappers.common import EpisodeLog, ObsCopies, base_env
 
 
 class RslRlVecEnv(VecEnv):
@@ -43,6 +44,9 @@ class RslRlVecEnv(VecEnv):
         self.device = b.device
         self.cfg = {"task": b.task.name}
         self.log = log
+        self._copies = ObsCopies(b.obs)
+        self._groups = [TensorDict({"policy": buf}, batch_size=[self.num_envs], device=self.device)
+                        for buf in self._copies.buffers]
         self._obs = None
 
     @property
@@ -56,7 +60,8 @@ class RslRlVecEnv(VecEnv):
         self._base.episode_steps.copy_(value)
 
     def _group(self, obs: torch.Tensor) -> TensorDict:
-        return TensorDict({"policy": obs.clone()}, batch_size=[self.num_envs], device=self.device)
+        self._copies(obs)
+        return self._groups[self._copies.index]
 
     def get_observations(self) -> TensorDict:
         if self._obs is None:

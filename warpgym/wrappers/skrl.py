@@ -5,7 +5,8 @@
 
 Zero copy, except the observations: skrl's trainer passes the previous step's observation to
 ``record_transition`` after the next ``step``, which overwrites warpgym's buffer in place, so the
-adapter hands out a copy (one device-to-device copy per step). Rewards and the terminated and
+adapter hands out a copy (one device-to-device copy per step, into two buffers used by
+turns). Rewards and the terminated and
 truncated flags are views of warpgym's buffers, shaped (num_envs, 1) as skrl wants them.
 """
 
@@ -18,7 +19,7 @@ try:
 except ImportError as e:  # pragma: no cover
     raise ImportError(f'the skrl adapter needs skrl: pip install "warpgym[skrl]" ({e})') from e
 
-from warpgym.wrappers.common import EpisodeLog, base_env
+from warpgym.wrappers.common import EpisodeLog, ObsCopies, base_env
 
 
 class SkrlVecEnv(Wrapper):
@@ -37,6 +38,7 @@ class SkrlVecEnv(Wrapper):
         self._base = base_env(env)
         self._device = self._base.device
         self.log = log
+        self._copies = ObsCopies(self._base.obs)
         self._reset_once = True
         self._obs = None
         self._info: dict = {}
@@ -53,7 +55,7 @@ class SkrlVecEnv(Wrapper):
         # skrl resets before training and, with many envs, never again: later resets happen in step
         if self._reset_once:
             obs, self._info = self._env.reset()
-            self._obs = obs.clone()
+            self._obs = self._copies(obs)
             self._reset_once = False
         return self._obs, self._info
 
@@ -61,7 +63,7 @@ class SkrlVecEnv(Wrapper):
         obs, reward, terminated, truncated, info = self._env.step(actions)
         if self.log is not None:
             self.log.after_step(info)
-        self._obs, self._info = obs.clone(), info
+        self._obs, self._info = self._copies(obs), info
         return self._obs, reward.view(-1, 1), terminated.view(-1, 1), truncated.view(-1, 1), info
 
     def state(self):
