@@ -7,8 +7,8 @@
 Zero copy, except the observations: rsl_rl keeps a reference to the observation it acted on and
 stores it only after the next ``step``, which overwrites warpgym's observation buffer in place, so
 the adapter hands it a copy (one device-to-device copy per step, into two buffers used by
-turns). Rewards, dones and time-outs
-are warpgym's own buffers (rsl_rl copies them before the next step).
+turns). Rewards, dones and time-outs are warpgym's own buffers (rsl_rl copies them before the
+next step).
 """
 
 from __future__ import annotations
