@@ -71,7 +71,11 @@ class OnPolicyRunner:
         self._stop_request = torch.zeros(1, dtype=torch.float64, device=self.device)
         # running totals of things that should never happen (agents.protocol), logged every row
         self._faults = env.fault_counters() if hasattr(env, "fault_counters") else {}
-        self._fault_help = getattr(env, "FAULT_HELP", {})
+        # and the learner's own: non-finite observation or reward entries that reached the rollout
+        self._nonfinite = torch.zeros((), dtype=torch.int64, device=self.device)
+        self._faults = {**self._faults, "nonfinite_obs_rewards": self._nonfinite}
+        self._fault_help = {**getattr(env, "FAULT_HELP", {}), "nonfinite_obs_rewards":
+                            "the env returned NaN/inf observations or rewards; PPO trained on them"}
         self._faults_reported: set[str] = set()
         self._stop_requested = False
         # Only an env that declares it (agents.protocol) is captured; the normaliser update stays
@@ -162,6 +166,8 @@ class OnPolicyRunner:
         adv, ret = compute_gae(rewards, s.values, s.dones, last_values, cfg.gamma, cfg.lambda_gae)
         s.advantages.copy_(adv)
         s.returns.copy_(ret)
+        # once per rollout, over its whole buffer: cheaper than a check per step
+        self._nonfinite += (~torch.isfinite(s.raw_obs)).sum() + (~torch.isfinite(s.rewards)).sum()
         self.episodes.end_rollout(s.dones)
         timer.lap("bootstrap, GAE")
 
@@ -260,6 +266,9 @@ class OnPolicyRunner:
         row = {"iteration": staged.iteration, "samples": staged.samples, "time_s": round(self.elapsed(), 3),
                "samples_per_s": self._per_iter / max(seconds["iteration"], 1e-9), "iteration_s": seconds["iteration"]}
         row.update({f"phase/{k}_s": v for k, v in seconds.items() if k != "iteration"})
+        if self.device.type == "cuda":  # allocator counters: host-side, no synchronisation
+            row["memory/allocated_mib"] = torch.cuda.memory_allocated(self.device) / 2**20
+            row["memory/reserved_mib"] = torch.cuda.memory_reserved(self.device) / 2**20
         row.update(dict(zip(keys, values[: len(keys)])))
         episode_end = len(keys) + EpisodeTracker.SUMS
         row.update(EpisodeTracker.summary(values[len(keys) : episode_end]))

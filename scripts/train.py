@@ -284,6 +284,16 @@ def read_run_config(run_dir: str, device: str | None) -> dict:
     return json.loads(workers.broadcast_bytes(data, torch.device(device or "cpu")))
 
 
+def built(make, what: str, phase):
+    """``make()``, with one timeline line: how long it took and what Warp compiled meanwhile."""
+    from warpgym.preload import compiled_modules, describe_compiles  # noqa: PLC0415
+
+    start, before = time.time(), len(compiled_modules())
+    obj = make()
+    phase(f"{what} built in {time.time() - start:.1f} s; {describe_compiles(before)}")
+    return obj
+
+
 def train(args, rank: int, watch=None, live: dict | None = None) -> int:
     import torch  # noqa: PLC0415
 
@@ -330,15 +340,23 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
     workers = int(os.environ.get("WORLD_SIZE", "1"))
     say(f"warpgym PPO | {task} | {num_envs} envs on {device} ({device_name})"
         + (f" x {workers} processes" if workers > 1 else "") + f" | run dir {run_dir}", flush=True)
-    say("building the envs; Warp compiles its kernels on first use (about a minute on a CPU, "
-        "cached in ~/.cache/warp afterwards)", flush=True)
+    from warpgym import preload  # noqa: PLC0415
 
+    timeline: list[tuple[float, str]] = []
+
+    def phase(text: str) -> None:  # a cold start should say where its time goes, not sit silent
+        timeline.append((round(time.time() - PROCESS_START, 2), text))
+        say(f"[{timeline[-1][0]:6.1f} s] {text}", flush=True)
+
+    cache, cached = preload.kernel_cache()
+    phase(f"imports done; Warp kernel cache {cache} holds {cached} modules"
+          + ("" if cached else " (empty: this run compiles them, about 30 s on an H100 and a few minutes "
+                                "on a CPU; WARP_CACHE_PATH points Warp at a shared cache)"))
     if args.no_mathdx:
-        from warpgym.preload import use_mathdx  # noqa: PLC0415
-
-        use_mathdx(False)
-    env = cfg.env_class(**cfg.env_args)
-    eval_env = None if args.no_eval else cfg.eval_env_class(**cfg.eval_env_args)
+        preload.use_mathdx(False)
+    env = built(lambda: cfg.env_class(**cfg.env_args), f"training env: {task} x {num_envs}", phase)
+    eval_env = None if args.no_eval else built(lambda: cfg.eval_env_class(**cfg.eval_env_args),
+                                               f"evaluation env: {task} x {cfg.eval_env_args['num_envs']}", phase)
     assert isinstance(env, LocomotionVecEnv)
     recorder = None
     if args.video and eval_env is not None:
@@ -350,6 +368,7 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
                             print_fn=lambda s: print(s, flush=True), profile=args.profile,
                             cuda_graph=not args.no_cuda_graph, rollout_graph=not args.no_rollout_graph,
                             eval_recorder=recorder)
+    phase("policy and optimiser ready; the first iteration captures the rollout and update graphs")
     if live is not None:
         live["runner"] = runner
     if args.resume:
@@ -367,6 +386,8 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
         return 0
     summary = summarize(history, device_name, cfg)
     summary["solver_load"] = env.sim.solver_load()  # this process's envs, over the whole run
+    summary["startup"] = {"timeline": timeline, "kernel_cache": cache, "cached_modules_at_start": cached,
+                          "compiled": [(name, round(t, 3)) for name, t in preload.compiled_modules()]}
     summary["faults"] = {k[len("faults/"):]: v for k, v in (history[-1] if history else {}).items()
                          if k.startswith("faults/")}
     if args.profile:

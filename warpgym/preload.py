@@ -10,10 +10,16 @@ before the first step. Two things shorten that:
 - No adjoint (backward) code for Newton's MuJoCo glue module, as for warpgym's own kernels:
   nothing differentiates through them, and the adjoints are over half of that module's compile.
 
-MuJoCo Warp's specialised kernels, which its closures create during the solver's construction
-and first step, still compile one by one when they are first launched. Five of them factor
-small matrices with Warp's tile Cholesky, which by default links NVIDIA's libmathdx and is the
-slowest part of a cold start; ``use_mathdx(False)`` compiles Warp's own implementation instead.
+- MuJoCo Warp's specialised kernels exist only once its closures run, during the solver's
+  construction and first step, and Warp would compile them one by one as they are first launched.
+  ``compile_ahead(fn)`` runs ``fn`` once with every launch turned into a note of the module it
+  needs, then compiles all of them side by side; ``Sim`` does this for the solver's construction
+  and for the first capture of a step. Five of those kernels factor small matrices with Warp's tile
+  Cholesky, which by default links NVIDIA's libmathdx (slow to compile, fast to run);
+  ``use_mathdx(False)`` compiles Warp's own implementation instead.
+
+``compiled_modules()`` lists what this process compiled and how long each took, for the start-up
+timeline that ``scripts/train.py`` prints.
 """
 
 from __future__ import annotations
@@ -21,13 +27,16 @@ from __future__ import annotations
 import importlib
 import os
 import threading
+import time
 from concurrent.futures import ThreadPoolExecutor
 
 import warp as wp
+import warp._src.context as _wp_context
 
 # Importable before the model exists, and launched by every Sim step or reset.
 SIM_MODULES = (
     "newton._src.solvers.mujoco.kernels",
+    "newton._src.sim.articulation",
     "mujoco_warp._src.forward",
     "mujoco_warp._src.smooth",
     "mujoco_warp._src.set_const",
@@ -43,7 +52,7 @@ SIM_MODULES = (
     "kernels.solver_load",
 )
 # Dependencies' modules compiled without adjoints (warpgym's own set this in their source).
-NO_BACKWARD = ("newton._src.solvers.mujoco.kernels",)
+NO_BACKWARD = ("newton._src.solvers.mujoco.kernels", "newton._src.sim.articulation")
 
 
 def _import(name: str):
@@ -54,33 +63,201 @@ def _import(name: str):
 
 
 class Preload:
-    """Start compiling ``SIM_MODULES`` for ``device`` in the background; ``wait()`` before using them."""
+    """Compile ``SIM_MODULES`` for ``device`` on a thread pool, starting now; ``add(fn)`` queues the
+    modules that ``fn`` would launch (``record_modules``) on the same pool. ``wait()`` before
+    launching anything that needs them. A failed compile is kept in ``error``, not raised: the
+    launch that needs the module compiles it again and reports the failure where it happens."""
 
     def __init__(self, device: str, workers: int | None = None):
         self.device = device
         self.error: BaseException | None = None
+        self.stopped_early: BaseException | None = None
         for name in NO_BACKWARD:
             module = _import(name)
             if module is not None and wp.get_module_options(module).get("enable_backward", True):
                 wp.set_module_options({"enable_backward": False}, module=module)
         self.modules = [m for m in map(_import, SIM_MODULES) if m is not None]
-        self.workers = workers or max(1, min(len(self.modules), os.cpu_count() or 1))
-        self._thread = threading.Thread(target=self._run, name="warpgym-preload", daemon=True)
-        self._thread.start()
+        self.workers = workers or max(1, os.cpu_count() or 1)
+        self._pool = ThreadPoolExecutor(self.workers, thread_name_prefix="warpgym-compile")
+        self._futures = [self._pool.submit(wp.load_module, m, device=device, max_workers=0) for m in self.modules]
 
-    def _run(self) -> None:
-        try:
-            with ThreadPoolExecutor(self.workers) as pool:
-                for f in [pool.submit(wp.load_module, m, device=self.device, max_workers=0) for m in self.modules]:
-                    f.result()
-        except BaseException as e:  # the same failure resurfaces, with its context, at the first launch
-            self.error = e
+    def add(self, fn) -> int:
+        """Queue the modules ``fn``'s launches need; ``fn`` runs now, launch-free, in this thread."""
+        found, self.stopped_early = record_modules(fn)
+        todo = [(m, d, b) for m, d, b in found if not _is_loaded(m, d, b)]
+        self._futures += [self._pool.submit(m.load, d, b) for m, d, b in todo]
+        return len(todo)
 
     def wait(self) -> None:
-        self._thread.join()
+        for f in self._futures:
+            try:
+                f.result()
+            except BaseException as e:  # noqa: PERF203
+                self.error = self.error or e
+        self._pool.shutdown()
 
 
 def use_mathdx(enabled: bool) -> None:
     """Whether Warp's tile Cholesky (and other tile solvers) link libmathdx, for kernels compiled
     from now on in this process. A process-wide Warp setting; call it before building any env."""
     wp.config.enable_mathdx_solver = bool(enabled)
+
+
+# ----------------------------------------------------------------------------- compile ahead
+# Warp compiles a module inside ``Module.load``, which every launch calls first. One wrapper,
+# installed once, both times real compiles (for the start-up timeline) and, in a thread that is
+# recording, answers "not loaded" so that the launch returns without running (Warp's ``launch``
+# skips a kernel whose module did not load).
+_local = threading.local()
+_compiled: list[tuple[str, float]] = []
+_original_load = None
+
+
+def _variant(module, block_dim):
+    return block_dim if block_dim is not None else module.options["block_dim"]  # as Module.load picks it
+
+
+def _is_loaded(module, device, block_dim) -> bool:
+    return module.execs.get((getattr(device, "context", None), _variant(module, block_dim))) is not None
+
+
+def _cache_dir_of(module, block_dim) -> str | None:
+    try:
+        return os.path.join(wp.config.kernel_cache_dir, module.get_module_identifier(block_dim))
+    except Exception:  # a Warp without this helper: compiles are then not told from cache hits
+        return None
+
+
+def _load(module, device, block_dim=None, *args, **kwargs):
+    notes = getattr(_local, "notes", None)
+    if notes is not None:
+        notes.setdefault((module.name, block_dim, str(device)), (module, device, block_dim))
+        return None
+    if _is_loaded(module, device, block_dim):
+        return _original_load(module, device, block_dim, *args, **kwargs)
+    cached = _cache_dir_of(module, _variant(module, block_dim))
+    was_cached = cached is None or os.path.isdir(cached)
+    start = time.perf_counter()
+    result = _original_load(module, device, block_dim, *args, **kwargs)
+    if not was_cached:
+        _compiled.append((module.name, time.perf_counter() - start))
+    return result
+
+
+def _install() -> None:
+    global _original_load
+    if _original_load is None:
+        _original_load = _wp_context.Module.load
+        _wp_context.Module.load = _load
+
+
+def compiled_modules() -> list[tuple[str, float]]:
+    """(module name, seconds) for every Warp module this process compiled rather than found in the
+    kernel cache (no cache folder for its hash yet), in the order they finished. Counted from the
+    import of this module on."""
+    return list(_compiled)
+
+
+_install()
+
+
+def _recording_capture_while(condition, while_body, stream=None, **kwargs):
+    while_body(**kwargs)  # once: the body's launches are noted, the condition is never read
+
+
+def _recording_capture_if(condition, on_true=None, on_false=None, stream=None, **kwargs):
+    for branch in (on_true, on_false):  # both branches: either may run later
+        if callable(branch):
+            branch(**kwargs)
+
+
+def _recording_block_size(kernel, device=None, *args, **kwargs):
+    device = wp.get_device(device)
+    if device.is_cpu:
+        return 1, 1  # as Warp answers for the CPU, without loading anything
+    # Warp loads the module's default variant to query occupancy: that variant is needed too.
+    _local.notes.setdefault((kernel.module.name, None, str(device)), (kernel.module, device, None))
+    return 256, 1
+
+
+def _recording_empty(*args, **kwargs):
+    return wp.zeros(*args, **kwargs)  # no kernel fills it: host code reading it back sees zeros, not noise
+
+
+_RECORDING_PATCHES = {"capture_while": _recording_capture_while, "capture_if": _recording_capture_if,
+                      "get_suggested_block_size": _recording_block_size, "empty": _recording_empty}
+_patch_lock = threading.Lock()
+
+
+def record_modules(fn) -> tuple[list, BaseException | None]:
+    """Run ``fn`` with every Warp launch in this thread skipped and noted. Returns the
+    (module, device, block_dim) triples it would have loaded, and the error that stopped ``fn``
+    early, if any (a host read of a buffer no kernel filled can send it down another path).
+
+    Device loops (``wp.capture_while``) run their body once and ``wp.capture_if`` both branches,
+    so every kernel the step can reach is noted. Other threads launch as usual meanwhile."""
+    _install()
+    notes: dict = {}
+    error = None
+    with _patch_lock:
+        saved = {name: getattr(wp, name) for name in _RECORDING_PATCHES}
+        for name, patched in _RECORDING_PATCHES.items():
+            setattr(wp, name, _thread_local_patch(patched, saved[name]))
+        _local.notes = notes
+        try:
+            fn()
+        except Exception as e:  # what was noted before still compiles ahead; the rest at its launch
+            error = e
+        finally:
+            _local.notes = None
+            for name, original in saved.items():
+                setattr(wp, name, original)
+    return list(notes.values()), error
+
+
+def _thread_local_patch(patched, original):
+    def dispatch(*args, **kwargs):
+        return (patched if getattr(_local, "notes", None) is not None else original)(*args, **kwargs)
+    return dispatch
+
+
+def compile_ahead(fn, workers: int | None = None) -> dict:
+    """Find the Warp modules ``fn`` launches (``record_modules``), without running it, and load
+    them all at once on a thread pool: compiled side by side on an empty kernel cache, read from
+    it otherwise. ``fn``'s launches have no effect; its host-side effects do, so ``fn`` should be
+    one that can run twice (a constructor whose result is dropped, or a step about to be captured).
+    Returns what was done, for the start-up timeline."""
+    start = time.perf_counter()
+    before = len(_compiled)
+    found, error = record_modules(fn)
+    todo = [(m, d, b) for m, d, b in found if not _is_loaded(m, d, b)]
+    if todo:
+        with ThreadPoolExecutor(workers or max(1, min(len(todo), os.cpu_count() or 1))) as pool:
+            for f in [pool.submit(m.load, d, b) for m, d, b in todo]:
+                try:
+                    f.result()
+                except Exception:  # the launch that needs it compiles it again and reports the error there
+                    pass
+    return {"modules": len(found), "loaded": len(todo), "compiled": len(_compiled) - before,
+            "seconds": time.perf_counter() - start, "stopped_early": repr(error) if error else None}
+
+
+def kernel_cache() -> tuple[str, int]:
+    """Warp's kernel cache folder (``WARP_CACHE_PATH`` moves it) and how many compiled modules it holds."""
+    wp.init()
+    path = wp.config.kernel_cache_dir
+    try:
+        count = sum(1 for name in os.listdir(path) if name.startswith("wp_"))
+    except OSError:
+        count = 0
+    return path, count
+
+
+def describe_compiles(since: int = 0) -> str:
+    """One line on the modules compiled since ``len(compiled_modules())`` was ``since``."""
+    done = _compiled[since:]
+    if not done:
+        return "every kernel came from the cache"
+    name, longest = max(done, key=lambda c: c[1])
+    return (f"Warp compiled {len(done)} module{'s' * (len(done) > 1)}, {sum(s for _, s in done):.1f} s of work side by side "
+            f"(longest {longest:.1f} s: {name})")

@@ -9,6 +9,7 @@ graph, or on the CPU Warp's recorded launch list.
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 import torch
@@ -18,7 +19,7 @@ from kernels import tensor_api as k_api
 from kernels.solver_load import track_solver_load
 from warpgym.device import resolve_device
 from warpgym.physics import Physics
-from warpgym.preload import Preload
+from warpgym.preload import Preload, compile_ahead
 from warpgym.robots import RobotSpec, hinge_joint_names, mjcf_path, motor_gears, robot_spec
 from warpgym.streams import StreamOrder
 from warpgym.tensor_api import TensorAPI
@@ -151,28 +152,46 @@ class Sim(TensorAPI):
             armature[:, k_api.ROOT_DOFS :] = phys.armature
             model.joint_armature.assign(armature.reshape(-1))
 
-        preload.wait()
-        self.solver = newton.solvers.SolverMuJoCo(
-            model,
-            iterations=phys.solver_iterations,
-            ls_iterations=phys.ls_iterations,
-            integrator=phys.integrator,
-            nconmax=self.nconmax,
-            njmax=self.njmax,
-            disable_sensors=True,
-        )
         # The iteration caps are a deliberate speed/accuracy trade, not an error worth a printf per
         # world. Dropped constraints and contacts are errors, but they are counted on the device
         # every substep (solver_overflows, solver_load()) and reported once, not printed per world.
         from mujoco_warp import OverflowType as OF  # noqa: PLC0415
 
         self._drop_bits = int(OF.NEFC | OF.NJMAX_NNZ | OF.BROADPHASE | OF.NARROWPHASE)
-        if phys.contact_timeconst is not None:
-            solref = self.solver.mjw_model.geom_solref.numpy()
-            solref[..., 0] = phys.contact_timeconst
-            self.solver.mjw_model.geom_solref.assign(solref)
-        opt = self.solver.mjw_model.opt
-        opt.warn_overflow = int(opt.warn_overflow) & ~int(OF.ITERATIONS | OF.LS_ITERATIONS | self._drop_bits)
+        quiet = ~int(OF.ITERATIONS | OF.LS_ITERATIONS | self._drop_bits)
+
+        def make_solver():
+            solver = newton.solvers.SolverMuJoCo(
+                model,
+                iterations=phys.solver_iterations,
+                ls_iterations=phys.ls_iterations,
+                integrator=phys.integrator,
+                nconmax=self.nconmax,
+                njmax=self.njmax,
+                disable_sensors=True,
+            )
+            if phys.contact_timeconst is not None:
+                solref = solver.mjw_model.geom_solref.numpy()
+                solref[..., 0] = phys.contact_timeconst
+                solver.mjw_model.geom_solref.assign(solref)
+            opt = solver.mjw_model.opt  # some kernels are specialised to these options
+            opt.warn_overflow = int(opt.warn_overflow) & quiet
+            return solver
+
+        def rehearse():  # a launch-free construction and substep, contact forces on as tasks want them
+            solver = make_solver()
+            solver.mjw_model.opt.run_rne_postconstraint = True
+            state, control = model.state(), model.control()
+            solver.step(state, state, control, None, self.dt / self.substeps)
+
+        # MuJoCo Warp specialises kernels to the model while it builds and first steps it. The
+        # rehearsal names them, so they compile beside the modules above instead of one by one.
+        start = time.perf_counter()
+        queued = preload.add(rehearse)
+        preload.wait()
+        self.compile_log = [("solver", {"queued": queued, "seconds": time.perf_counter() - start,
+                                        "stopped_early": repr(preload.stopped_early) if preload.stopped_early else None})]
+        self.solver = make_solver()
         self._peak_nefc = wp.zeros(n, dtype=wp.int32, device=self.device)
         self._peak_nacon = wp.zeros(1, dtype=wp.int32, device=self.device)
         self._overflowed = wp.zeros(n, dtype=wp.int32, device=self.device)
@@ -235,9 +254,18 @@ class Sim(TensorAPI):
         Return None while torch is capturing: ``launch`` then records ``fn`` into torch's graph."""
         if self._order.torch_is_capturing():
             return None
+        self.compile_ahead(fn)
         with wp.ScopedCapture(device=self.device) as cap:
             fn()
         return cap.graph
+
+    def compile_ahead(self, fn) -> None:
+        """Compile, side by side, every module ``fn``'s launches need (``warpgym.preload``). Newton
+        counts solver steps on the host; the launch-free pass must not move that count."""
+        count = getattr(self.solver, "_step", None)
+        self.compile_log.append(("step", compile_ahead(fn)))
+        if count is not None:
+            self.solver._step = count
 
     def launch(self, graph, fn) -> None:
         """Run ``fn`` (captured as ``graph``), ordered after and before torch's stream.

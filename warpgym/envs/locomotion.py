@@ -127,6 +127,9 @@ class LocomotionVecEnv(VectorEnv):
         totals = t(self._fault_totals)
         self._fault_views = {name: totals[i] for i, name in enumerate(self.FAULTS)}
         self._graph = None
+        # Every kernel a step launches, compiled here and side by side rather than one by one
+        # inside the first step (warpgym.preload); a warm cache makes this a quick check.
+        sim.compile_ahead(self._launch_step)
         self._reset_all()
 
     # ------------------------------------------------------------------ device work

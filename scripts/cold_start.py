@@ -1,0 +1,124 @@
+"""Time a fresh machine's first training runs: empty Warp kernel cache, then warm, then a copied cache.
+
+    python scripts/cold_start.py --out OUT                # the runs of docs/benchmarks.md, "Cold start"
+    python scripts/cold_start.py --report OUT/cold_start.json
+
+Every run is ``scripts/train.py`` with default settings in its own process; ``WARP_CACHE_PATH``
+picks the cache each starts from:
+
+- ``Ant cold``: an empty cache, twice, each time a new one;
+- ``Humanoid cold``: an empty cache; ``Humanoid after Ant``: the first Ant run's cache;
+- ``Ant warm``: the first Ant run's cache again, twice;
+- ``Ant, copied cache``: a copy of that cache in another folder, as a cluster job would get it
+  from shared storage (Warp names cached modules by content hash, not by path).
+
+Writes OUT/cold_start.json (each run's start-up timeline and compiled modules from its
+summary.json) and prints the table of docs/benchmarks.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, ROOT)
+
+
+def train(out: str, name: str, task: str, cache: str, seconds: float, extra: list[str]) -> dict:
+    run_dir = os.path.join(out, name)
+    cmd = [sys.executable, os.path.join(ROOT, "scripts", "train.py"), "--task", task, "--time-limit", str(seconds),
+           "--run-dir", run_dir, "--no-plots", *extra]
+    env = {**os.environ, "WARP_CACHE_PATH": cache, "PYTHONUNBUFFERED": "1"}
+    start = time.time()
+    with open(os.path.join(out, f"{name}.log"), "w") as log:
+        code = subprocess.call(cmd, env=env, stdout=log, stderr=subprocess.STDOUT, cwd=ROOT)
+    row = {"name": name, "task": task, "cache": cache, "exit_code": code, "wall_s": round(time.time() - start, 1)}
+    path = os.path.join(run_dir, "summary.json")
+    if code == 0 and os.path.isfile(path):
+        with open(path) as f:
+            s = json.load(f)
+        row.update({k: s.get(k) for k in ("device", "first_iteration_time_s", "first_train_speed_2ms",
+                                          "first_train_speed_3ms", "first_eval_speed_3ms",
+                                          "steady_samples_per_s_median", "startup")})
+    print(f"{name}: exit {code}, first iteration {row.get('first_iteration_time_s')} s, "
+          f"3 m/s at {row.get('first_train_speed_3ms')}", flush=True)
+    return row
+
+
+def cache_size(path: str) -> tuple[int, float]:
+    files = [os.path.join(d, f) for d, _, fs in os.walk(path) for f in fs]
+    return sum(1 for n in os.listdir(os.path.join(path, os.listdir(path)[0])) if n.startswith("wp_")), \
+        sum(os.path.getsize(f) for f in files) / 2**20
+
+
+def measure(args) -> dict:
+    os.makedirs(args.out, exist_ok=True)
+    root = tempfile.mkdtemp(prefix="warpgym-cold-")
+    first = os.path.join(root, "ant-1")
+    rows = [train(args.out, "ant_cold_1", "Ant", first, args.seconds, args.extra)]
+    rows.append(train(args.out, "ant_cold_2", "Ant", os.path.join(root, "ant-2"), args.seconds, args.extra))
+    rows.append(train(args.out, "humanoid_cold", "Humanoid", os.path.join(root, "humanoid"), args.seconds, args.extra))
+    modules, mib = cache_size(first)
+    rows.append(train(args.out, "humanoid_after_ant", "Humanoid", first, args.seconds, args.extra))
+    copy = os.path.join(root, "copied")
+    shutil.copytree(first, copy)
+    for i in (1, 2):
+        rows.append(train(args.out, f"ant_warm_{i}", "Ant", first, args.seconds, args.extra))
+    rows.append(train(args.out, "ant_copied_cache", "Ant", copy, args.seconds, args.extra))
+    shutil.rmtree(root, ignore_errors=True)
+    result = {"command": " ".join(sys.argv), "seconds": args.seconds, "extra": args.extra,
+              "ant_cache": {"modules": modules, "mib": round(mib, 1)}, "runs": rows}
+    path = os.path.join(args.out, "cold_start.json")
+    with open(path, "w") as f:
+        json.dump(result, f, indent=1)
+    return result
+
+
+def fmt(v, unit=" s") -> str:
+    return "-" if v is None else f"{v:.1f}{unit}"
+
+
+def report(result: dict) -> str:
+    lines = ["| run | kernel cache at start | modules compiled | first iteration | training episodes at 3 m/s |",
+             "|---|---|---:|---:|---:|"]
+    start_cache = {"ant_cold_1": "empty", "ant_cold_2": "empty", "humanoid_cold": "empty",
+                   "humanoid_after_ant": "the Ant's", "ant_warm_1": "warm", "ant_warm_2": "warm",
+                   "ant_copied_cache": "the Ant's, copied to another folder"}
+    for r in result["runs"]:
+        compiled = len((r.get("startup") or {}).get("compiled", [])) if r.get("startup") else None
+        lines.append(f"| {r['name']} | {start_cache.get(r['name'], '?')} | {'-' if compiled is None else compiled} "
+                     f"| {fmt(r.get('first_iteration_time_s'))} | {fmt(r.get('first_train_speed_3ms'))} |")
+    c = result.get("ant_cache", {})
+    lines.append(f"\nThe Ant's cache: {c.get('modules')} modules, {c.get('mib')} MiB.")
+    for r in result["runs"][:1]:
+        for t, text in (r.get("startup") or {}).get("timeline", []):
+            lines.append(f"    [{t:6.1f} s] {text}")
+    return "\n".join(lines)
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--out", help="folder for the runs, their logs and cold_start.json")
+    ap.add_argument("--seconds", type=float, default=45.0, help="each run's --time-limit")
+    ap.add_argument("--report", metavar="JSON", help="print the table of an earlier run's cold_start.json")
+    ap.add_argument("extra", nargs="*", help="more train.py flags, after --, e.g. -- --no-mathdx")
+    args = ap.parse_args()
+    if args.report:
+        with open(args.report) as f:
+            print(report(json.load(f)))
+        return 0
+    if not args.out:
+        ap.error("--out OUT is needed to measure (or --report JSON to print a table)")
+    print(report(measure(args)))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
