@@ -3,6 +3,7 @@ without running code (``weights_only``: tensors and plain values only, never pic
 
 from __future__ import annotations
 
+import glob
 import io
 import os
 import pickle
@@ -20,6 +21,12 @@ def save_atomic(obj: dict, path: str) -> None:
     says so."""
     os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
     tmp = f"{path}.tmp{os.getpid()}"
+    for stale in glob.glob(glob.escape(path) + ".tmp*"):  # a process killed mid-write left it
+        if stale != tmp:
+            try:
+                os.remove(stale)
+            except OSError:
+                pass
     try:
         with open(tmp, "wb") as f:
             torch.save(obj, f)

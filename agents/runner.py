@@ -209,6 +209,10 @@ class OnPolicyRunner:
                 in_flight = staged
                 self.timer.lap("logging, evaluation, host read")
                 if self.iteration % self.cfg.save_gap == 0 and self.run_dir:
+                    # the checkpoint's own row goes to disk before it: a resume continues right after
+                    # both, with no row missing (one host wait per save, which waits anyway)
+                    stop = self._log_row(in_flight, last_iter) or stop
+                    in_flight = None
                     self.save()
             if in_flight is not None:  # the last iteration always carries an evaluation
                 staged, in_flight = in_flight, None

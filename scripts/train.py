@@ -18,6 +18,7 @@ PROCESS_START = time.time()  # the wall-clock axis starts here: imports and kern
 
 import argparse  # noqa: E402
 import json  # noqa: E402
+import math  # noqa: E402
 import os  # noqa: E402
 import sys  # noqa: E402
 from dataclasses import fields  # noqa: E402
@@ -36,7 +37,7 @@ TASK_NAMES = {t.lower(): t for t in PRESETS}
 
 def parse_args(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--task", default="Ant", help="Ant or Humanoid")
+    ap.add_argument("--task", default=None, help="Ant (default) or Humanoid")
     ap.add_argument("--num-envs", type=int, default=None, help="default: 4096 on a GPU, 64 on the CPU")
     ap.add_argument("--device", default=None, help="default: cuda:0 when present, else cpu")
     ap.add_argument("--seed", type=int, default=0)
@@ -75,6 +76,7 @@ def parse_args(argv=None):
     ap.add_argument("--profile", action="store_true",
                     help="time each phase of an iteration (synchronises the GPU between phases: slower)")
     args = ap.parse_args(argv)
+    check_values(ap, args)
     from warpgym.physics import Physics, parse_setting  # noqa: PLC0415
 
     try:
@@ -85,6 +87,70 @@ def parse_args(argv=None):
     if args.video:
         check_video_args(ap, args)
     return args
+
+
+# flag -> (smallest allowed, example): each is checked before anything is built
+POSITIVE = {"num_envs": 4096, "max_iterations": 500, "total_steps": 100_000_000, "eval_envs": 64, "save_gap": 50,
+            "horizon_len": 16, "batch_size": 32768, "repeat_times": 4, "episode_length": 1000, "substeps": 2,
+            "time_limit": 300, "learning_rate": 3e-4}
+NON_NEGATIVE = {"eval_gap": 30, "seed": 0}
+
+
+def flag(name: str) -> str:
+    return "--" + name.replace("_", "-")
+
+
+def check_values(ap, args) -> None:
+    """Impossible numbers and unknown tasks fail here, naming the flag and a value that works."""
+    for name, example in {**POSITIVE, **NON_NEGATIVE}.items():
+        v = getattr(args, name)
+        if v is None:
+            continue
+        low_ok = v > 0 if name in POSITIVE else v >= 0
+        if not (low_ok and math.isfinite(v)):
+            need = "a positive" if name in POSITIVE else "a non-negative"
+            ap.error(f"{flag(name)} {v}: must be {need} number, e.g. {flag(name)} {example}")
+    if args.task is not None and args.task.lower() not in TASK_NAMES:
+        ap.error(f"--task {args.task!r}: choose one of {sorted(TASK_NAMES.values())}")
+    if args.resume is not None:
+        given = [f for f in ("num_envs", "horizon_len", "episode_length", "substeps") if getattr(args, f) is not None]
+        if given or args.physics:
+            names = ", ".join([flag(f) for f in given] + (["--physics"] if args.physics else []))
+            ap.error(f"{names}: a resumed run keeps the envs it was started with; drop {names} "
+                     "or start a new run with --run-dir")
+
+
+def with_flag_names(message: str) -> str:
+    """A config error as the user wrote it: ``batch_size=8`` becomes ``--batch-size 8``."""
+    for name in sorted({*POSITIVE, *NON_NEGATIVE}, key=len, reverse=True):
+        message = message.replace(f"{name}=", f"{flag(name)} ").replace(f"lower {name}", f"lower {flag(name)}")
+    return message
+
+
+def check_resume(run_dir: str, saved: dict, task_flag: str | None) -> bool:
+    """The run directory's checkpoint, if it has one yet (the return value), is readable and of the
+    task its config names, and the task asked for (if any) is that one: checked on the CPU before
+    any model is built."""
+    from agents.checkpoint import load  # noqa: PLC0415
+
+    import torch  # noqa: PLC0415
+
+    task = saved.get("task")
+    if task_flag is not None and TASK_NAMES.get(task_flag.lower()) != task:
+        raise SystemExit(f"--task {task_flag} --resume {run_dir}: that run trains {task}; drop --task, or start "
+                         f"a new {TASK_NAMES.get(task_flag.lower(), task_flag)} run with --run-dir")
+    path = os.path.join(run_dir, "checkpoint.pt")
+    if not os.path.exists(path):
+        return False  # stopped before its first save: the run starts again from iteration 0
+    try:
+        ckpt = load(path, torch.device("cpu"))
+    except (FileNotFoundError, ValueError) as e:
+        raise SystemExit(f"--resume {run_dir}: {e}") from None
+    ckpt_task = (ckpt["config"].get("env_args") or {}).get("task")
+    if ckpt_task is not None and ckpt_task != task:
+        raise SystemExit(f"--resume {run_dir}: its checkpoint.pt was trained on {ckpt_task} but config.json says "
+                         f"{task}; the folder mixes two runs: resume from a run directory written by one run")
+    return True
 
 
 def check_video_args(ap, args) -> None:
@@ -306,21 +372,26 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
         saved = read_run_config(args.resume, args.device)
         task, run_dir = saved["task"], args.resume
         device = resolve_device(args.device or saved["device"])
+        found = str(int(check_resume(run_dir, saved, args.task))) if rank == 0 else ""
+        has_checkpoint = same_on_every_worker(found, device) == "1"
         num_envs = saved["num_envs"]
         args.seed = saved["seed"]
         args.episode_length = saved["env_args"].get("max_episode_steps")
         args.substeps = saved["env_args"].get("substeps")
         args.physics = saved["env_args"].get("physics") or {}
     else:
-        if args.task.lower() not in TASK_NAMES:
-            raise SystemExit(f"--task {args.task!r}: choose one of {sorted(TASK_NAMES.values())}")
-        task = TASK_NAMES[args.task.lower()]
+        has_checkpoint = False
+        task = TASK_NAMES[(args.task or "Ant").lower()]
         device = resolve_device(args.device)
         num_envs = args.num_envs or DEFAULT_ENVS["cuda" if device.startswith("cuda") else "cpu"]
         run_dir = args.run_dir or os.path.join("runs", f"{task}-{time.strftime('%Y%m%d-%H%M%S')}")
         run_dir = same_on_every_worker(run_dir, device)  # a default name could differ by a second
     kind = "cuda" if device.startswith("cuda") else "cpu"
-    cfg = build_config(args, task, num_envs, device, saved)
+    try:
+        cfg = build_config(args, task, num_envs, device, saved)
+        cfg.check_batch(num_envs)
+    except ValueError as e:
+        raise SystemExit(f"error: {with_flag_names(str(e))}") from None
     if rank > 0:  # each process draws its own reset noise; rank 0 alone logs, evaluates and saves
         cfg = cfg.replace(env_args={**cfg.env_args, "seed": cfg.env_args["seed"] + 1000 * rank})
         args.no_eval = True
@@ -371,9 +442,12 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
     phase("policy and optimiser ready; the first iteration captures the rollout and update graphs")
     if live is not None:
         live["runner"] = runner
-    if args.resume:
+    if args.resume and has_checkpoint:
         runner.load(os.path.join(run_dir, "checkpoint.pt"), resume=True)
         say(f"resumed at iteration {runner.iteration} ({runner.samples} samples)", flush=True)
+    elif args.resume:
+        runner.logger.drop_rows_after(0, 0)
+        say(f"{run_dir} has no checkpoint yet: the run starts again from iteration 0", flush=True)
     try:
         history = runner.learn(args.max_iterations, args.total_steps, args.time_limit)
     finally:

@@ -1,0 +1,135 @@
+"""Reliability on the CPU: SIGKILL at any moment resumes cleanly, the same seed gives the same
+metrics bit for bit, and every impossible train.py flag fails before a model is built."""
+
+import json
+import os
+import random
+import subprocess
+import sys
+
+import pytest
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+TRAIN = os.path.join(ROOT, "scripts", "train.py")
+SMALL = ["--task", "Ant", "--device", "cpu", "--num-envs", "8", "--horizon-len", "8", "--batch-size", "32",
+         "--episode-length", "40", "--eval-envs", "2", "--no-plots"]
+TIMING = ("time_s", "samples_per_s", "iteration_s", "eval_s")
+
+
+def run(args, env=None, script=TRAIN, timeout=300):
+    return subprocess.run([sys.executable, script, *args], cwd=ROOT, capture_output=True, text=True,
+                          timeout=timeout, env={**os.environ, **(env or {})})
+
+
+def rows_of(run_dir):
+    """metrics.jsonl and metrics.csv rows; every jsonl line must parse (no torn line left)."""
+    import csv
+
+    with open(os.path.join(run_dir, "metrics.jsonl")) as f:
+        jsonl = [json.loads(line) for line in f]
+    with open(os.path.join(run_dir, "metrics.csv"), newline="") as f:
+        csv_rows = list(csv.DictReader(f))
+    return jsonl, csv_rows
+
+
+def test_sigkill_at_ten_moments_always_resumes_and_loses_at_most_one_save_interval(tmp_path):
+    from agents.checkpoint import load
+
+    import torch
+
+    save_gap = 3
+    rng = random.Random(20261122)
+    phases = ["rollout", "update", "evaluate", "save"] * 2 + rng.sample(["rollout", "update", "evaluate", "save"], 2)
+    rng.shuffle(phases)
+    moments = [(p, rng.randint(1, 2 if p == "save" else 3)) for p in phases]
+    run_dir = str(tmp_path / "run")
+    marker = str(tmp_path / "marker.json")
+    common = ["--save-gap", str(save_gap), "--eval-gap", "0"]
+    for i, (phase, n) in enumerate(moments):
+        args = [*SMALL, *common, "--max-iterations", "200", "--run-dir", run_dir] if i == 0 else \
+            ["--resume", run_dir, "--device", "cpu", "--no-plots", "--max-iterations", "200"]
+        proc = run(args, {"KILL_AT": f"{phase}:{n}", "KILL_MARKER": marker},
+                   script=os.path.join(ROOT, "tests", "kill_worker.py"))
+        assert proc.returncode == -9, (phase, n, proc.returncode, proc.stderr[-2000:])
+        with open(marker) as f:
+            killed_after = json.load(f)["iteration"]
+        ckpt_path = os.path.join(run_dir, "checkpoint.pt")
+        if os.path.exists(ckpt_path):
+            ckpt = load(ckpt_path, torch.device("cpu"))  # never torn: the write is atomic
+            assert killed_after - ckpt["iteration"] <= save_gap, (phase, n, killed_after, ckpt["iteration"])
+        else:
+            assert killed_after <= save_gap, (phase, n, killed_after)
+        jsonl, _ = rows_of(run_dir) if i == 0 else (None, None)  # a torn last line is allowed before resume
+    final = run(["--resume", run_dir, "--device", "cpu", "--no-plots", "--max-iterations", "20"])
+    assert final.returncode == 0, final.stderr[-2000:]
+    jsonl, csv_rows = rows_of(run_dir)
+    assert [r["iteration"] for r in jsonl] == list(range(1, 21))
+    assert [int(r["iteration"]) for r in csv_rows] == list(range(1, 21))
+    assert not [f for f in os.listdir(run_dir) if ".tmp" in f]  # torn temporary files are cleaned up
+    assert load(os.path.join(run_dir, "checkpoint.pt"), torch.device("cpu"))["iteration"] == 20
+
+
+def test_same_seed_gives_bit_identical_metrics_for_20_iterations_on_the_cpu(tmp_path):
+    runs = []
+    for k in range(2):
+        proc = run([*SMALL, "--seed", "3", "--max-iterations", "20", "--eval-gap", "0",
+                    "--run-dir", str(tmp_path / f"r{k}")])
+        assert proc.returncode == 0, proc.stderr[-2000:]
+        jsonl, _ = rows_of(str(tmp_path / f"r{k}"))
+        runs.append([{k: v for k, v in r.items() if k not in TIMING and not k.startswith(("phase/", "memory/"))}
+                     for r in jsonl])
+    assert len(runs[0]) == 20
+    assert runs[0] == runs[1]  # floats compared exactly
+    assert any("eval/return" in r for r in runs[0]) and runs[0][-1]["return"] is not None
+
+
+BAD_FLAGS = [
+    (["--num-envs", "0"], "--num-envs 0: must be a positive number"),
+    (["--num-envs", "-4"], "--num-envs -4"),
+    (["--max-iterations", "0"], "--max-iterations 0"),
+    (["--total-steps", "-1"], "--total-steps -1"),
+    (["--time-limit", "0"], "--time-limit 0"),
+    (["--time-limit", "nan"], "--time-limit nan"),
+    (["--eval-gap", "-1"], "--eval-gap -1.0: must be a non-negative number"),
+    (["--eval-envs", "0"], "--eval-envs 0"),
+    (["--save-gap", "0"], "--save-gap 0"),
+    (["--horizon-len", "0"], "--horizon-len 0"),
+    (["--batch-size", "0"], "--batch-size 0"),
+    (["--repeat-times", "0"], "--repeat-times 0"),
+    (["--learning-rate", "0"], "--learning-rate 0.0"),
+    (["--learning-rate", "inf"], "--learning-rate inf"),
+    (["--episode-length", "0"], "--episode-length 0"),
+    (["--substeps", "0"], "--substeps 0"),
+    (["--seed", "-1"], "--seed -1"),
+    (["--task", "Hopper"], "--task 'Hopper': choose one of ['Ant', 'Humanoid']"),
+    (["--physics", "armature=-1"], "--physics: armature=-1"),
+    (["--num-envs", "8", "--horizon-len", "8", "--batch-size", "48"],
+     "--batch-size 48 does not divide the 64 samples of one rollout"),
+    (["--num-envs", "8", "--horizon-len", "8", "--batch-size", "128"], "--batch-size 128 exceeds the 64 samples"),
+    (["--video", "--no-eval"], "--video records the evaluation episode"),
+]
+
+
+@pytest.mark.parametrize(("flags", "message"), BAD_FLAGS, ids=[" ".join(f) for f, _ in BAD_FLAGS])
+def test_an_impossible_flag_fails_before_any_model_is_built(tmp_path, flags, message):
+    proc = run(["--device", "cpu", "--no-plots", "--run-dir", str(tmp_path / "run"), *flags], timeout=60)
+    assert proc.returncode != 0
+    assert message in proc.stderr, proc.stderr[-1500:]
+    assert "building" not in proc.stdout and "training env" not in proc.stdout  # nothing was built
+
+
+def test_a_resume_from_another_task_or_a_broken_run_fails_before_any_model_is_built(tmp_path):
+    run_dir = tmp_path / "ant"
+    run_dir.mkdir()
+    (run_dir / "config.json").write_text(json.dumps({"task": "Ant", "device": "cpu", "num_envs": 8, "seed": 0,
+                                                     "env_args": {}}))
+    proc = run(["--resume", str(run_dir), "--task", "Humanoid", "--no-plots"], timeout=60)
+    assert proc.returncode != 0 and "that run trains Ant; drop --task" in proc.stderr, proc.stderr[-1500:]
+    (run_dir / "checkpoint.pt").write_bytes(b"not a checkpoint")
+    proc = run(["--resume", str(run_dir), "--no-plots"], timeout=60)
+    assert proc.returncode != 0 and "checkpoint.pt is not a readable torch checkpoint" in proc.stderr
+    proc = run(["--resume", str(run_dir), "--num-envs", "16", "--no-plots"], timeout=60)
+    assert proc.returncode != 0 and "a resumed run keeps the envs it was started with" in proc.stderr
+    proc = run(["--resume", str(tmp_path / "missing"), "--no-plots"], timeout=60)
+    assert proc.returncode != 0 and "no config.json there" in proc.stderr
+    assert "training env" not in proc.stdout
