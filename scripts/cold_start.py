@@ -93,13 +93,17 @@ def report(result: dict) -> str:
                    "ant_copied_cache": "the Ant's, copied to another folder"}
     for r in result["runs"]:
         compiled = len((r.get("startup") or {}).get("compiled", [])) if r.get("startup") else None
+        reached = (r.get("first_train_speed_3ms") or {}).get("time_s")
+        reached = fmt(reached) if reached is not None else f"not within {result['seconds']:g} s"
         lines.append(f"| {r['name']} | {start_cache.get(r['name'], '?')} | {'-' if compiled is None else compiled} "
-                     f"| {fmt(r.get('first_iteration_time_s'))} | {fmt(r.get('first_train_speed_3ms'))} |")
+                     f"| {fmt(r.get('first_iteration_time_s'))} | {reached} |")
     c = result.get("ant_cache", {})
     lines.append(f"\nThe Ant's cache: {c.get('modules')} modules, {c.get('mib')} MiB.")
-    for r in result["runs"][:1]:
+    for r in result["runs"]:
+        lines.append(f"\n{r['name']}:")
         for t, text in (r.get("startup") or {}).get("timeline", []):
             lines.append(f"    [{t:6.1f} s] {text}")
+        lines.append(f"    [{r.get('first_iteration_time_s') or 0:6.1f} s] first iteration logged")
     return "\n".join(lines)
 
 
