@@ -9,12 +9,12 @@ before the first step. Two things shorten that:
   is built on the main thread. NVRTC and LLVM run outside the GIL, so the compiles overlap.
 - No adjoint (backward) code for Newton's MuJoCo glue module, as for warpgym's own kernels:
   nothing differentiates through them, and the adjoints are over half of that module's compile.
-
 - MuJoCo Warp's specialised kernels exist only once its closures run, during the solver's
   construction and first step, and Warp would compile them one by one as they are first launched.
-  ``compile_ahead(fn)`` runs ``fn`` once with every launch turned into a note of the module it
-  needs, then compiles all of them side by side; ``Sim`` does this for the solver's construction
-  and for the first capture of a step. Five of those kernels factor small matrices with Warp's tile
+  ``record_modules(fn)`` runs ``fn`` once with every launch turned into a note of the module it
+  needs. ``Sim`` rehearses the solver's construction and a substep this way and queues the modules
+  on the pool above (``Preload.add``); the env checks its whole step with ``compile_ahead``, which
+  compiles whatever is still missing, side by side. Five of those kernels factor small matrices with Warp's tile
   Cholesky, which by default links NVIDIA's libmathdx (slow to compile, fast to run);
   ``use_mathdx(False)`` compiles Warp's own implementation instead.
 
