@@ -421,8 +421,8 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
 
     cache, cached = preload.kernel_cache()
     phase(f"imports done; Warp kernel cache {cache} holds {cached} modules"
-          + ("" if cached else " (empty: this run compiles them, about 30 s on an H100 and a few minutes "
-                                "on a CPU; WARP_CACHE_PATH points Warp at a shared cache)"))
+          + ("" if cached else " (empty: this run compiles them, about 30 s on an H100 and 15 s on two "
+                                "CPU cores; WARP_CACHE_PATH points Warp at a shared cache)"))
     if args.no_mathdx:
         preload.use_mathdx(False)
     env = built(lambda: cfg.env_class(**cfg.env_args), f"training env: {task} x {num_envs}", phase)
