@@ -89,7 +89,7 @@ def parse_args(argv=None):
     return args
 
 
-# flag -> (smallest allowed, example): each is checked before anything is built
+# flag -> a value that works, quoted in the error; every flag is checked before anything is built
 POSITIVE = {"num_envs": 4096, "max_iterations": 500, "total_steps": 100_000_000, "eval_envs": 64, "save_gap": 50,
             "horizon_len": 16, "batch_size": 32768, "repeat_times": 4, "episode_length": 1000, "substeps": 2,
             "time_limit": 300, "learning_rate": 3e-4}
