@@ -84,7 +84,7 @@ class Preload:
     def add(self, fn) -> int:
         """Queue the modules ``fn``'s launches need; ``fn`` runs now, launch-free, in this thread."""
         found, self.stopped_early = record_modules(fn)
-        todo = [(m, d, b) for m, d, b in found if not _is_loaded(m, d, b)]
+        todo = _not_loaded(found)
         self._futures += [self._pool.submit(m.load, d, b) for m, d, b in todo]
         return len(todo)
 
@@ -119,6 +119,10 @@ def _variant(module, block_dim):
 
 def _is_loaded(module, device, block_dim) -> bool:
     return module.execs.get((getattr(device, "context", None), _variant(module, block_dim))) is not None
+
+
+def _not_loaded(found: list) -> list:
+    return [(m, d, b) for m, d, b in found if not _is_loaded(m, d, b)]
 
 
 def _cache_dir_of(module, block_dim) -> str | None:
@@ -230,7 +234,7 @@ def compile_ahead(fn, workers: int | None = None) -> dict:
     start = time.perf_counter()
     before = len(_compiled)
     found, error = record_modules(fn)
-    todo = [(m, d, b) for m, d, b in found if not _is_loaded(m, d, b)]
+    todo = _not_loaded(found)
     if todo:
         with ThreadPoolExecutor(workers or max(1, min(len(todo), os.cpu_count() or 1))) as pool:
             for f in [pool.submit(m.load, d, b) for m, d, b in todo]:
