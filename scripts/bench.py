@@ -1,10 +1,13 @@
 """Throughput of the simulation, in env-steps per second (one env-step = one control step of one env).
 
 For each robot and env count, one model is built and three loops are timed on it:
+  mjwarp   MuJoCo Warp's own step on the solver's data, no Newton state in or out (what Newton's
+           conversions cost), graph-captured;
   raw      Newton's SolverMuJoCo alone: the usual double-buffered substep loop, graph-captured;
   physics  warpgym.Sim.step(): the same substeps as the Sim runs them (in place, one graph);
   env      LocomotionVecEnv.step(random actions): actions in, physics, task kernels, resets.
-Each figure is the median of --repeats timings of --steps steps, after a warm-up.
+Each figure is the median of --repeats timings of --steps steps, after a warm-up. --physics
+NAME=VALUE (repeatable) times other solver settings, e.g. --physics ls_iterations=2.
 
     python scripts/bench.py --robots ant humanoid --num-envs 1024 4096 16384
 """
@@ -71,6 +74,21 @@ def raw_newton_loop(sim):
     return launch
 
 
+def mujoco_warp_loop(sim):
+    """MuJoCo Warp's step alone, ``substeps`` times, without contact forces, captured once."""
+    import mujoco_warp  # noqa: PLC0415
+
+    m, d = sim.solver.mjw_model, sim.solver.mjw_data
+
+    def substeps():
+        m.opt.run_rne_postconstraint = False
+        for _ in range(sim.substeps):
+            mujoco_warp.step(m, d)
+
+    graph = sim.capture(substeps)
+    return substeps if graph is None else (lambda: wp.capture_launch(graph))
+
+
 def gpu_memory_used(device: str) -> int:
     if not device.startswith("cuda"):
         return 0
@@ -100,6 +118,8 @@ def bench_one(robot: str, num_envs: int, device: str, steps: int, repeats: int, 
         sim.step()
     raw = raw_newton_loop(sim)
     raw()
+    mjwarp = mujoco_warp_loop(sim)
+    mjwarp()
     wp.synchronize_device(device)
     warmup_s = time.perf_counter() - t0
     mem1 = gpu_memory_used(device)
@@ -107,16 +127,17 @@ def bench_one(robot: str, num_envs: int, device: str, steps: int, repeats: int, 
     result = {"robot": robot, "num_envs": num_envs, "njmax": sim.njmax, "steps": steps, "repeats": repeats,
               "build_s": round(build_s, 2), "warmup_s": round(warmup_s, 2),
               "gpu_mem_mib": round((mem1 - mem0) / 2**20, 1)}
-    for name, fn in (("raw", raw), ("physics", sim.step), ("env", env_step)):
+    for name, fn in (("mjwarp", mjwarp), ("raw", raw), ("physics", sim.step), ("env", env_step)):
         fn()
         times = timed(fn, steps, repeats, device)
         med = statistics.median(times)
         result[f"{name}_steps_per_s"] = num_envs * steps / med
         result[f"{name}_spread"] = (max(times) - min(times)) / med
+    result["raw_over_mjwarp"] = result["raw_steps_per_s"] / result["mjwarp_steps_per_s"]
     result["physics_over_raw"] = result["physics_steps_per_s"] / result["raw_steps_per_s"]
     result["env_over_physics"] = result["env_steps_per_s"] / result["physics_steps_per_s"]
     env.close()
-    del env, sim, raw
+    del env, sim, raw, mjwarp
     return result
 
 
@@ -150,10 +171,13 @@ def main(argv=None) -> int:
                 print(json.dumps(r), flush=True)
 
     print(f"\n{gpu}, {args.steps} steps x {args.repeats} repeats, median env-steps/s")
-    print("| robot | envs | njmax | raw Newton | warpgym physics | physics/raw | env (task) | env/physics | MiB/1k envs |")
-    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
+    print(f"physics settings: {physics or 'the task defaults'}")
+    print("| robot | envs | njmax | MuJoCo Warp | raw Newton | warpgym physics | physics/raw | env (task) | "
+          "env/physics | MiB/1k envs |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     for r in rows:
-        print(f"| {r['robot']} | {r['num_envs']} | {r['njmax']} | {r['raw_steps_per_s'] / 1e6:.2f}M | "
+        print(f"| {r['robot']} | {r['num_envs']} | {r['njmax']} | {r['mjwarp_steps_per_s'] / 1e6:.2f}M | "
+              f"{r['raw_steps_per_s'] / 1e6:.2f}M | "
               f"{r['physics_steps_per_s'] / 1e6:.2f}M | {r['physics_over_raw']:.3f} | "
               f"{r['env_steps_per_s'] / 1e6:.2f}M | {r['env_over_physics']:.3f} | "
               f"{r['gpu_mem_mib'] / r['num_envs'] * 1000:.0f} |")

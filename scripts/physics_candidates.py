@@ -37,6 +37,9 @@ CANDIDATES: dict[str, list[str]] = {
     "joint_speed100": ["--physics", "max_joint_speed=100"],
     "contact0.04": ["--physics", "contact_timeconst=0.04"],
     "euler": ["--physics", "integrator=euler"],
+    "ls2": ["--physics", "ls_iterations=2"],
+    "iter3_ls3": ["--physics", "solver_iterations=3", "--physics", "ls_iterations=3"],
+    "iter2_ls2": ["--physics", "solver_iterations=2", "--physics", "ls_iterations=2"],
 }
 
 
@@ -73,23 +76,30 @@ def one(name: str, args) -> dict:
                 "peak_joint_speed": train_step["peak_joint_speed"], "falls": train_step["falls"],
                 "finer_falls": finer["falls"], "robots": train_step["robots"]})
     if ("native MuJoCo", 0) in by:
-        row.update({"native_ratio": by[("native MuJoCo", 0)]["speed_ratio"],
-                    "native_finer_ratio": by[("native MuJoCo", 1)]["speed_ratio"]})
+        native = by[("native MuJoCo", 0)]
+        row.update({"native_ratio": native["speed_ratio"],
+                    "native_finer_ratio": by[("native MuJoCo", 1)]["speed_ratio"],
+                    # native MuJoCo sees contacts in every substep, warpgym's observation in the last only
+                    "native_no_foot_share": native["no_foot_contact_share"],
+                    "native_longest_flight": native.get("longest_airborne_steps")})
     return row
 
 
 def table(rows: list[dict]) -> str:
     lines = ["| candidate | samples/s | trained speed (replay) | 4x substeps | native | native 4x finer | "
-             "torso height | no foot on ground | peak joint speed |",
-             "|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
+             "torso height | no foot on ground (last substep / any substep, native) | longest flight | "
+             "peak joint speed |",
+             "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for r in rows:
         if "error" in r:
             lines.append(f"| {r['candidate']} | {r['error']} |")
             continue
         nat = (f"{r['native_ratio']:.2f} | {r['native_finer_ratio']:.2f}" if "native_ratio" in r else "- | -")
+        any_sub = (f"{100 * r['native_no_foot_share']:.0f} %" if r.get("native_no_foot_share") is not None else "-")
+        flight = (f"{r['native_longest_flight']:.0f} steps" if r.get("native_longest_flight") is not None else "-")
         lines.append(f"| {r['candidate']} | {r['steady_samples_per_s'] / 1e6:.2f} M | {r['replay_speed']:.1f} m/s | "
-                     f"{r['finer_ratio']:.2f} | {nat} | {r['torso_height']:.2f} m | {100 * r['no_foot_share']:.0f} % | "
-                     f"{r['peak_joint_speed']:.0f} rad/s |")
+                     f"{r['finer_ratio']:.2f} | {nat} | {r['torso_height']:.2f} m | "
+                     f"{100 * r['no_foot_share']:.0f} % / {any_sub} | {flight} | {r['peak_joint_speed']:.0f} rad/s |")
     return "\n".join(lines)
 
 
@@ -101,12 +111,12 @@ def main(argv=None) -> int:
     ap.add_argument("--seconds", type=float, default=80.0, help="training wall-clock time per candidate")
     ap.add_argument("--native-copies", type=int, default=16)
     ap.add_argument("--train-flags", nargs=argparse.REMAINDER, default=[], help="passed to every train.py run")
-    ap.add_argument("--report", nargs="+", metavar="OUT", help="print the table of these output directories")
+    ap.add_argument("--report", nargs="+", metavar="OUT", help="print the table of these output directories (or their candidates.json files)")
     args = ap.parse_args(argv)
     if args.report:
         rows = []
         for out in args.report:
-            with open(os.path.join(out, "candidates.json")) as f:
+            with open(out if out.endswith(".json") else os.path.join(out, "candidates.json")) as f:
                 rows += json.load(f)["rows"]
         print(table(rows))
         return 0

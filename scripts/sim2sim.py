@@ -10,7 +10,7 @@ Plays the deterministic policy for one episode (--steps control steps) in four s
                    own data (warpgym/native.py)
 and prints for each: forward speed (summed while an episode lasts, divided by envs x steps, so a
 robot that falls adds zero from then on), torso height while up, falls, the largest joint speed, and
-the share of steps with no foot on the ground; the ratio columns divide by warpgym's training-step
+the share of steps with no foot on the ground and the longest such stretch; the ratio columns divide by warpgym's training-step
 speed. A gait that only works at the training step exploits the integrator, not the robot.
 """
 
@@ -30,21 +30,25 @@ import numpy as np  # noqa: E402
 class GaitMeter:
     """Per-episode gait statistics from per-step arrays of K robots; a robot counts until it first ends."""
 
-    def __init__(self, k: int):
-        self.k, self.steps = k, 0
+    def __init__(self, k: int, contact_measure: str):
+        self.k, self.steps, self.contact_measure = k, 0, contact_measure
         self.up = np.ones(k, bool)
         self.vx, self.z, self.up_steps, self.airborne = np.zeros(k), np.zeros(k), np.zeros(k), np.zeros(k)
+        self.stretch, self.longest_stretch = np.zeros(k), np.zeros(k)
         self.peak_joint_speed = 0.0
 
-    def add(self, vx, z, dof_vel, feet_force, ended) -> None:
-        """vx, z (K,); dof_vel (K, A); feet_force (K, F, 3); ended (K,) bool: fell or timed out at this step."""
+    def add(self, vx, z, dof_vel, touching, ended) -> None:
+        """vx, z (K,); dof_vel (K, A); touching (K,) bool: a foot was on the ground in this step;
+        ended (K,) bool: fell or timed out at this step."""
         up = self.up
         self.steps += 1
         self.vx += vx * up
         self.z += z * up
         self.up_steps += up
-        touching = (np.abs(feet_force) > 0).any(axis=-1).any(axis=-1)
-        self.airborne += (~touching) & up
+        flying = ~touching & up
+        self.airborne += flying
+        self.stretch = np.where(flying, self.stretch + 1, 0)
+        self.longest_stretch = np.maximum(self.longest_stretch, self.stretch)
         if up.any():
             self.peak_joint_speed = max(self.peak_joint_speed, float(np.abs(dof_vel[up]).max()))
         self.up = up & ~ended
@@ -55,7 +59,14 @@ class GaitMeter:
                 "torso_height": float(self.z.sum() / alive_steps),
                 "falls": int(fell.sum()), "robots": self.k,
                 "peak_joint_speed": self.peak_joint_speed,
-                "no_foot_contact_share": float(self.airborne.sum() / alive_steps)}
+                "no_foot_contact_share": float(self.airborne.sum() / alive_steps),
+                "longest_airborne_steps": float(np.median(self.longest_stretch)),
+                "contact_measure": self.contact_measure}
+
+
+def feet_pressed(feet_obs: np.ndarray, k: int) -> np.ndarray:
+    """(K,) bool from the observation's foot columns: some foot felt a contact force."""
+    return (np.abs(feet_obs.reshape(k, -1, 6)[..., :3]) > 0).any(axis=(1, 2))
 
 
 def feet_columns(task, num_actions: int, num_feet: int) -> slice:
@@ -74,7 +85,7 @@ def replay_warpgym(ckpt, env_args: dict, substeps: int, envs: int, steps: int, d
                            physics=env_args.get("physics") or {}, max_episode_steps=steps)
     policy, normalize = policy_from_checkpoint(ckpt, env.num_obs, env.num_actions, torch.device(device))
     feet = feet_columns(env.task, env.num_actions, env.sim.foot_bodies.shape[0])
-    meter = GaitMeter(envs)
+    meter = GaitMeter(envs, "foot contact force in the last substep of a step")
     fell = np.zeros(envs, bool)
     obs, _ = env.reset(seed=seed)
     with torch.no_grad():
@@ -85,7 +96,7 @@ def replay_warpgym(ckpt, env_args: dict, substeps: int, envs: int, steps: int, d
             # a robot that ended was reset inside the step: its pose is the new episode's, its
             # observation row the new episode's first; it stops counting here either way
             meter.add(env.sim.root_vel[:, 0].cpu().numpy(), env.sim.root_pose[:, 2].cpu().numpy(),
-                      env.sim.dof_vel.cpu().numpy(), obs[:, feet].reshape(envs, -1, 6)[..., :3].cpu().numpy(), ended)
+                      env.sim.dof_vel.cpu().numpy(), feet_pressed(obs[:, feet].cpu().numpy(), envs), ended)
     env.close()
     return meter.result(fell)
 
@@ -103,12 +114,11 @@ def replay_native(ckpt, env_args: dict, substeps: int, copies: int, steps: int, 
     robot = NativeRobot(task, substeps=substeps, copies=copies)
     num_obs = task.observation_size(len(robot.dof_names), len(robot.feet))
     policy, normalize = policy_from_checkpoint(ckpt, num_obs, len(robot.dof_names), torch.device("cpu"))
-    meter = GaitMeter(copies)
+    meter = GaitMeter(copies, "a foot within the contact margin of the ground in any substep of a step")
     fell = np.zeros(copies, bool)
     robot.reset(np.random.default_rng(seed))
     actions = np.zeros((copies, len(robot.dof_names)))
     obs = robot.observation(actions, fresh=True)
-    feet = feet_columns(task, len(robot.dof_names), len(robot.feet))
     with torch.no_grad():
         for _ in range(steps):
             act = policy.act_deterministic(normalize(torch.as_tensor(obs, dtype=torch.float32))).numpy()
@@ -117,8 +127,7 @@ def replay_native(ckpt, env_args: dict, substeps: int, copies: int, steps: int, 
             s = robot.state()
             down = s["root_pose"][:, 2] < task.termination_height
             fell |= down & meter.up
-            meter.add(s["root_vel"][:, 0], s["root_pose"][:, 2], s["dof_vel"],
-                      obs[:, feet].reshape(copies, -1, 6)[..., :3], down)
+            meter.add(s["root_vel"][:, 0], s["root_pose"][:, 2], s["dof_vel"], robot.feet_touched, down)
     return meter.result(fell)
 
 
@@ -181,12 +190,17 @@ def main(argv=None) -> int:
 
     print(f"\n{env_args['task']} policy from iteration {ckpt['iteration']} ({ckpt['samples'] / 1e6:.1f} M samples), "
           f"trained with {trained} substeps, physics {env_args.get('physics') or 'default'}")
-    print("| simulator | physics step | forward speed | ratio | torso height | falls | peak joint speed | no foot on ground |")
-    print("|---|---:|---:|---:|---:|---:|---:|---:|")
+    print("| simulator | physics step | forward speed | ratio | torso height | falls | peak joint speed | "
+          "no foot on ground | longest flight |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
     for r in rows:
         print(f"| {r['simulator']} | 1/{round(1 / r['physics_dt'])} s | {r['forward_speed']:.2f} m/s | "
               f"{r['speed_ratio']:.2f} | {r['torso_height']:.2f} m | {r['falls']}/{r['robots']} | "
-              f"{r['peak_joint_speed']:.0f} rad/s | {100 * r['no_foot_contact_share']:.0f} % |")
+              f"{r['peak_joint_speed']:.0f} rad/s | {100 * r['no_foot_contact_share']:.0f} % | "
+              f"{r['longest_airborne_steps']:.0f} steps |")
+    print("no foot on ground: warpgym counts a step when no foot felt a force in its last substep; native "
+          "MuJoCo when no foot came within the contact margin in any substep. Longest flight: the median "
+          "robot's longest run of such steps.")
     if args.out:
         out = {"checkpoint": path, "iteration": ckpt["iteration"], "samples": ckpt["samples"],
                "task": env_args["task"], "trained_substeps": trained, "physics": env_args.get("physics") or {},

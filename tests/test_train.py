@@ -9,7 +9,9 @@ import torch
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
 
+import numpy as np  # noqa: E402
 import play  # noqa: E402
+import sim2sim  # noqa: E402
 import train  # noqa: E402
 
 from agents.checkpoint import load  # noqa: E402
@@ -44,3 +46,31 @@ def test_short_cpu_run_writes_logs_checkpoint_plots_resumes_and_plays(tmp_path, 
     result = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
     assert result["iteration"] == 5 and result["episodes"] == 2
     assert 0 < result["eval/length"] <= 40 and result["eval/return"] != 0
+
+    # ... and replays in warpgym and native MuJoCo at the training step and 2x finer
+    out = str(tmp_path / "s2s.json")
+    assert sim2sim.main([run, "--device", "cpu", "--envs", "2", "--native-copies", "2", "--steps", "30",
+                         "--finer", "2", "--out", out]) == 0
+    with open(out) as f:
+        rows = json.load(f)["rows"]
+    assert [(r["simulator"], r["substeps"]) for r in rows] == [("warpgym", 3), ("warpgym", 6),
+                                                              ("native MuJoCo", 3), ("native MuJoCo", 6)]
+    assert rows[0]["speed_ratio"] == 1.0
+    for r in rows:
+        assert 0.0 <= r["no_foot_contact_share"] <= 1.0 and 0 <= r["longest_airborne_steps"] <= 30
+        assert r["torso_height"] > 0.2 and r["robots"] == 2
+
+
+def test_gait_meter_counts_flights_until_a_robot_ends():
+    meter = sim2sim.GaitMeter(2, "test")
+    z, vel = np.full(2, 0.5), np.zeros((2, 3))
+    # robot 0: ground, 3 steps in the air, ground, 1 in the air; robot 1 flies 2 steps, then ends
+    touching = [(True, False), (False, False), (False, True), (False, True), (True, True), (False, True)]
+    ended = [(False, False), (False, True), (False, False), (False, False), (False, False), (False, False)]
+    for t, e in zip(touching, ended):
+        meter.add(np.array([1.0, 2.0]), z, vel, np.array(t), np.array(e))
+    r = meter.result(np.array([False, True]))
+    # robot 0 is up 6 steps (4 airborne), robot 1 2 steps (2 airborne) before it ended
+    assert r["no_foot_contact_share"] == 6 / 8
+    assert r["longest_airborne_steps"] == np.median([3, 2])
+    assert r["forward_speed"] == (6 * 1.0 + 2 * 2.0) / 12 and r["falls"] == 1

@@ -167,6 +167,9 @@ class NativeRobot:
         self.feet = np.array([mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, f) for f in self.spec.feet])
         if (self.feet < 0).any():
             raise ValueError(f"{self.spec.mjcf}: feet {self.spec.feet} are not all bodies of the model")
+        self._foot_geom = np.isin(m.geom_bodyid, self.feet)
+        # (K,) bool: some foot had a contact with the ground in some substep of the last step()
+        self.feet_touched = np.zeros(copies, bool)
 
     # ------------------------------------------------------------------ state
     def set_state(self, root_pose, root_vel, dof_pos, dof_vel) -> None:
@@ -223,12 +226,25 @@ class NativeRobot:
                 continue
             d.qfrc_applied[:] = 0.0
             d.qfrc_applied[self.dof_adr] = actions[k] * self.torque_scale
+            touched = False
             for _ in range(self.substeps):
                 mj.mj_step(self.model, d)
                 if self.physics.max_joint_speed is not None:
                     v = self.physics.max_joint_speed
                     d.qvel[self.dof_adr] = np.clip(d.qvel[self.dof_adr], -v, v)
+                # every substep, not just the last: a bounding gait's feet may touch down mid-step
+                touched = touched or self._foot_on_ground(d)
+            self.feet_touched[k] = touched
         return actions
+
+    def _foot_on_ground(self, d) -> bool:
+        """A contact (within the geoms' margin) between a foot geom and a geom of the world body."""
+        if d.ncon == 0:
+            return False
+        geoms = d.contact.geom[: d.ncon]
+        world = self.model.geom_bodyid[geoms] == 0
+        foot = self._foot_geom[geoms]
+        return bool(((foot[:, 0] & world[:, 1]) | (foot[:, 1] & world[:, 0])).any())
 
     # ------------------------------------------------------------------ sensing
     def contact_wrenches(self, bodies) -> np.ndarray:

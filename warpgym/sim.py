@@ -218,8 +218,11 @@ class Sim(TensorAPI):
 
     def simulate(self) -> None:
         """Advance one control step as plain launches (what the captured graph holds)."""
-        d = self.solver.mjw_data
+        d, opt = self.solver.mjw_data, self.solver.mjw_model.opt
         for i in range(self.substeps):
+            # Contact wrenches are read after the last substep only. MuJoCo Warp checks this flag on
+            # the host at each step, so the captured graph holds the extra pass once per control step.
+            opt.run_rne_postconstraint = self._contact_forces and i == self.substeps - 1
             self.solver.step(self.state, self.state, self.control, None, self.sub_dt)
             if self.physics.max_joint_speed is not None:
                 wp.launch(k_api.clamp_dof_speed, dim=(self.num_envs, self.num_dofs),
@@ -288,9 +291,9 @@ class Sim(TensorAPI):
         self.launch(self._graph, self.simulate)
 
     def enable_contact_forces(self) -> None:
-        """Have the solver compute per-body contact wrenches (MuJoCo's ``cfrc_ext``) each substep."""
+        """Have the solver compute per-body contact wrenches (MuJoCo's ``cfrc_ext``) in the last
+        substep of every step."""
         if not self._contact_forces:
-            self.solver.mjw_model.opt.run_rne_postconstraint = True
             self._contact_forces = True
             self._graph = None  # the captured graph lacks the extra pass
 
