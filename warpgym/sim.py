@@ -83,6 +83,9 @@ class Sim(TensorAPI):
         self._build()
         self._graph = None
         self._contact_forces = False
+        # Convert Newton's state to MuJoCo's and back once per control step, not once per substep
+        # (simulate()); False takes Newton's public step every substep (the reference in tests).
+        self.convert_once_per_step = True
         self._tensors: dict[str, tuple[wp.array, torch.Tensor]] = {}
 
     # ------------------------------------------------------------------ model
@@ -219,17 +222,40 @@ class Sim(TensorAPI):
     def simulate(self) -> None:
         """Advance one control step as plain launches (what the captured graph holds)."""
         d, opt = self.solver.mjw_data, self.solver.mjw_model.opt
+        once = self.convert_once_per_step and self.physics.max_joint_speed is None
+        last = self.substeps - 1
         for i in range(self.substeps):
             # Contact wrenches are read after the last substep only. MuJoCo Warp checks this flag on
             # the host at each step, so the captured graph holds the extra pass once per control step.
-            opt.run_rne_postconstraint = self._contact_forces and i == self.substeps - 1
-            self.solver.step(self.state, self.state, self.control, None, self.sub_dt)
-            if self.physics.max_joint_speed is not None:
-                wp.launch(k_api.clamp_dof_speed, dim=(self.num_envs, self.num_dofs),
-                          inputs=[self.physics.max_joint_speed], outputs=[self.joint_qd], device=self.device)
+            opt.run_rne_postconstraint = self._contact_forces and i == last
+            if once:
+                self._mujoco_substep(push=i == 0, pull=i == last)
+            else:
+                self.solver.step(self.state, self.state, self.control, None, self.sub_dt)
+                if self.physics.max_joint_speed is not None:  # a clamp on Newton's state: every substep
+                    wp.launch(k_api.clamp_dof_speed, dim=(self.num_envs, self.num_dofs),
+                              inputs=[self.physics.max_joint_speed], outputs=[self.joint_qd], device=self.device)
             wp.launch(track_solver_load, dim=self.num_envs,
                       inputs=[d.nefc, d.nacon, self._drop_bits, int(i == 0)],
                       outputs=[d.overflow, self._peak_nefc, self._peak_nacon, self._overflowed], device=self.device)
+
+    def _mujoco_substep(self, push: bool, pull: bool) -> None:
+        """One substep on MuJoCo Warp's data: SolverMuJoCo.step's phases, with Newton's state pushed
+        in only before the first substep and pulled out (forward kinematics of every body included)
+        only after the last. Between substeps nothing reads Newton's state, and the conversions cost
+        about a tenth of the Ant's physics time on an H100 (scripts/bench.py, "MuJoCo Warp" against
+        "raw Newton"). These are SolverMuJoCo internals of newton 1.8, which pyproject.toml pins;
+        tests/test_sim.py checks this path against the public step."""
+        s, m = self.solver, self.model
+        with wp.ScopedDevice(self.device), s._scoped_mujoco_warp_execution():
+            if push:
+                s._apply_mjc_control(m, self.state, self.control, s.mjw_data)
+                s._update_mjc_data(s.mjw_data, m, self.state)
+                s.mjw_model.opt.timestep.fill_(self.sub_dt)
+            s._mujoco_warp_step()
+            if pull:
+                s._update_newton_state(m, self.state, s.mjw_data, state_prev=self.state)
+        s._step += 1
 
     @property
     def solver_overflows(self) -> wp.array:
