@@ -8,6 +8,7 @@ Row layout for A actuated dofs and F feet:
 
 import warp as wp
 
+from kernels.buffers import RobotView
 from kernels.math import finite_or_zero, roll_from_quat, unscale, wrap_angle, yaw_from_quat
 from kernels.params import LocomotionParams
 from kernels.tensor_api import ROOT_COORDS, ROOT_DOFS
@@ -39,19 +40,13 @@ def potential(p: LocomotionParams, pos: wp.vec3):
 def write_observation(
     env: int,
     p: LocomotionParams,
-    joint_q: wp.array2d[float],  # (N, C)
-    joint_qd: wp.array2d[float],  # (N, D)
-    dof_lower: wp.array[float],  # (A,)
-    dof_upper: wp.array[float],  # (A,)
-    dof_force: wp.array2d[float],  # (N, A)
-    contact_wrench: wp.array2d[float],  # (N*B, 6)
-    foot_bodies: wp.array[wp.int32],  # (F,) body index within an env
-    bodies_per_env: int,
-    actions: wp.array2d[float],  # (N, A)
+    robot: RobotView,
     fresh: int,  # 1 right after a reset: no forces have acted and no action was taken yet
     obs: wp.array2d[float],  # (N, O) out
 ):
-    num_dofs = actions.shape[1]
+    joint_q = robot.joint_q
+    joint_qd = robot.joint_qd
+    num_dofs = robot.actions.shape[1]
     pos = root_position(joint_q, env)
     torso_quat = root_rotation(joint_q, env) * wp.quat_inverse(p.start_rot)
     lin_vel = wp.vec3(joint_qd[env, 0], joint_qd[env, 1], joint_qd[env, 2])
@@ -76,7 +71,8 @@ def write_observation(
 
     col = int(12)
     for j in range(num_dofs):
-        obs[env, col + j] = finite_or_zero(unscale(joint_q[env, ROOT_COORDS + j], dof_lower[j], dof_upper[j]))
+        q = joint_q[env, ROOT_COORDS + j]
+        obs[env, col + j] = finite_or_zero(unscale(q, robot.dof_lower[j], robot.dof_upper[j]))
     col += num_dofs
     for j in range(num_dofs):
         obs[env, col + j] = finite_or_zero(joint_qd[env, ROOT_DOFS + j] * p.dof_velocity_scale)
@@ -85,19 +81,20 @@ def write_observation(
         for j in range(num_dofs):
             f = float(0.0)
             if fresh == 0:
-                f = dof_force[env, j] * p.dof_force_scale
+                f = robot.dof_force[env, j] * p.dof_force_scale
             obs[env, col + j] = finite_or_zero(f)
         col += num_dofs
-    for k in range(foot_bodies.shape[0]):
-        row = env * bodies_per_env + foot_bodies[k]
+    num_feet = robot.foot_bodies.shape[0]
+    for k in range(num_feet):
+        row = env * robot.bodies_per_env + robot.foot_bodies[k]
         for i in range(6):
             w = float(0.0)
             if fresh == 0:
-                w = contact_wrench[row, i] * p.contact_force_scale
+                w = robot.contact_wrench[row, i] * p.contact_force_scale
             obs[env, col + 6 * k + i] = finite_or_zero(w)
-    col += 6 * foot_bodies.shape[0]
+    col += 6 * num_feet
     for j in range(num_dofs):
         a = float(0.0)
         if fresh == 0:
-            a = actions[env, j]
+            a = robot.actions[env, j]
         obs[env, col + j] = a

@@ -5,15 +5,19 @@
 #   QUICK=1  the runs behind issue 5's targets (~10 min on an H100): cold start, libmathdx on/off,
 #            GPU checks, Ant and Humanoid at 4096 envs
 #   default  also the env-step table at 1024-16384 envs, profiles and the Ant scaling runs (~30 min)
+#   COLD=0   skip the cold start and the --no-mathdx env step, and keep Warp's own kernel cache
+#            (warm after any earlier run; scripts/cold_start.py measures cold starts in full)
 set -uo pipefail
 out=${1:?usage: scripts/run_benchmarks.sh OUT_DIR}
 mkdir -p "$out"
 export PYTHONUNBUFFERED=1
 quick=${QUICK:-0}
+cold_run=${COLD:-1}
 flags=""
 step() { echo "== $(date +%T) $*" | tee -a "$out/progress.log"; }
 nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv > "$out/machine.txt" 2>&1
 python3 -c "import torch, warp, newton, mujoco_warp; print(torch.__version__, warp.__version__, newton.__version__, mujoco_warp.__version__)" >> "$out/machine.txt" 2>&1
+if [ "$cold_run" = 1 ]; then
 cold=$(mktemp -d)
 export WARP_CACHE_PATH=$cold
 
@@ -24,6 +28,7 @@ WARPGYM_WARP_INFO=1 python3 scripts/train.py --task Ant --num-envs 4096 --time-l
 step "env step: Ant 4096 without, then with libmathdx (the second compiles its kernels first)"
 python3 scripts/bench.py --robots ant --num-envs 4096 --steps 100 --repeats 5 --no-mathdx \
   --out "$out/bench_no_mathdx.json" > "$out/bench_no_mathdx.log" 2>&1
+fi
 if [ "$quick" = 1 ]; then sizes="4096"; else sizes="1024 4096 16384"; fi
 python3 scripts/bench.py --robots ant humanoid --num-envs $sizes --steps 100 --repeats 5 \
   --out "$out/bench.json" > "$out/bench.log" 2>&1
@@ -65,6 +70,6 @@ if [ "$quick" != 1 ]; then
     --labels "1024 envs" "4096 envs" "16384 envs" "32768 envs" --title "Ant: PPO, one GPU" \
     --out "$out/fig_ant" > /dev/null 2>&1
 fi
-rm -rf "$cold"
+[ "$cold_run" = 1 ] && rm -rf "$cold"
 step "done"
 touch "$out/DONE"

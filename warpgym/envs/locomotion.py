@@ -15,6 +15,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from kernels.actions import apply_actions
+from kernels.buffers import EpisodeBuffers, RobotView, StepOutputs
 from kernels.locomotion import advance_rng, locomotion_step
 from kernels.resets import reset_finished_envs
 from kernels.solver_load import count_faults
@@ -75,53 +76,59 @@ class LocomotionVecEnv(VectorEnv):
         gear = sim.motor_gear_np
         self.params = task.to_warp(sim.spec.start_height)
         self._torque_scale = wp.array(gear * task.power_scale, dtype=float, device=dev)
-        self._effort_ratio = wp.array(gear / gear.max(), dtype=float, device=dev)
-        self._dof_lower = wp.array(sim.dof_lower_np, dtype=float, device=dev)
-        self._dof_upper = wp.array(sim.dof_upper_np, dtype=float, device=dev)
-        self._default_dof_pos = wp.array(sim.default_dof_pos_np, dtype=float, device=dev)
-        self._feet = sim.foot_bodies
         self._rng_state = wp.array(np.array([seed, 0], np.int32), dtype=wp.int32, device=dev)
 
         def buf(shape, dtype=float):
             return wp.zeros(shape, dtype=dtype, device=dev)
 
-        self._actions_in, self._actions = buf((n, a)), buf((n, a))
+        self._actions_in = buf((n, a))
         self._nan_count = buf(n, wp.int32)
-        self._obs, self._final_obs = buf((n, o)), buf((n, o))
-        self._reward, self._potentials = buf(n), buf(n)
-        self._terminated, self._truncated = buf(n, wp.bool), buf(n, wp.bool)
-        self._done, self._diverged = buf(n, wp.bool), buf(n, wp.bool)
-        self._ep_length, self._ep_return, self._ep_forward = buf(n, wp.int32), buf(n), buf(n)
-        self._stat_length, self._stat_return, self._stat_speed = buf(n, wp.int32), buf(n), buf(n)
         self._fault_totals = buf(3, wp.int64)  # non-finite actions, diverged worlds, overflowed substeps
-
         if task.contact_force_scale != 0.0:
             sim.enable_contact_forces()
-        self._contact_wrench = sim.contact_wrench_buffer()
-        self._dof_force = sim.dof_force_buffer()
+
+        self._robot = robot = RobotView()
+        robot.joint_q, robot.joint_qd = sim.joint_q, sim.joint_qd
+        robot.dof_lower = wp.array(sim.dof_lower_np, dtype=float, device=dev)
+        robot.dof_upper = wp.array(sim.dof_upper_np, dtype=float, device=dev)
+        robot.default_dof_pos = wp.array(sim.default_dof_pos_np, dtype=float, device=dev)
+        robot.effort_ratio = wp.array(gear / gear.max(), dtype=float, device=dev)
+        robot.dof_force, robot.contact_wrench = sim.dof_force_buffer(), sim.contact_wrench_buffer()
+        robot.foot_bodies, robot.bodies_per_env = sim.foot_bodies, sim.bodies_per_env
+        robot.actions = buf((n, a))
+        robot.warm_start = sim.solver.mjw_data.qacc_warmstart
+
+        self._episodes = ep = EpisodeBuffers()
+        ep.potential, ep.length, ep.total_return, ep.forward = buf(n), buf(n, wp.int32), buf(n), buf(n)
+        ep.ended_return, ep.ended_length, ep.ended_speed = buf(n), buf(n, wp.int32), buf(n)
+
+        self._out = out = StepOutputs()
+        out.obs, out.final_obs, out.reward = buf((n, o)), buf((n, o)), buf(n)
+        out.terminated, out.truncated = buf(n, wp.bool), buf(n, wp.bool)
+        out.done, out.diverged = buf(n, wp.bool), buf(n, wp.bool)
 
         t = sim.to_torch
         self._actions_in_t = t(self._actions_in)
-        self.obs, self.reward = t(self._obs), t(self._reward)
-        self.terminated, self.truncated = t(self._terminated), t(self._truncated)
-        self.actions = t(self._actions)
+        self.obs, self.reward = t(out.obs), t(out.reward)
+        self.terminated, self.truncated = t(out.terminated), t(out.truncated)
+        self.actions = t(robot.actions)
         # steps into each env's episode (int32); writable, e.g. to spread the first episodes' ends
-        self.episode_steps = t(self._ep_length)
-        done = t(self._done)
+        self.episode_steps = t(ep.length)
+        done = t(out.done)
         self.info = {
-            "final_obs": t(self._final_obs),
+            "final_obs": t(out.final_obs),
             "_final_obs": done,
             "episode": {
-                "r": t(self._stat_return),
-                "l": t(self._stat_length),
-                "s": t(self._stat_speed),
+                "r": t(ep.ended_return),
+                "l": t(ep.ended_length),
+                "s": t(ep.ended_speed),
                 "_r": done,
                 "_l": done,
                 "_s": done,
             },
             "_episode": done,
             "nan_actions": t(self._nan_count),
-            "diverged": t(self._diverged),
+            "diverged": t(out.diverged),
             "solver_overflows": t(sim.solver_overflows),
         }
         totals = t(self._fault_totals)
@@ -133,45 +140,25 @@ class LocomotionVecEnv(VectorEnv):
         self._reset_all()
 
     # ------------------------------------------------------------------ device work
-    def _obs_inputs(self):
-        sim = self.sim
-        return [self._dof_force, self._contact_wrench, self._feet, sim.bodies_per_env, self._actions]
-
     def _launch_step(self) -> None:
         sim, n, dev = self.sim, self.num_envs, self.sim.device
         wp.launch(apply_actions, dim=n, inputs=[self._actions_in, self._torque_scale],
-                  outputs=[self._actions, sim.joint_f, self._nan_count], device=dev)
+                  outputs=[self._robot.actions, sim.joint_f, self._nan_count], device=dev)
         sim.simulate()
         if self.task.contact_force_scale != 0.0:
             sim.compute_contact_wrenches()
         if self.task.observe_dof_forces:
             sim.compute_dof_forces()
-        wp.launch(
-            locomotion_step,
-            dim=n,
-            inputs=[self.params, sim.joint_q, sim.joint_qd, self._dof_lower, self._dof_upper, self._dof_force,
-                    self._contact_wrench, self._feet, sim.bodies_per_env, self._actions, self._effort_ratio,
-                    self._potentials, self._ep_length, self._ep_return, self._ep_forward],
-            outputs=[self._obs, self._reward, self._terminated, self._truncated, self._done, self._diverged],
-            device=dev,
-        )
+        wp.launch(locomotion_step, dim=n, inputs=[self.params, self._robot, self._episodes, self._out], device=dev)
         self._launch_reset(force_all=0)
-        wp.launch(count_faults, dim=n, inputs=[self._nan_count, self._diverged, sim.solver_overflows],
+        wp.launch(count_faults, dim=n, inputs=[self._nan_count, self._out.diverged, sim.solver_overflows],
                   outputs=[self._fault_totals], device=dev)
         wp.launch(advance_rng, dim=1, inputs=[self._rng_state], device=dev)
 
     def _launch_reset(self, force_all: int) -> None:
-        sim = self.sim
-        wp.launch(
-            reset_finished_envs,
-            dim=self.num_envs,
-            inputs=[self.params, force_all, self._rng_state, self._default_dof_pos, self._dof_lower, self._dof_upper,
-                    *self._obs_inputs(), self._terminated, self._truncated, self._done],
-            outputs=[sim.joint_q, sim.joint_qd, sim.solver.mjw_data.qacc_warmstart, self._potentials,
-                     self._ep_length, self._ep_return, self._ep_forward, self._stat_return, self._stat_length,
-                     self._stat_speed, self._final_obs, self._obs],
-            device=sim.device,
-        )
+        wp.launch(reset_finished_envs, dim=self.num_envs,
+                  inputs=[self.params, force_all, self._rng_state, self._robot, self._episodes, self._out],
+                  device=self.sim.device)
 
     def _reset_all(self) -> None:
         def run():
