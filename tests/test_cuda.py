@@ -98,9 +98,12 @@ def test_captured_rollout_matches_the_eager_one():
     assert sum(int(r["truncated"].sum()) for r in captured[1:]) > 0  # the graph bootstrapped truncations
     for i, (a, b) in enumerate(zip(eager, captured)):
         for name in a:
-            # MuJoCo Warp's float atomics differ run to run by ~1e-4 after a few dozen steps; a rollout
-            # that read a stale buffer or skipped a launch would be off by far more
-            torch.testing.assert_close(b[name], a[name], atol=1e-3, rtol=1e-3, msg=lambda m: f"rollout {i} {name}: {m}")
+            # MuJoCo Warp's float atomics differ run to run by ~1e-4 m after a few dozen steps; the
+            # reward's progress term divides a position change by dt (1/60 s), so it differs by up to
+            # ~1e-2 (seen: 3.9e-3 in 2 of 256 entries on an H100). A rollout that read a stale buffer
+            # or skipped a launch would be off by far more.
+            atol = 2e-2 if name == "rewards" else 1e-3
+            torch.testing.assert_close(b[name], a[name], atol=atol, rtol=1e-3, msg=lambda m: f"rollout {i} {name}: {m}")
 
 
 def test_env_on_cuda_matches_the_torch_reference_from_another_stream():
