@@ -1,6 +1,6 @@
 """Throughput of the simulation, in env-steps per second (one env-step = one control step of one env).
 
-For each robot and env count, one model is built and three loops are timed on it:
+For each robot and env count, one model is built and four loops are timed on it:
   mjwarp   MuJoCo Warp's own step on the solver's data, no Newton state in or out (what Newton's
            conversions cost), graph-captured;
   raw      Newton's SolverMuJoCo alone: the usual double-buffered substep loop, graph-captured;
@@ -82,8 +82,10 @@ def mujoco_warp_loop(sim):
 
     def substeps():
         m.opt.run_rne_postconstraint = False
-        for _ in range(sim.substeps):
-            mujoco_warp.step(m, d)
+        # under the solver's compile options, so these are the very kernels Sim.simulate launches
+        with wp.ScopedDevice(sim.device), sim.solver._scoped_mujoco_warp_execution():
+            for _ in range(sim.substeps):
+                mujoco_warp.step(m, d)
 
     graph = sim.capture(substeps)
     return substeps if graph is None else (lambda: wp.capture_launch(graph))
