@@ -352,11 +352,13 @@ def read_run_config(run_dir: str, device: str | None) -> dict:
 
 def built(make, what: str, phase):
     """``make()``, with one timeline line: how long it took and what Warp compiled meanwhile."""
-    from warpgym.preload import compiled_modules, describe_compiles  # noqa: PLC0415
+    from warpgym.compile_log import describe_compiles, mark  # noqa: PLC0415
 
-    start, before = time.time(), len(compiled_modules())
+    start, before = time.time(), mark()
     obj = make()
-    phase(f"{what} built in {time.time() - start:.1f} s; {describe_compiles(before)}")
+    parts = getattr(getattr(obj, "sim", None), "build_times", {})
+    parts = f" ({', '.join(f'{k} {v:.1f} s' for k, v in parts.items() if v >= 0.05)})" if parts else ""
+    phase(f"{what} built in {time.time() - start:.1f} s{parts}; {describe_compiles(before)}")
     return obj
 
 
@@ -411,7 +413,7 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
     workers = int(os.environ.get("WORLD_SIZE", "1"))
     say(f"warpgym PPO | {task} | {num_envs} envs on {device} ({device_name})"
         + (f" x {workers} processes" if workers > 1 else "") + f" | run dir {run_dir}", flush=True)
-    from warpgym import preload  # noqa: PLC0415
+    from warpgym import compile_log, preload  # noqa: PLC0415
 
     timeline: list[tuple[float, str]] = []
 
@@ -419,9 +421,12 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
         timeline.append((round(time.time() - PROCESS_START, 2), text))
         say(f"[{timeline[-1][0]:6.1f} s] {text}", flush=True)
 
+    note = preload.bytecode_note()
+    if note:
+        say(f"note: {note}", flush=True)
     cache, cached = preload.kernel_cache()
     phase(f"imports done; Warp kernel cache {cache} holds {cached} modules"
-          + ("" if cached else " (empty: this run compiles them, about 30 s on an H100 and 15 s on two "
+          + ("" if cached else " (empty: this run compiles them, about 20 s on an H100 and 15 s on two "
                                 "CPU cores; WARP_CACHE_PATH points Warp at a shared cache)"))
     if args.no_mathdx:
         preload.use_mathdx(False)
@@ -461,7 +466,8 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
     summary = summarize(history, device_name, cfg)
     summary["solver_load"] = env.sim.solver_load()  # this process's envs, over the whole run
     summary["startup"] = {"timeline": timeline, "kernel_cache": cache, "cached_modules_at_start": cached,
-                          "compiled": [(name, round(t, 3)) for name, t in preload.compiled_modules()]}
+                          "compiled": compile_log.compile_trace(since=PROCESS_START),
+                          "lto_builds": compile_log.lto_builds_since(PROCESS_START)}
     summary["faults"] = {k[len("faults/"):]: v for k, v in (history[-1] if history else {}).items()
                          if k.startswith("faults/")}
     if args.profile:

@@ -4,7 +4,7 @@ import importlib
 
 import warp as wp
 
-from warpgym import preload
+from warpgym import compile_log, preload
 
 
 def test_sim_modules_are_set_to_skip_adjoint_code():
@@ -43,12 +43,12 @@ def _constant_kernel(value: float):
 def test_a_recorded_launch_names_its_module_and_runs_nothing():
     kernel = _constant_kernel(7.0)
     out = wp.zeros(4, dtype=float, device="cpu")
-    compiled_before = len(preload.compiled_modules())
+    compiled_before = len(compile_log.compiled_modules())
     found, error = preload.record_modules(lambda: wp.launch(kernel, dim=4, outputs=[out], device="cpu"))
     assert error is None
     assert [m for m, _, _ in found] == [kernel.module]
     assert out.numpy().tolist() == [0.0] * 4  # skipped, not run
-    assert len(preload.compiled_modules()) == compiled_before  # and not compiled either
+    assert len(compile_log.compiled_modules()) == compiled_before  # and not compiled either
     wp.launch(kernel, dim=4, outputs=[out], device="cpu")  # outside the recording, launches run again
     assert out.numpy().tolist() == [7.0] * 4
 
@@ -76,10 +76,10 @@ def test_compile_ahead_compiles_what_the_launch_then_finds_ready():
 
     report = preload.compile_ahead(launch)
     assert (report["modules"], report["loaded"], report["compiled"]) == (1, 1, 1)
-    assert preload.compiled_modules()[-1][0] == kernel.module.name
-    count = len(preload.compiled_modules())
+    assert compile_log.compiled_modules()[-1][0] == kernel.module.name
+    count = len(compile_log.compiled_modules())
     launch()
-    assert len(preload.compiled_modules()) == count
+    assert len(compile_log.compiled_modules()) == count
     assert out.numpy()[0] > 0
 
 
@@ -88,7 +88,7 @@ def test_a_built_sim_has_every_module_of_its_step_loaded():
     # rehearsal, not an earlier test, loaded them
     from warpgym import Sim
 
-    sim = Sim("ant", num_envs=2, device="cpu", njmax=131)
+    sim = Sim("ant", num_envs=3, device="cpu", njmax=131)  # not the rehearsal's world count
     sim.enable_contact_forces()
     found, error = preload.record_modules(sim.simulate)
     assert error is None
@@ -96,3 +96,17 @@ def test_a_built_sim_has_every_module_of_its_step_loaded():
     assert any(n.startswith("_update_gradient_JTDAJ") for n in names), names
     missing = [m.name for m, d, b in found if not preload._is_loaded(m, d, b)]
     assert missing == [], (missing, sim.compile_log)
+
+
+def test_a_start_without_cached_bytecode_says_how_to_cache_it(monkeypatch, tmp_path):
+    import importlib.util
+    import sys
+    from types import SimpleNamespace
+
+    assert preload.bytecode_note() == "" or sys.flags.dont_write_bytecode  # this machine caches bytecode
+    monkeypatch.setattr(sys, "flags", SimpleNamespace(dont_write_bytecode=1))
+    monkeypatch.setattr(importlib.util, "cache_from_source", lambda path: str(tmp_path / "missing.pyc"))
+    note = preload.bytecode_note()
+    assert "PYTHONDONTWRITEBYTECODE" in note and "python -m compileall -q " in note
+    site = note.split("python -m compileall -q ")[1].split("`")[0]
+    assert importlib.util.find_spec("torch").origin.startswith(site)

@@ -15,11 +15,13 @@ before the first step. Two things shorten that:
   needs. ``Sim`` rehearses the solver's construction and a substep this way and queues the modules
   on the pool above (``Preload.add``); the env checks its whole step with ``compile_ahead``, which
   compiles whatever is still missing, side by side. Five of those kernels factor small matrices with Warp's tile
-  Cholesky, which by default links NVIDIA's libmathdx (slow to compile, fast to run);
-  ``use_mathdx(False)`` compiles Warp's own implementation instead.
+  Cholesky, which by default links NVIDIA's libmathdx (slow to compile, fast to run). Those LTO
+  objects are built in child processes first (``warpgym.mathdx``), since Warp builds them one at
+  a time under its code-generation lock; ``use_mathdx(False)`` compiles Warp's own implementation
+  instead.
 
-``compiled_modules()`` lists what this process compiled and how long each took, for the start-up
-timeline that ``scripts/train.py`` prints.
+``warpgym.compile_log`` records what this process compiled and where the time went, for the
+start-up timeline that ``scripts/train.py`` prints.
 """
 
 from __future__ import annotations
@@ -32,6 +34,8 @@ from concurrent.futures import ThreadPoolExecutor
 
 import warp as wp
 import warp._src.context as _wp_context
+
+from warpgym import compile_log, mathdx
 
 # Importable before the model exists, and launched by every Sim step or reset.
 SIM_MODULES = (
@@ -85,7 +89,7 @@ class Preload:
         """Queue the modules ``fn``'s launches need; ``fn`` runs now, launch-free, in this thread."""
         found, self.stopped_early = record_modules(fn)
         todo = _not_loaded(found)
-        self._futures += [self._pool.submit(m.load, d, b) for m, d, b in todo]
+        self._futures += submit_loads(self._pool, todo)
         return len(todo)
 
     def wait(self) -> None:
@@ -105,11 +109,10 @@ def use_mathdx(enabled: bool) -> None:
 
 # ----------------------------------------------------------------------------- compile ahead
 # Warp compiles a module inside ``Module.load``, which every launch calls first. One wrapper,
-# installed once, both times real compiles (for the start-up timeline) and, in a thread that is
-# recording, answers "not loaded" so that the launch returns without running (Warp's ``launch``
-# skips a kernel whose module did not load).
+# installed once, both logs real compiles (``warpgym.compile_log``, for the start-up timeline) and,
+# in a thread that is recording, answers "not loaded" so that the launch returns without running
+# (Warp's ``launch`` skips a kernel whose module did not load).
 _local = threading.local()
-_compiled: list[tuple[str, float]] = []
 _original_load = None
 
 
@@ -132,6 +135,24 @@ def _cache_dir_of(module, block_dim) -> str | None:
         return None
 
 
+def is_cached(module, block_dim=None) -> bool:
+    """Whether the kernel cache holds this module variant (a folder for its content hash)."""
+    cached = _cache_dir_of(module, _variant(module, block_dim))
+    return cached is None or os.path.isdir(cached)
+
+
+_variant_locks: dict = {}
+_variant_locks_guard = threading.Lock()
+
+
+def _lock_of(module, device, block_dim) -> threading.Lock:
+    # Warp has no lock of its own here: two threads loading one variant would both compile it (a
+    # launch on the main thread while the pool is compiling that module, say). The second waits.
+    key = (id(module), getattr(device, "context", None), _variant(module, block_dim))
+    with _variant_locks_guard:
+        return _variant_locks.setdefault(key, threading.Lock())
+
+
 def _load(module, device, block_dim=None, *args, **kwargs):
     notes = getattr(_local, "notes", None)
     if notes is not None:
@@ -139,13 +160,15 @@ def _load(module, device, block_dim=None, *args, **kwargs):
         return None
     if _is_loaded(module, device, block_dim):
         return _original_load(module, device, block_dim, *args, **kwargs)
-    cached = _cache_dir_of(module, _variant(module, block_dim))
-    was_cached = cached is None or os.path.isdir(cached)
-    start = time.perf_counter()
-    result = _original_load(module, device, block_dim, *args, **kwargs)
-    if not was_cached:
-        _compiled.append((module.name, time.perf_counter() - start))
-    return result
+    with _lock_of(module, device, block_dim):
+        if _is_loaded(module, device, block_dim):  # loaded by the thread this one waited for
+            return _original_load(module, device, block_dim, *args, **kwargs)
+        record = compile_log.begin(module, _variant(module, block_dim))
+        was_cached = is_cached(module, block_dim)
+        try:
+            return _original_load(module, device, block_dim, *args, **kwargs)
+        finally:
+            compile_log.end(record, compiled=not was_cached)
 
 
 def _install() -> None:
@@ -153,13 +176,6 @@ def _install() -> None:
     if _original_load is None:
         _original_load = _wp_context.Module.load
         _wp_context.Module.load = _load
-
-
-def compiled_modules() -> list[tuple[str, float]]:
-    """(module name, seconds) for every Warp module this process compiled rather than found in the
-    kernel cache (no cache folder for its hash yet), in the order they finished. Counted from the
-    import of this module on."""
-    return list(_compiled)
 
 
 _install()
@@ -225,6 +241,43 @@ def _thread_local_patch(patched, original):
     return dispatch
 
 
+def submit_loads(pool, todo: list) -> list:
+    """Load each (module, device, block_dim) of ``todo`` on ``pool``. On a GPU, the libmathdx LTO
+    objects that modules about to compile would build are first started in child processes
+    (``warpgym.mathdx``), and those modules load once theirs are built; the others load at once."""
+    waits = _start_lto_builds(todo)
+    plain = [pool.submit(m.load, d, b) for m, d, b in todo if (id(m), _variant(m, b)) not in waits]
+    return plain + [pool.submit(_load_after, waits[(id(m), _variant(m, b))], m, d, b)
+                    for m, d, b in todo if (id(m), _variant(m, b)) in waits]
+
+
+def _load_after(builds, module, device, block_dim):
+    for b in builds:
+        b.wait()  # a failed child only means Warp builds that object itself, as it would have anyway
+    return module.load(device, block_dim)
+
+
+def lto_in_processes() -> bool:
+    """Whether libmathdx objects are built in child processes (``WARPGYM_LTO_PROCESSES=0``: no)."""
+    return os.environ.get("WARPGYM_LTO_PROCESSES", "1") != "0"
+
+
+def _start_lto_builds(todo: list) -> dict:
+    waits = {}
+    if not lto_in_processes():
+        return waits
+    for m, d, b in todo:
+        if not getattr(d, "is_cuda", False) or is_cached(m, b):
+            continue
+        try:
+            requests = mathdx.lto_requests(m, m._get_compile_arch(d), _variant(m, b))
+        except Exception:  # noqa: BLE001,S112  (a Warp without these internals: the module builds its own)
+            continue
+        if requests:
+            waits[(id(m), _variant(m, b))] = mathdx.start_builds(requests)
+    return waits
+
+
 def compile_ahead(fn, workers: int | None = None) -> dict:
     """Find the Warp modules ``fn`` launches (``record_modules``), without running it, and load
     them all at once on a thread pool: compiled side by side on an empty kernel cache, read from
@@ -232,17 +285,17 @@ def compile_ahead(fn, workers: int | None = None) -> dict:
     one that can run twice (a constructor whose result is dropped, or a step about to be captured).
     Returns what was done, for the start-up timeline."""
     start = time.perf_counter()
-    before = len(_compiled)
+    before = len(compile_log.compiled_modules())
     found, error = record_modules(fn)
     todo = _not_loaded(found)
     if todo:
         with ThreadPoolExecutor(workers or max(1, min(len(todo), os.cpu_count() or 1))) as pool:
-            for f in [pool.submit(m.load, d, b) for m, d, b in todo]:
+            for f in submit_loads(pool, todo):
                 try:
                     f.result()
                 except Exception:  # the launch that needs it compiles it again and reports the error there
                     pass
-    return {"modules": len(found), "loaded": len(todo), "compiled": len(_compiled) - before,
+    return {"modules": len(found), "loaded": len(todo), "compiled": len(compile_log.compiled_modules()) - before,
             "seconds": time.perf_counter() - start, "stopped_early": repr(error) if error else None}
 
 
@@ -257,11 +310,20 @@ def kernel_cache() -> tuple[str, int]:
     return path, count
 
 
-def describe_compiles(since: int = 0) -> str:
-    """One line on the modules compiled since ``len(compiled_modules())`` was ``since``."""
-    done = _compiled[since:]
-    if not done:
-        return "every kernel came from the cache"
-    name, longest = max(done, key=lambda c: c[1])
-    return (f"Warp compiled {len(done)} module{'s' * (len(done) > 1)}, {sum(s for _, s in done):.1f} s of work side by side "
-            f"(longest {longest:.1f} s: {name})")
+def bytecode_note() -> str:
+    """A hint when Python recompiles its packages' source at every start: no cached bytecode for
+    torch and none will be written (PYTHONDONTWRITEBYTECODE, common in container images). On an
+    H100 host that added about 18 s to a cold start; ``python -m compileall`` writes the cache once,
+    as ``pip install`` does by default."""
+    import importlib.util  # noqa: PLC0415
+    import sys  # noqa: PLC0415
+
+    torch_spec = importlib.util.find_spec("torch")
+    origin = torch_spec.origin if torch_spec else None
+    if not sys.flags.dont_write_bytecode or origin is None:
+        return ""
+    if os.path.exists(importlib.util.cache_from_source(origin)):
+        return ""
+    site = os.path.dirname(os.path.dirname(origin))
+    return (f"Python writes no bytecode here (PYTHONDONTWRITEBYTECODE) and {site} has none, so every start "
+            f"recompiles the packages' source; run `python -m compileall -q {site}` once to cache it")

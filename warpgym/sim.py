@@ -35,6 +35,24 @@ def _leaf(label: str) -> str:
     return label.rsplit("/", 1)[-1]
 
 
+# Worlds in the model whose construction and first substep are rehearsed to name MuJoCo Warp's
+# kernels: two, not one, so that nothing takes a single-world shortcut the real model would not.
+REHEARSAL_WORLDS = 2
+
+
+class _PhaseClock:
+    """Seconds of each phase of a build, for the start-up timeline (``Sim.build_times``)."""
+
+    def __init__(self):
+        self.laps: dict[str, float] = {}
+        self._last = time.perf_counter()
+
+    def lap(self, phase: str) -> None:
+        now = time.perf_counter()
+        self.laps[phase] = self.laps.get(phase, 0.0) + now - self._last
+        self._last = now
+
+
 class Sim(TensorAPI):
     """Batched rigid-body simulation of ``num_envs`` independent worlds of one robot.
 
@@ -80,13 +98,13 @@ class Sim(TensorAPI):
         self.check_inputs = bool(check_inputs)
         self._order = StreamOrder(self.device)
 
-        self._build()
         self._graph = None
         self._contact_forces = False
         # Convert Newton's state to MuJoCo's and back once per control step, not once per substep
         # (simulate()); False takes Newton's public step every substep (the reference in tests).
         self.convert_once_per_step = True
         self._tensors: dict[str, tuple[wp.array, torch.Tensor]] = {}
+        self._build()
 
     # ------------------------------------------------------------------ model
     def _check_memory(self) -> None:
@@ -102,18 +120,68 @@ class Sim(TensorAPI):
             )
 
     def _build(self) -> None:
+        clock = _PhaseClock()
         import newton  # noqa: PLC0415
 
+        clock.lap("import Newton")
         self._check_memory()
-        preload = Preload(self.device)  # compiles while the model is built below
+        preload = Preload(self.device)  # compiles while the models are built below
         path = mjcf_path(self.spec)
         robot = newton.ModelBuilder()
         robot.add_mjcf(path, ignore_names=["floor", "ground"])
-        scene = newton.ModelBuilder()
-        scene.add_ground_plane()
-        scene.replicate(robot, self.num_envs)
-        self.model = scene.finalize(device=self.device)
-        model = self.model
+
+        def build_model(num_worlds: int):
+            scene = newton.ModelBuilder()
+            scene.add_ground_plane()
+            scene.replicate(robot, num_worlds)
+            return scene.finalize(device=self.device)
+
+        # The iteration caps are a deliberate speed/accuracy trade, not an error worth a printf per
+        # world. Dropped constraints and contacts are errors, but they are counted on the device
+        # every substep (solver_overflows, solver_load()) and reported once, not printed per world.
+        from mujoco_warp import OverflowType as OF  # noqa: PLC0415
+
+        self._drop_bits = int(OF.NEFC | OF.NJMAX_NNZ | OF.BROADPHASE | OF.NARROWPHASE)
+        quiet = ~int(OF.ITERATIONS | OF.LS_ITERATIONS | self._drop_bits)
+        phys = self.physics
+
+        def make_solver(model):
+            solver = newton.solvers.SolverMuJoCo(
+                model,
+                iterations=phys.solver_iterations,
+                ls_iterations=phys.ls_iterations,
+                integrator=phys.integrator,
+                nconmax=self.nconmax,
+                njmax=self.njmax,
+                disable_sensors=True,
+            )
+            if phys.contact_timeconst is not None:
+                solref = solver.mjw_model.geom_solref.numpy()
+                solref[..., 0] = phys.contact_timeconst
+                solver.mjw_model.geom_solref.assign(solref)
+            opt = solver.mjw_model.opt  # some kernels are specialised to these options
+            opt.warn_overflow = int(opt.warn_overflow) & quiet
+            return solver
+
+        # MuJoCo Warp specialises kernels to the model while it builds and first steps it. A
+        # rehearsal on two worlds names them (a few depend on the world count: the step's own
+        # rehearsal, below, catches those), so they compile beside the modules above, and while the
+        # full model is built, instead of one by one at their first launch.
+        start = time.perf_counter()
+        queued = preload.add(lambda: build_model(REHEARSAL_WORLDS))  # the finalize kernels
+        small = build_model(REHEARSAL_WORLDS)
+
+        def rehearse():  # a launch-free construction and substep, contact forces on as tasks want them
+            solver = make_solver(small)
+            solver.mjw_model.opt.run_rne_postconstraint = True
+            state, control = small.state(), small.control()
+            solver.step(state, state, control, None, self.dt / self.substeps)
+
+        queued += preload.add(rehearse)
+        stopped_early = preload.stopped_early
+        clock.lap("rehearsal")
+        self.model = model = build_model(self.num_envs)
+        clock.lap("model")
         n = self.num_envs
         self.coords_per_env = model.joint_coord_count // n
         self.dofs_per_env = model.joint_dof_count // n
@@ -149,52 +217,17 @@ class Sim(TensorAPI):
         q[:, 7:] = self.default_dof_pos_np
         model.joint_q.assign(q.reshape(-1))
         model.joint_qd.zero_()
-        phys = self.physics
         if phys.armature is not None:
             armature = model.joint_armature.numpy().reshape(n, self.dofs_per_env)
             armature[:, k_api.ROOT_DOFS :] = phys.armature
             model.joint_armature.assign(armature.reshape(-1))
 
-        # The iteration caps are a deliberate speed/accuracy trade, not an error worth a printf per
-        # world. Dropped constraints and contacts are errors, but they are counted on the device
-        # every substep (solver_overflows, solver_load()) and reported once, not printed per world.
-        from mujoco_warp import OverflowType as OF  # noqa: PLC0415
-
-        self._drop_bits = int(OF.NEFC | OF.NJMAX_NNZ | OF.BROADPHASE | OF.NARROWPHASE)
-        quiet = ~int(OF.ITERATIONS | OF.LS_ITERATIONS | self._drop_bits)
-
-        def make_solver():
-            solver = newton.solvers.SolverMuJoCo(
-                model,
-                iterations=phys.solver_iterations,
-                ls_iterations=phys.ls_iterations,
-                integrator=phys.integrator,
-                nconmax=self.nconmax,
-                njmax=self.njmax,
-                disable_sensors=True,
-            )
-            if phys.contact_timeconst is not None:
-                solref = solver.mjw_model.geom_solref.numpy()
-                solref[..., 0] = phys.contact_timeconst
-                solver.mjw_model.geom_solref.assign(solref)
-            opt = solver.mjw_model.opt  # some kernels are specialised to these options
-            opt.warn_overflow = int(opt.warn_overflow) & quiet
-            return solver
-
-        def rehearse():  # a launch-free construction and substep, contact forces on as tasks want them
-            solver = make_solver()
-            solver.mjw_model.opt.run_rne_postconstraint = True
-            state, control = model.state(), model.control()
-            solver.step(state, state, control, None, self.dt / self.substeps)
-
-        # MuJoCo Warp specialises kernels to the model while it builds and first steps it. The
-        # rehearsal names them, so they compile beside the modules above instead of one by one.
-        start = time.perf_counter()
-        queued = preload.add(rehearse)
         preload.wait()
+        clock.lap("waiting for compiles")
         self.compile_log = [("solver", {"queued": queued, "seconds": time.perf_counter() - start,
-                                        "stopped_early": repr(preload.stopped_early) if preload.stopped_early else None})]
-        self.solver = make_solver()
+                                        "stopped_early": repr(stopped_early) if stopped_early else None})]
+        self.solver = make_solver(model)
+        clock.lap("solver")
         self._peak_nefc = wp.zeros(n, dtype=wp.int32, device=self.device)
         self._peak_nacon = wp.zeros(1, dtype=wp.int32, device=self.device)
         self._overflowed = wp.zeros(n, dtype=wp.int32, device=self.device)
@@ -213,6 +246,14 @@ class Sim(TensorAPI):
         to_mj = np.concatenate([mj_qd_start[j] + np.arange(dof_dims[j]) for j in range(1, joints_per_env)])
         to_mj = to_mj.astype(np.int32)
         self.newton_to_mj_dof = wp.array(to_mj, dtype=wp.int32, device=self.device)
+
+        # The kernels specialised to the world count, named by a launch-free step of this model
+        # (contact forces on: tasks ask for them) and compiled side by side now, not at first launch.
+        self._contact_forces = True
+        self.compile_ahead(self.simulate)
+        self._contact_forces = False
+        clock.lap("step rehearsal")
+        self.build_times = clock.laps
 
     # ------------------------------------------------------------------ stepping
     @property
