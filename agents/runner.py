@@ -83,6 +83,7 @@ class OnPolicyRunner:
         self.rollout_graph = rollout_graph and cuda_graph and self.device.type == "cuda" and spec.graph_capturable
         self._rollout_graph: torch.cuda.CUDAGraph | None = None
         self._rollouts_eager = 0
+        self._in_flight: StagedRow | None = None  # an iteration's row on its way to the host (log())
 
     # ------------------------------------------------------------------ pieces
     def normalize(self, obs: torch.Tensor) -> torch.Tensor:
@@ -187,7 +188,7 @@ class OnPolicyRunner:
         last_iter = min([g for g in goal if g is not None], default=None)
         self.last_eval_time = self.elapsed()
         self.clock.restart()
-        in_flight: StagedRow | None = None  # the previous iteration's row, on its way to the host
+        self._in_flight = None
         stop = False
         finished = True  # the state is that of a finished iteration: safe to checkpoint
         try:
@@ -201,33 +202,38 @@ class OnPolicyRunner:
                 self.iteration += 1
                 self.timer.iterations += 1
                 self.samples += per_iter
-                wants_stop = self._stop_requested or (time_limit is not None and self.elapsed() >= time_limit)
-                staged = self._stage_row(stats, wants_stop)
                 finished = True
-                if in_flight is not None:  # arrived long ago: logging never makes the GPU wait
-                    stop = self._log_row(in_flight, last_iter)
-                in_flight = staged
+                stop = self.log(stats, last_iter, wants_stop=self._stop_requested or
+                                (time_limit is not None and self.elapsed() >= time_limit))
                 self.timer.lap("logging, evaluation, host read")
                 if self.iteration % self.cfg.save_gap == 0 and self.run_dir:
-                    # the checkpoint's own row goes to disk before it: a resume continues right after
-                    # both, with no row missing (one host wait per save, which waits anyway)
-                    stop = self._log_row(in_flight, last_iter) or stop
-                    in_flight = None
+                    stop = self.flush_log(last_iter) or stop  # the checkpoint's own row reaches disk first
                     self.save()
-            if in_flight is not None:  # the last iteration always carries an evaluation
-                staged, in_flight = in_flight, None
-                self._log_row(staged, last_iter, final=True)
+            self.flush_log(last_iter, final=True)  # the last iteration always carries an evaluation
         finally:
-            if in_flight is not None:  # interrupted: keep the finished iteration's row, if it can be read
-                try:
-                    self._log_row(in_flight, last_iter, may_evaluate=False)
-                except Exception:  # noqa: BLE001  (the original error is the one to see)
-                    pass
-            # An error inside an iteration may leave the policy half updated: the last checkpoint
-            # written between iterations stands (at most save_gap iterations are lost).
+            # Interrupted: keep the finished iteration's row if it can be read. An error inside an
+            # iteration may leave the policy half updated: the last checkpoint, written between
+            # iterations, stands (at most save_gap iterations are lost).
+            try:
+                self.flush_log(last_iter, may_evaluate=False)
+            except Exception:  # noqa: BLE001  (the original error is the one to see)
+                pass
             if self.run_dir and finished:
                 self.save()
         return self.history
+
+    def log(self, stats: dict, last_iter: int | None, wants_stop: bool) -> bool:
+        """Queue this iteration's row to the host and log the previous one, which arrived long ago:
+        logging never makes the GPU wait. Returns whether any process asked to stop."""
+        staged = self._stage_row(stats, wants_stop)
+        stop = self.flush_log(last_iter)
+        self._in_flight = staged
+        return stop
+
+    def flush_log(self, last_iter: int | None, final: bool = False, may_evaluate: bool = True) -> bool:
+        """Log the row in flight now, if there is one (one host wait); return whether to stop."""
+        staged, self._in_flight = self._in_flight, None
+        return False if staged is None else self._log_row(staged, last_iter, final, may_evaluate)
 
     def close(self) -> None:
         """Free the CUDA graphs (before ``destroy_process_group``: see ``PPO.release_graph``)."""
