@@ -426,7 +426,7 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
         say(f"note: {note}", flush=True)
     cache, cached = preload.kernel_cache()
     phase(f"imports done; Warp kernel cache {cache} holds {cached} modules"
-          + ("" if cached else " (empty: this run compiles them, about 20 s on an H100 and 15 s on two "
+          + ("" if cached else " (empty: this run compiles them, about 15 s on an H100 or on two "
                                 "CPU cores; WARP_CACHE_PATH points Warp at a shared cache)"))
     if args.no_mathdx:
         preload.use_mathdx(False)

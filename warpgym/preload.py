@@ -12,8 +12,8 @@ before the first step. Two things shorten that:
 - MuJoCo Warp's specialised kernels exist only once its closures run, during the solver's
   construction and first step, and Warp would compile them one by one as they are first launched.
   ``record_modules(fn)`` runs ``fn`` once with every launch turned into a note of the module it
-  needs. ``Sim`` rehearses the solver's construction and a substep this way and queues the modules
-  on the pool above (``Preload.add``); the env checks its whole step with ``compile_ahead``, which
+  needs. ``Sim`` rehearses a two-world model's finalize, solver construction and substep this way
+  and queues the modules on the pool above (``Preload.add``) while it builds the full model; the env checks its whole step with ``compile_ahead``, which
   compiles whatever is still missing, side by side. Five of those kernels factor small matrices with Warp's tile
   Cholesky, which by default links NVIDIA's libmathdx (slow to compile, fast to run). Those LTO
   objects are built in child processes first (``warpgym.mathdx``), since Warp builds them one at

@@ -169,6 +169,7 @@ class Sim(TensorAPI):
         # full model is built, instead of one by one at their first launch.
         start = time.perf_counter()
         queued = preload.add(lambda: build_model(REHEARSAL_WORLDS))  # the finalize kernels
+        stopped_early = preload.stopped_early
         small = build_model(REHEARSAL_WORLDS)
 
         def rehearse():  # a launch-free construction and substep, contact forces on as tasks want them
@@ -178,7 +179,7 @@ class Sim(TensorAPI):
             solver.step(state, state, control, None, self.dt / self.substeps)
 
         queued += preload.add(rehearse)
-        stopped_early = preload.stopped_early
+        stopped_early = stopped_early or preload.stopped_early
         clock.lap("rehearsal")
         self.model = model = build_model(self.num_envs)
         clock.lap("model")
