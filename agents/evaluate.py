@@ -9,7 +9,10 @@ import torch
 def evaluate(env, policy, normalize, max_steps: int, recorder=None) -> dict:
     """Mean return, length and forward speed of the first episode of every env (one host read).
 
-    A ``recorder`` (agents.protocol) sees the env after the reset and after every step."""
+    Forward speeds are the env's own (``info["episode"]["s"]``, agents.protocol): nothing here computes
+    one. An episode still running after ``max_steps`` counts with what it has so far, its speed from
+    ``info["episode_so_far"]["s"]`` (0 if the env reports none). A ``recorder`` (agents.protocol) sees
+    the env after the reset and after every step."""
     obs, _ = env.reset()
     if recorder is not None:
         recorder.capture(env)
@@ -19,6 +22,7 @@ def evaluate(env, policy, normalize, max_steps: int, recorder=None) -> dict:
     ret = torch.zeros(n, device=dev)
     length = torch.zeros(n, device=dev)
     out_ret, out_len, out_speed = torch.zeros(n, device=dev), torch.zeros(n, device=dev), torch.zeros(n, device=dev)
+    info: dict = {}
     for _ in range(max_steps):
         obs, reward, terminated, truncated, info = env.step(policy.act_deterministic(normalize(obs)))
         if recorder is not None:
@@ -36,5 +40,8 @@ def evaluate(env, policy, normalize, max_steps: int, recorder=None) -> dict:
     # an episode still running at max_steps counts with what it has so far
     out_ret = torch.where(finished, out_ret, ret)
     out_len = torch.where(finished, out_len, length)
+    so_far = info.get("episode_so_far", {}).get("s")
+    if so_far is not None:
+        out_speed = torch.where(finished, out_speed, so_far)
     r, ln, s = torch.stack([out_ret.mean(), out_len.mean(), out_speed.mean()]).tolist()
     return {"eval/return": r, "eval/length": ln, "eval/speed": s}

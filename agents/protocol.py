@@ -5,8 +5,10 @@ An env needs ``num_envs``; observation and action sizes, as ``num_obs``/``num_ac
 ``step(actions) -> (obs, reward, terminated, truncated, info)``, everything a torch tensor on one
 device. Finished envs reset inside the step (Gymnasium's same-step autoreset): ``info["final_obs"]``
 holds their last observation, masked by ``info["_final_obs"]``. Optional:
-``info["episode"] = {"r": return, "l": length, "s": mean forward speed, "_r": mask}`` for logging,
-and ``max_episode_steps`` for evaluation.
+``info["episode"] = {"r": return, "l": length, "s": forward speed, "_r": mask}`` for logging;
+``info["episode_so_far"]`` with the same keys for the episode in progress after the step (what an
+evaluation cut short reports); and ``max_episode_steps`` for evaluation. The learner computes no
+speed of its own: it averages the env's.
 
 Optional: ``fault_counters() -> {name: device tensor}``, running totals of things that should
 never happen (NaN actions, physics blow-ups, dropped constraints), with ``FAULT_HELP = {name: text}``.

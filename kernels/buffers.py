@@ -33,10 +33,10 @@ class EpisodeBuffers:
     potential: wp.array[float]  # (N,) -distance to the target / dt at the last step
     length: wp.array[wp.int32]  # (N,) steps so far
     total_return: wp.array[float]  # (N,)
-    forward: wp.array[float]  # (N,) sum of the root's forward (x) velocity
+    speed: wp.array[float]  # (N,) forward speed of the episode so far [m/s] (kernels.observations.forward_speed)
     ended_return: wp.array[float]  # (N,) written when an episode ends
     ended_length: wp.array[wp.int32]  # (N,)
-    ended_speed: wp.array[float]  # (N,) its mean forward speed [m/s]
+    ended_speed: wp.array[float]  # (N,) its forward speed [m/s]
 
 
 @wp.struct

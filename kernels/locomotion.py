@@ -4,7 +4,7 @@ terminations and truncations, and per-env episode accumulators."""
 import warp as wp
 
 from kernels.buffers import EpisodeBuffers, RobotView, StepOutputs
-from kernels.observations import potential, root_position, write_observation
+from kernels.observations import forward_speed, potential, root_position, write_observation
 from kernels.params import LocomotionParams
 from kernels.rewards import locomotion_reward
 
@@ -33,7 +33,8 @@ def locomotion_step(p: LocomotionParams, robot: RobotView, episodes: EpisodeBuff
     sane = is_sane(p, robot, env)
     write_observation(env, p, robot, 0, out.obs)
 
-    new_potential = potential(p, root_position(robot.joint_q, env))
+    pos = root_position(robot.joint_q, env)
+    new_potential = potential(p, pos)
     progress = new_potential - episodes.potential[env]
     if wp.abs(progress) > p.max_speed:
         sane = False  # the root jumped farther in one step than max_speed allows
@@ -50,8 +51,8 @@ def locomotion_step(p: LocomotionParams, robot: RobotView, episodes: EpisodeBuff
     length = episodes.length[env] + 1
     episodes.length[env] = length
     episodes.total_return[env] = episodes.total_return[env] + r
-    if sane:
-        episodes.forward[env] = episodes.forward[env] + robot.joint_qd[env, 0]
+    if sane:  # a blown-up state travelled nowhere: the speed keeps its last sane value
+        episodes.speed[env] = forward_speed(p, pos, length)
     trunc = (length >= p.episode_length) and not fell
 
     out.reward[env] = r

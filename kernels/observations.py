@@ -37,6 +37,14 @@ def potential(p: LocomotionParams, pos: wp.vec3):
 
 
 @wp.func
+def forward_speed(p: LocomotionParams, pos: wp.vec3, steps: int):
+    # The project's one forward speed: the root's travel from the start pose along the task's forward
+    # direction, over the time the episode has lasted (LocomotionTask.forward_speed is its host twin).
+    travel = wp.dot(pos - p.start_pos, p.forward_dir)
+    return travel / (float(wp.max(steps, 1)) * p.dt)
+
+
+@wp.func
 def write_observation(
     env: int,
     p: LocomotionParams,

@@ -10,6 +10,7 @@ class LocomotionParams:
     target: wp.vec3  # walk target in each env's frame [m]
     start_pos: wp.vec3  # root position at reset [m]
     start_rot: wp.quat  # root orientation at reset (xyzw)
+    forward_dir: wp.vec3  # unit horizontal vector from the start towards the target: what forward means
     angular_velocity_scale: float
     dof_velocity_scale: float
     dof_force_scale: float

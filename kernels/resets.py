@@ -25,7 +25,7 @@ def record_ended_episode(env: int, episodes: EpisodeBuffers, out: StepOutputs):
     length = episodes.length[env]
     episodes.ended_return[env] = episodes.total_return[env]
     episodes.ended_length[env] = length
-    episodes.ended_speed[env] = episodes.forward[env] / float(wp.max(length, 1))
+    episodes.ended_speed[env] = episodes.speed[env]
 
 
 @wp.func
@@ -65,7 +65,7 @@ def reset_finished_envs(
         record_ended_episode(env, episodes, out)
     episodes.length[env] = 0
     episodes.total_return[env] = 0.0
-    episodes.forward[env] = 0.0
+    episodes.speed[env] = 0.0
     draw_start_state(env, p, robot, rng_state)
     episodes.potential[env] = potential(p, p.start_pos)
     write_observation(env, p, robot, 1, out.obs)

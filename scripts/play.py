@@ -5,10 +5,13 @@
     python scripts/play.py runs/Ant-20261122-120000 --video ant.mp4     # one episode, tracking camera
     python scripts/play.py runs/Ant-20261122-120000 --gif ant.gif --steps 300 --num-envs 9   # a 3x3 grid
 
-Each env plays one full episode with the action mean (no exploration noise). With --video or
---gif the physics runs in warpgym as in training, and each control step's state is drawn by
-MuJoCo's renderer from the same MJCF (headless: EGL or OSMesa; pip install "warpgym[video]").
-MP4 runs at 60 fps (one frame per 1/60 s control step), GIF at 20.
+Each env plays one episode with the action mean (no exploration noise), cut short after --steps.
+Forward speed, here as everywhere in warpgym, is the distance travelled towards the target over the
+time the episode lasted (warpgym.tasks.LocomotionTask.forward_speed). With --video or --gif the
+physics runs in warpgym as in training, and each control step's state is drawn by MuJoCo's renderer
+from the same MJCF (headless: EGL or OSMesa; pip install "warpgym[video]"). MP4 runs at 60 fps (one
+frame per 1/60 s control step), GIF at 20. A clip's forward speed counts the strides it shows; a
+robot that fell and was reset inside it adds no travel for its reset.
 """
 
 from __future__ import annotations
@@ -93,18 +96,18 @@ def main(argv=None) -> int:
     result = evaluate(env, policy, normalize, steps, recorder)
     result = {"task": task, "checkpoint": path, "iteration": ckpt["iteration"], "samples": ckpt["samples"],
               "episodes": n, **result}
-    print(f"{task}: {n} episodes of the deterministic policy from iteration {ckpt['iteration']}: "
-          f"mean return {result['eval/return']:.1f}, mean forward speed {result['eval/speed']:.2f} m/s, "
-          f"mean length {result['eval/length']:.0f} steps")
+    print(f"{task}, policy of iteration {ckpt['iteration']}, {n} episodes of the deterministic policy: "
+          f"return {result['eval/return']:.1f}, forward speed {result['eval/speed']:.2f} m/s, "
+          f"length {result['eval/length']:.0f} steps (means)")
     if filming:
+        from warpgym.clips import clip_forward_speed  # noqa: PLC0415
         from warpgym.video import render_clip  # noqa: PLC0415
 
         states = recorder.states()
-        x = states["root_pose"][:, :, 0]  # evaluate() reports speed at an episode's end; a clip may end before
-        seconds = (x.shape[0] - 1) * env.task.dt
-        result["clip/forward_speed"] = float((x[-1] - x[0]).mean() / seconds) if seconds > 0 else 0.0
-        print(f"filmed {x.shape[0] - 1} steps ({seconds:.1f} s): the robots moved forward at "
-              f"{result['clip/forward_speed']:.2f} m/s (a reset within the clip lowers it)")
+        shown = states["root_pose"].shape[0] - 1  # steps after the first frame
+        result["clip/forward_speed"] = float(clip_forward_speed(env.task, states).mean())
+        print(f"clip: {shown} steps ({shown * env.task.dt:.1f} s) of {n} robot(s): forward speed "
+              f"{result['clip/forward_speed']:.2f} m/s")
 
         outputs = {}
         if args.video:

@@ -8,10 +8,11 @@ Plays the deterministic policy for one episode (--steps control steps) in four s
     native MuJoCo  the same MJCF in the ``mujoco`` package (C, CPU, float64), at the training step and
                    --finer times finer, with the observation and action mapping computed from MuJoCo's
                    own data (warpgym/native.py)
-and prints for each: forward speed (summed while an episode lasts, divided by envs x steps, so a
-robot that falls adds zero from then on), torso height while up, falls, the largest joint speed, and
-the share of steps with no foot on the ground and the longest such stretch; the ratio columns divide by warpgym's training-step
-speed. A gait that only works at the training step exploits the integrator, not the robot.
+and prints for each: forward speed (each robot's first episode: the distance it travelled towards the
+target over the time until it fell or the replay ended, warpgym's one definition; the mean over
+robots), torso height while up, falls, the largest joint speed, and the share of steps with no foot on
+the ground and the longest such stretch; the ratio columns divide by warpgym's training-step speed. A
+gait that only works at the training step exploits the integrator, not the robot.
 """
 
 from __future__ import annotations
@@ -33,16 +34,17 @@ class GaitMeter:
     def __init__(self, k: int, contact_measure: str):
         self.k, self.steps, self.contact_measure = k, 0, contact_measure
         self.up = np.ones(k, bool)
-        self.vx, self.z, self.up_steps, self.airborne = np.zeros(k), np.zeros(k), np.zeros(k), np.zeros(k)
+        self.speed, self.z, self.up_steps, self.airborne = np.zeros(k), np.zeros(k), np.zeros(k), np.zeros(k)
         self.stretch, self.longest_stretch = np.zeros(k), np.zeros(k)
         self.peak_joint_speed = 0.0
 
-    def add(self, vx, z, dof_vel, touching, ended) -> None:
-        """vx, z (K,); dof_vel (K, A); touching (K,) bool: a foot was on the ground in this step;
-        ended (K,) bool: fell or timed out at this step."""
+    def add(self, speed, z, dof_vel, touching, ended) -> None:
+        """speed (K,): the forward speed of each robot's episode so far (LocomotionTask.forward_speed),
+        kept from the step it ended; z (K,); dof_vel (K, A); touching (K,) bool: a foot was on the
+        ground in this step; ended (K,) bool: fell or timed out at this step."""
         up = self.up
         self.steps += 1
-        self.vx += vx * up
+        self.speed = np.where(up, speed, self.speed)
         self.z += z * up
         self.up_steps += up
         flying = ~touching & up
@@ -55,7 +57,7 @@ class GaitMeter:
 
     def result(self, fell: np.ndarray) -> dict:
         alive_steps = max(self.up_steps.sum(), 1.0)
-        return {"forward_speed": float(self.vx.sum() / (self.k * self.steps)),
+        return {"forward_speed": float(self.speed.mean()),
                 "torso_height": float(self.z.sum() / alive_steps),
                 "falls": int(fell.sum()), "robots": self.k,
                 "peak_joint_speed": self.peak_joint_speed,
@@ -84,20 +86,31 @@ def replay_warpgym(ckpt, env_args: dict, substeps: int, envs: int, steps: int, d
     env = LocomotionVecEnv(env_args["task"], num_envs=envs, device=device, seed=seed, substeps=substeps,
                            physics=env_args.get("physics") or {}, max_episode_steps=steps)
     policy, normalize = policy_from_checkpoint(ckpt, env.num_obs, env.num_actions, torch.device(device))
+    result = play_warpgym(env, lambda obs: policy.act_deterministic(normalize(obs)), steps, seed)
+    env.close()
+    return result
+
+
+def play_warpgym(env, act, steps: int, seed: int) -> dict:
+    """``steps`` control steps of ``act`` (observations -> actions, torch) in a ``LocomotionVecEnv``."""
+    import torch  # noqa: PLC0415
+
+    envs = env.num_envs
     feet = feet_columns(env.task, env.num_actions, env.sim.foot_bodies.shape[0])
     meter = GaitMeter(envs, "foot contact force in the last substep of a step")
     fell = np.zeros(envs, bool)
     obs, _ = env.reset(seed=seed)
     with torch.no_grad():
         for _ in range(steps):
-            obs, _, terminated, truncated, _ = env.step(policy.act_deterministic(normalize(obs)))
-            ended = (terminated | truncated).cpu().numpy()
+            obs, _, terminated, truncated, info = env.step(act(obs))
+            done = terminated | truncated
+            ended = done.cpu().numpy()
             fell |= terminated.cpu().numpy() & meter.up
             # a robot that ended was reset inside the step: its pose is the new episode's, its
-            # observation row the new episode's first; it stops counting here either way
-            meter.add(env.sim.root_vel[:, 0].cpu().numpy(), env.sim.root_pose[:, 2].cpu().numpy(),
+            # observation row the new episode's first; its speed is the env's record of the one that ended
+            speed = torch.where(done, info["episode"]["s"], info["episode_so_far"]["s"])
+            meter.add(speed.cpu().numpy(), env.sim.root_pose[:, 2].cpu().numpy(),
                       env.sim.dof_vel.cpu().numpy(), feet_pressed(obs[:, feet].cpu().numpy(), envs), ended)
-    env.close()
     return meter.result(fell)
 
 
@@ -114,20 +127,30 @@ def replay_native(ckpt, env_args: dict, substeps: int, copies: int, steps: int, 
     robot = NativeRobot(task, substeps=substeps, copies=copies)
     num_obs = task.observation_size(len(robot.dof_names), len(robot.feet))
     policy, normalize = policy_from_checkpoint(ckpt, num_obs, len(robot.dof_names), torch.device("cpu"))
+    return play_native(robot, lambda obs: policy.act_deterministic(normalize(obs)), steps, seed)
+
+
+def play_native(robot, act, steps: int, seed: int) -> dict:
+    """``steps`` control steps of ``act`` (observations -> actions, torch) on a ``NativeRobot``; each
+    robot stops at its first fall."""
+    import torch  # noqa: PLC0415
+
+    task, copies = robot.task, robot.copies
     meter = GaitMeter(copies, "a foot within the contact margin of the ground in any substep of a step")
     fell = np.zeros(copies, bool)
     robot.reset(np.random.default_rng(seed))
+    start = robot.state()["root_pose"][:, :3]
     actions = np.zeros((copies, len(robot.dof_names)))
     obs = robot.observation(actions, fresh=True)
     with torch.no_grad():
-        for _ in range(steps):
-            act = policy.act_deterministic(normalize(torch.as_tensor(obs, dtype=torch.float32))).numpy()
-            actions = robot.step(act, active=meter.up)
+        for step in range(1, steps + 1):
+            actions = robot.step(act(torch.as_tensor(obs, dtype=torch.float32)).numpy(), active=meter.up)
             obs = robot.observation(actions)
             s = robot.state()
             down = s["root_pose"][:, 2] < task.termination_height
             fell |= down & meter.up
-            meter.add(s["root_vel"][:, 0], s["root_pose"][:, 2], s["dof_vel"], robot.feet_touched, down)
+            speed = task.forward_speed(s["root_pose"][:, :3] - start, step)
+            meter.add(speed, s["root_pose"][:, 2], s["dof_vel"], robot.feet_touched, down)
     return meter.result(fell)
 
 

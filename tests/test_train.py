@@ -67,10 +67,33 @@ def test_gait_meter_counts_flights_until_a_robot_ends():
     # robot 0: ground, 3 steps in the air, ground, 1 in the air; robot 1 flies 2 steps, then ends
     touching = [(True, False), (False, False), (False, True), (False, True), (True, True), (False, True)]
     ended = [(False, False), (False, True), (False, False), (False, False), (False, False), (False, False)]
-    for t, e in zip(touching, ended):
-        meter.add(np.array([1.0, 2.0]), z, vel, np.array(t), np.array(e))
+    for step, (t, e) in enumerate(zip(touching, ended)):
+        # each robot's speed so far; robot 1's after its end belongs to a new episode and must not count
+        meter.add(np.array([1.0 + step, 2.0 if step < 2 else 9.0]), z, vel, np.array(t), np.array(e))
     r = meter.result(np.array([False, True]))
     # robot 0 is up 6 steps (4 airborne), robot 1 2 steps (2 airborne) before it ended
     assert r["no_foot_contact_share"] == 6 / 8
     assert r["longest_airborne_steps"] == np.median([3, 2])
-    assert r["forward_speed"] == (6 * 1.0 + 2 * 2.0) / 12 and r["falls"] == 1
+    assert r["forward_speed"] == (6.0 + 2.0) / 2 and r["falls"] == 1
+
+
+def test_play_prints_one_forward_speed_per_thing_measured_and_they_agree(tmp_path, capsys):
+    """An episode cut short by --steps and the clip of that episode are the same travel over the same
+    time: play.py must print the same forward speed for both (it once printed 0 for the first)."""
+    pytest = __import__("pytest")
+    pytest.importorskip("av")
+    pytest.importorskip("PIL")
+    run = str(tmp_path / "ant")
+    assert train.main(["--task", "Ant", "--device", "cpu", "--num-envs", "8", "--max-iterations", "2",
+                       "--horizon-len", "8", "--no-eval", "--no-plots", "--run-dir", run]) == 0
+    capsys.readouterr()
+    gif = str(tmp_path / "a.gif")
+    assert play.main([run, "--device", "cpu", "--steps", "20", "--gif", gif, "--width", "160", "--height",
+                      "120", "--gif-width", "160"]) == 0
+    lines = capsys.readouterr().out.strip().splitlines()
+    result = json.loads(lines[-1])
+    speeds = [line for line in lines[:-1] if "forward speed" in line]
+    assert len(speeds) == 2, lines  # the episodes, then the clip
+    assert result["eval/length"] == 20 and abs(result["eval/speed"]) > 1e-3
+    assert abs(result["clip/forward_speed"] - result["eval/speed"]) <= 0.01 * abs(result["eval/speed"])
+    assert os.path.getsize(gif) > 0

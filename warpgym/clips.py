@@ -44,9 +44,11 @@ class StateRecorder:
             if self.copies > env.num_envs:
                 raise ValueError(f"copies={self.copies} but the env has {env.num_envs} robots")
             self.task = env.task
-            # views of the sim's persistent state, made once (each Tensor API property builds a new view)
+            # views of the sim's persistent state, made once (each Tensor API property builds a new view),
+            # and each robot's step count in its episode, which tells a reset apart from a stride
             self._sources = {k: getattr(env.sim, k)[: self.copies] for k in STATE_KEYS}
-            self._buffers = {k: torch.empty((self.steps, *v.shape), dtype=torch.float32, device=env.device)
+            self._sources["episode_steps"] = env.episode_steps[: self.copies]
+            self._buffers = {k: torch.empty((self.steps, *v.shape), dtype=v.dtype, device=env.device)
                              for k, v in self._sources.items()}
         for key, buf in self._buffers.items():
             buf[self.count].copy_(self._sources[key])
@@ -60,6 +62,18 @@ class StateRecorder:
 
     def clear(self) -> None:
         self.count = 0
+
+
+def clip_forward_speed(task, states: dict) -> np.ndarray:
+    """(K,) forward speed of each robot over a clip (``StateRecorder.states()``): its travel between
+    consecutive frames of one episode over their time (``LocomotionTask.forward_speed``). A reset inside
+    the clip is not travel: the stride into a reset pose is left out, travel and time alike."""
+    pos = states["root_pose"][..., :3]  # (T, K, 3)
+    steps = states["episode_steps"]  # (T, K)
+    same_episode = steps[1:] == steps[:-1] + 1
+    travel = ((pos[1:] - pos[:-1]) * same_episode[..., None]).sum(axis=0)
+    counted = same_episode.sum(axis=0)
+    return np.where(counted > 0, task.forward_speed(travel, np.maximum(counted, 1)), 0.0)
 
 
 class EvalVideoRecorder(StateRecorder):

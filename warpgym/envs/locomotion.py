@@ -99,7 +99,7 @@ class LocomotionVecEnv(VectorEnv):
         robot.warm_start = sim.solver.mjw_data.qacc_warmstart
 
         self._episodes = ep = EpisodeBuffers()
-        ep.potential, ep.length, ep.total_return, ep.forward = buf(n), buf(n, wp.int32), buf(n), buf(n)
+        ep.potential, ep.length, ep.total_return, ep.speed = buf(n), buf(n, wp.int32), buf(n), buf(n)
         ep.ended_return, ep.ended_length, ep.ended_speed = buf(n), buf(n, wp.int32), buf(n)
 
         self._out = out = StepOutputs()
@@ -127,6 +127,9 @@ class LocomotionVecEnv(VectorEnv):
                 "_s": done,
             },
             "_episode": done,
+            # the episode in progress after this step (a fresh one where the step reset the env):
+            # what an evaluation cut short reports (agents.evaluate)
+            "episode_so_far": {"r": t(ep.total_return), "l": t(ep.length), "s": t(ep.speed)},
             "nan_actions": t(self._nan_count),
             "diverged": t(out.diverged),
             "solver_overflows": t(sim.solver_overflows),

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass, field
 
 import warp as wp
@@ -44,6 +45,25 @@ class LocomotionTask:
     def observe_dof_forces(self) -> bool:
         return self.dof_force_scale != 0.0
 
+    @property
+    def forward_direction(self) -> tuple[float, float, float]:
+        """Unit horizontal vector from the start (above the env's origin) towards the target."""
+        x, y = self.target[0], self.target[1]
+        norm = math.hypot(x, y)
+        if norm == 0.0:
+            raise ValueError(f"target={self.target!r} lies straight above the start: it gives no forward direction")
+        return (x / norm, y / norm, 0.0)
+
+    def forward_speed(self, travel, steps):
+        """The forward speed [m/s] of a robot whose root moved by ``travel`` (..., 3: end minus start
+        position) in ``steps`` control steps: the distance along ``forward_direction`` over the time.
+
+        Every reporter uses this definition: the env's ``info["episode"]["s"]`` (its kernel twin,
+        ``kernels.observations.forward_speed``), evaluations, training rows, play.py's episodes and
+        clips, and sim2sim.py in both simulators. Works on numpy arrays and torch tensors."""
+        d = self.forward_direction
+        return (travel[..., 0] * d[0] + travel[..., 1] * d[1]) / (steps * self.dt)
+
     def observation_size(self, num_dofs: int, num_feet: int) -> int:
         per_dof = 4 if self.observe_dof_forces else 3
         return 12 + per_dof * num_dofs + 6 * num_feet
@@ -85,5 +105,6 @@ class LocomotionTask:
         p.target = wp.vec3(*self.target)
         p.start_pos = wp.vec3(0.0, 0.0, start_height)
         p.start_rot = wp.quat_identity()
+        p.forward_dir = wp.vec3(*self.forward_direction)
         p.observe_dof_forces = int(self.observe_dof_forces)
         return p
