@@ -80,6 +80,13 @@ def load_native_model(robot: str, timestep: float, physics: Physics | None = Non
                                      friction=list(GROUND_FRICTION), condim=3, margin=0.0)
     if visual:
         _dress_for_camera(mujoco, spec, ground)
+    if physics.armature is not None:
+        # On the spec, before compiling: the compiler derives the constraints' regularisation from the
+        # mass matrix (dof_invweight0 and friends), armature included; a value written into the
+        # compiled model afterwards would leave those at the MJCF's armature.
+        for joint in spec.joints:
+            if joint.type == mujoco.mjtJoint.mjJNT_HINGE:
+                joint.armature = physics.armature
     model = spec.compile()
     # nv_humanoid.xml's default class gives every joint stiffness 5, its free root joint too: a spring
     # pulling the torso towards the origin, which Newton (and Isaac Gym) do not import.
@@ -88,9 +95,6 @@ def load_native_model(robot: str, timestep: float, physics: Physics | None = Non
     model.opt.integrator = INTEGRATORS[physics.integrator]
     model.opt.iterations = physics.solver_iterations
     model.opt.ls_iterations = physics.ls_iterations
-    hinge_dofs = model.jnt_dofadr[model.jnt_type == mujoco.mjtJoint.mjJNT_HINGE]
-    if physics.armature is not None:
-        model.dof_armature[hinge_dofs] = physics.armature
     if physics.contact_timeconst is not None:
         model.geom_solref[:, 0] = physics.contact_timeconst
     return model
