@@ -55,6 +55,9 @@ class Config:
     eval_envs: int = 64
     save_gap: int = 50
     keep_checkpoints: bool = False  # also keep checkpoint-<iteration>.pt at every save
+    # wall-clock seconds since the run started at which to keep a checkpoint-<iteration>.pt (the first
+    # iteration that ends after each), e.g. (60, 120): policies of known training time to compare
+    save_at: tuple[float, ...] = ()
 
     @classmethod
     def for_task(cls, task: str, **overrides) -> Config:
@@ -92,7 +95,11 @@ class Config:
                 raise ValueError(f"{name}={v!r} must be a non-negative number")
         if self.activation not in ("elu", "relu", "tanh"):
             raise ValueError(f"activation={self.activation!r}: choose 'elu', 'relu' or 'tanh'")
+        marks = tuple(self.save_at)
+        if any(not (isinstance(t, (int, float)) and math.isfinite(t) and t >= 0) for t in marks):
+            raise ValueError(f"save_at={self.save_at!r} must hold non-negative numbers of seconds, e.g. (60, 120)")
         self.net_dims = tuple(self.net_dims)
+        self.save_at = tuple(sorted(float(t) for t in marks))
         return self
 
     def check_batch(self, num_envs: int) -> int:

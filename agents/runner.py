@@ -65,6 +65,8 @@ class OnPolicyRunner:
         self.elapsed_before = 0.0  # wall-clock seconds of earlier processes of this run (resume)
         self.last_eval_time = 0.0  # set when learn() starts: the first evaluation waits eval_gap
         self.history: list[dict] = []
+        self.kept: list[dict] = []  # the checkpoints kept at cfg.save_at: mark, iteration, time
+        self._marks_after = -1.0  # save_at marks up to this many seconds are done (by an earlier process)
         self.last_raw_obs: torch.Tensor | None = None  # the env's latest observation, not yet acted on
         self.timer = PhaseTimer(self.device, enabled=profile)  # --profile: synchronising, per step
         self.clock = IterationClock(self.device)  # always on: events, read one iteration late
@@ -209,6 +211,7 @@ class OnPolicyRunner:
                 if self.iteration % self.cfg.save_gap == 0 and self.run_dir:
                     stop = self.flush_log(last_iter) or stop  # the checkpoint's own row reaches disk first
                     self.save()
+                self._keep_if_due()
             self.flush_log(last_iter, final=True)  # the last iteration always carries an evaluation
         finally:
             # Interrupted: keep the finished iteration's row if it can be read. An error inside an
@@ -326,6 +329,20 @@ class OnPolicyRunner:
         save_atomic(state, path)
         return path
 
+    def _keep_if_due(self) -> None:
+        """Keep checkpoint-<iteration>.pt once a ``save_at`` mark has passed (rank 0; a copy for later
+        comparison, not the file a resume reads, so its row need not be on disk first)."""
+        marks = [t for t in self.cfg.save_at if t > self._marks_after]
+        now = self.elapsed()
+        if not (self.run_dir and marks and now >= marks[0]):
+            return
+        passed = [t for t in marks if t <= now]
+        self._marks_after = passed[-1]
+        path = os.path.join(self.run_dir, f"checkpoint-{self.iteration}.pt")
+        save_atomic(self.state_dict(), path)
+        self.kept.append({"mark_s": passed[-1], "marks_s": passed, "iteration": self.iteration,
+                          "samples": self.samples, "time_s": round(now, 3), "path": path})
+
     def load(self, path: str, resume: bool = True) -> None:
         """Load a checkpoint that rank 0 can read (other processes, on other machines, get its bytes).
 
@@ -345,6 +362,7 @@ class OnPolicyRunner:
             self.ppo.lr.fill_(ckpt["lr"])
             self.iteration, self.samples = ckpt["iteration"], ckpt["samples"]
             self.elapsed_before = ckpt["elapsed_s"]
+            self._marks_after = self.elapsed_before
             self.start_time = time.time()
             set_rng_state(ckpt["rng"], self.device)
             if not self.workers.is_main:

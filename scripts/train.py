@@ -58,6 +58,9 @@ def parse_args(argv=None):
     ap.add_argument("--substeps", type=int, default=None, help="physics substeps per 1/60 s step (default: the task's)")
     ap.add_argument("--physics", action="append", default=[], metavar="NAME=VALUE",
                     help="a physics setting (warpgym/physics.py), e.g. --physics armature=0.05; repeat for more")
+    ap.add_argument("--save-at", type=float, nargs="+", default=None, metavar="SECONDS",
+                    help="also keep checkpoint-<iteration>.pt at the first iteration after each of these "
+                         "wall-clock seconds since start, e.g. --save-at 60 120 (summary.json lists them)")
     ap.add_argument("--keep-checkpoints", action="store_true",
                     help="keep checkpoint-<iteration>.pt at every save, not only the latest checkpoint.pt")
     ap.add_argument("--video", action="store_true",
@@ -110,6 +113,9 @@ def check_values(ap, args) -> None:
         if not (low_ok and math.isfinite(v)):
             need = "a positive" if name in POSITIVE else "a non-negative"
             ap.error(f"{flag(name)} {v}: must be {need} number, e.g. {flag(name)} {example}")
+    for v in args.save_at or ():
+        if not (v >= 0 and math.isfinite(v)):
+            ap.error(f"--save-at {v}: must be non-negative seconds since start, e.g. --save-at 60 120")
     if args.task is not None and args.task.lower() not in TASK_NAMES:
         ap.error(f"--task {args.task!r}: choose one of {sorted(TASK_NAMES.values())}")
     if args.resume is not None:
@@ -184,6 +190,7 @@ def build_config(args, task: str, num_envs: int, device: str, saved: dict | None
         "horizon_len": args.horizon_len, "repeat_times": args.repeat_times, "learning_rate": args.learning_rate,
         "save_gap": args.save_gap, "eval_gap": args.eval_gap, "eval_envs": args.eval_envs,
         "batch_size": args.batch_size, "keep_checkpoints": args.keep_checkpoints or None,
+        "save_at": tuple(args.save_at) if args.save_at else None,
     }.items() if v is not None}
     if saved is None and "eval_envs" not in changes and device == "cpu":
         changes["eval_envs"] = 4
@@ -465,6 +472,7 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
         return 0
     summary = summarize(history, device_name, cfg)
     summary["solver_load"] = env.sim.solver_load()  # this process's envs, over the whole run
+    summary["kept_checkpoints"] = runner.kept
     summary["startup"] = {"timeline": timeline, "kernel_cache": cache, "cached_modules_at_start": cached,
                           "compiled": compile_log.compile_trace(since=PROCESS_START),
                           "lto_builds": compile_log.lto_builds_since(PROCESS_START)}

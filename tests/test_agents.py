@@ -208,6 +208,23 @@ def test_an_error_inside_an_iteration_keeps_its_rows_and_the_last_clean_checkpoi
     assert load(str(tmp_path / "checkpoint.pt"), torch.device("cpu"))["iteration"] == 2
 
 
+def test_checkpoints_are_kept_at_the_first_iteration_after_each_save_at_mark_and_not_again_on_resume(tmp_path):
+    cfg = Config(net_dims=(8,), horizon_len=4, batch_size=32, repeat_times=1, eval_gap=1e9, save_gap=10**6,
+                 save_at=(45, 15, 25, 26))
+    a = OnPolicyRunner(PointMassVecEnv(8), cfg, run_dir=str(tmp_path), print_fn=lambda s: None)
+    a.elapsed = lambda: 10.0 * a.iteration  # a clock that ticks 10 s per iteration
+    a.learn(max_iterations=3)
+    assert [(k["marks_s"], k["iteration"]) for k in a.kept] == [([15.0], 2), ([25.0, 26.0], 3)]
+    assert load(str(tmp_path / "checkpoint-2.pt"), torch.device("cpu"))["iteration"] == 2
+    b = OnPolicyRunner(PointMassVecEnv(8), cfg, run_dir=str(tmp_path), print_fn=lambda s: None)
+    b.load(str(tmp_path / "checkpoint.pt"))  # written at 30 s: the marks before it are the first run's
+    b.elapsed = lambda: 10.0 * b.iteration
+    b.learn(max_iterations=5)
+    assert [(k["marks_s"], k["iteration"]) for k in b.kept] == [([45.0], 5)]
+    assert sorted(f for f in os.listdir(tmp_path) if f.startswith("checkpoint-")) == [
+        "checkpoint-2.pt", "checkpoint-3.pt", "checkpoint-5.pt"]
+
+
 def test_a_stop_request_ends_the_run_after_an_iteration_and_saves_it(tmp_path):
     cfg = Config(net_dims=(8,), horizon_len=4, batch_size=32, repeat_times=1, eval_gap=1e9, save_gap=10**6)
     runner = OnPolicyRunner(PointMassVecEnv(8), cfg, run_dir=str(tmp_path), print_fn=lambda s: None)
