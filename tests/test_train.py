@@ -97,3 +97,24 @@ def test_play_prints_one_forward_speed_per_thing_measured_and_they_agree(tmp_pat
     assert result["eval/length"] == 20 and abs(result["eval/speed"]) > 1e-3
     assert abs(result["clip/forward_speed"] - result["eval/speed"]) <= 0.01 * abs(result["eval/speed"])
     assert os.path.getsize(gif) > 0
+
+
+def test_fidelity_replays_a_probe_in_four_settings_and_reports_it(tmp_path, capsys):
+    import fidelity
+
+    flying = os.path.join(ROOT, "tests", "data", "ant_flying_policy.pt")
+    out = str(tmp_path / "fid")
+    assert fidelity.main(["--out", out, "--no-train", "--probes", flying, "--candidates", "default", "nov22",
+                          "--device", "cpu", "--steps", "20", "--envs", "2", "--native-copies", "2",
+                          "--workers", "1"]) == 0
+    with open(os.path.join(out, "fidelity.json")) as f:
+        probes = json.load(f)["probes"]
+    assert [p["candidate"] for p in probes] == ["default", "nov22"]
+    for p in probes:
+        assert sorted(p["rows"]) == ["finer", "native", "native_finer", "warpgym"]
+        assert [p["rows"][k]["substeps"] for k in ("warpgym", "finer", "native", "native_finer")] == [3, 12, 3, 12]
+        assert isinstance(p["agree"], bool)
+    capsys.readouterr()
+    assert fidelity.main(["--report", out]) == 0
+    table = capsys.readouterr().out
+    assert "| ant_flying_policy.pt | default (3 substeps) |" in table and "| ant_flying_policy.pt | nov22" in table

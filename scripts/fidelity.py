@@ -1,0 +1,312 @@
+"""Does the physics hold at convergence? Train, keep policies at set times, replay each at a 4x finer
+step and in native MuJoCo, and write one table.
+
+    python scripts/fidelity.py --out OUT --task Ant --seeds 0 1 --seconds 300 --save-at 60 120
+    python scripts/fidelity.py --out OUT --task Ant --candidates substeps4 --seeds 0 --seconds 150
+    python scripts/fidelity.py --out OUT --task Ant --no-train --probes tests/data/ant_flying_policy.pt
+    python scripts/fidelity.py --out OUT --replay RUN_DIR [RUN_DIR ...]       # runs trained elsewhere
+    python scripts/fidelity.py --report OUT [OUT ...]                         # the tables again
+
+For each candidate (CANDIDATES: named physics settings; "default" is the task's own) and seed,
+scripts/train.py trains --num-envs envs for --seconds of wall-clock time, keeping a checkpoint at each
+--save-at mark and at the end. Each kept policy then plays one --steps episode per robot, deterministic:
+warpgym at the training step and at --finer times the substeps (--envs robots each, on the GPU when
+there is one), and native MuJoCo at both (--native-copies robots each, in CPU processes beside the
+warpgym replays). Probes (--probes CKPT ...) are policies trained elsewhere, for example on an
+exploitable step; each is replayed with every candidate's physics in the same four settings.
+
+Writes OUT/fidelity.json after every run and prints two markdown tables. Policies: forward speed at the
+training step, the other settings' speeds as shares of it, torso height, the share of steps with no foot
+on the ground and the longest such flight (native MuJoCo, which checks every substep), falls, and
+whether the policy holds: >= 0.90 at the finer step in both simulators and >= 0.95 in native MuJoCo at
+the training step. Runs: steady samples/s, when the training episodes first reached the task's target
+speed (Ant 3 m/s, Humanoid 2 m/s), diverged resets, the last evaluation. Probes: the four speeds, and
+whether they agree within 10 % or 0.5 m/s, whichever is larger.
+"""
+
+from __future__ import annotations
+
+import argparse
+import concurrent.futures as futures
+import json
+import multiprocessing
+import os
+import subprocess
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.dirname(HERE))
+sys.path.insert(0, HERE)
+
+# Named physics settings, each complete for the fields it names (so a later change of the task's
+# defaults does not change what a name means). "default" is the task as it stands.
+CANDIDATES: dict[str, dict] = {
+    "default": {},
+    # Isaac Gym's step: 2 substeps; 8 solver iterations; nv_ant.xml's armature (0.01)
+    "isaac-step": {"substeps": 2, "physics": {"solver_iterations": 8, "ls_iterations": 8, "armature": None}},
+    # the Ant's defaults from 2026-11-22 to 2026-11-23: 3 substeps of 4 iterations, nv_ant.xml's armature
+    "nov22": {"substeps": 3, "physics": {"solver_iterations": 4, "ls_iterations": 4, "armature": None}},
+    "substeps4": {"substeps": 4, "physics": {"solver_iterations": 4, "ls_iterations": 4, "armature": None}},
+    "armature0.05": {"substeps": 3, "physics": {"solver_iterations": 4, "ls_iterations": 4, "armature": 0.05}},
+    "armature0.1": {"substeps": 3, "physics": {"solver_iterations": 4, "ls_iterations": 4, "armature": 0.1}},
+    # a softer contact than the MJCF's 0.02 s: the step a flying gait is fitted to (tests/data)
+    "soft-contact": {"substeps": 3, "physics": {"solver_iterations": 4, "ls_iterations": 4, "armature": None,
+                                                "contact_timeconst": 0.04}},
+}
+TARGET_SPEED = {"Ant": 3.0, "Humanoid": 2.0}  # m/s of the training episodes: "time to walking speed"
+HOLDS = {"finer": 0.90, "native": 0.95, "native_finer": 0.90}  # issue 22, item 1
+
+
+def train_flags(candidate: dict) -> list[str]:
+    flags = ["--substeps", str(candidate["substeps"])] if "substeps" in candidate else []
+    for name, value in candidate.get("physics", {}).items():
+        flags += ["--physics", f"{name}={'none' if value is None else value}"]
+    return flags
+
+
+# ---------------------------------------------------------------- replays
+def _native(job: dict) -> dict:
+    """One native-MuJoCo replay, in a worker process (CPU only)."""
+    os.environ["CUDA_VISIBLE_DEVICES"] = ""
+    import torch
+
+    import sim2sim
+    from agents.checkpoint import load
+
+    torch.set_num_threads(1)
+    t0 = time.perf_counter()
+    ckpt = load(job["checkpoint"], torch.device("cpu"))
+    row = sim2sim.replay_native(ckpt, job["env_args"], job["substeps"], job["copies"], job["steps"], job["seed"])
+    return {**row, "wall_s": round(time.perf_counter() - t0, 1)}
+
+
+def replay_all(policies: list[dict], args, pool) -> None:
+    """Fill each policy's ``rows``: warpgym here (at the training step, then --finer), native MuJoCo in
+    ``pool`` meanwhile. ``policies`` items: checkpoint, env_args (task, physics), substeps."""
+    import torch
+
+    import sim2sim
+    from agents.checkpoint import load
+    from warpgym.device import resolve_device
+
+    device = resolve_device(args.device)
+    envs = args.envs or (256 if device.startswith("cuda") else 8)
+    pending = []
+    for p in policies:
+        p["rows"] = {}
+        for key, substeps in (("native", p["substeps"]), ("native_finer", p["substeps"] * args.finer)):
+            job = {"checkpoint": p["checkpoint"], "env_args": p["env_args"], "substeps": substeps,
+                   "copies": args.native_copies, "steps": args.steps, "seed": args.seed}
+            pending.append((p, key, substeps, pool.submit(_native, job)))
+    for p in policies:
+        ckpt = load(p["checkpoint"], torch.device(device))
+        for key, substeps in (("warpgym", p["substeps"]), ("finer", p["substeps"] * args.finer)):
+            t0 = time.perf_counter()
+            row = sim2sim.replay_warpgym(ckpt, p["env_args"], substeps, envs, args.steps, device, args.seed)
+            p["rows"][key] = {**row, "substeps": substeps, "wall_s": round(time.perf_counter() - t0, 1)}
+    for p, key, substeps, fut in pending:
+        p["rows"][key] = {**fut.result(), "substeps": substeps}
+    for p in policies:
+        base = p["rows"]["warpgym"]["forward_speed"]
+        for row in p["rows"].values():
+            row["speed_ratio"] = row["forward_speed"] / base if base else float("nan")
+        r = p["rows"]
+        p["holds"] = (r["finer"]["speed_ratio"] >= HOLDS["finer"] and r["native"]["speed_ratio"] >= HOLDS["native"]
+                      and r["native_finer"]["speed_ratio"] >= HOLDS["native_finer"])
+        speeds = [r[k]["forward_speed"] for k in ("warpgym", "finer", "native", "native_finer")]
+        p["agree"] = max(speeds) - min(speeds) <= max(0.1 * max(abs(s) for s in speeds), 0.5)
+
+
+# ---------------------------------------------------------------- runs
+def kept_policies(run_dir: str, facts: dict, marks: list[float]) -> list[dict]:
+    """The run's checkpoints kept at its --save-at marks, and its last one. A run trained without
+    --save-at but with --keep-checkpoints gives, for each of ``marks``, its first checkpoint after it."""
+    import torch
+
+    from agents.checkpoint import load
+    from agents.logger import read_metrics
+
+    out = [{"label": f"{k['mark_s']:g} s", "checkpoint": k["path"], "iteration": k["iteration"],
+            "time_s": k["time_s"]} for k in facts["kept_checkpoints"]]
+    if not out and marks:
+        times = {r["iteration"]: r["time_s"] for r in read_metrics(run_dir)}
+        saved = sorted(int(f[11:-3]) for f in os.listdir(run_dir) if f.startswith("checkpoint-") and f.endswith(".pt"))
+        for mark in marks:
+            it = next((i for i in saved if times.get(i, -1.0) >= mark), None)
+            if it is not None and all(p["iteration"] != it for p in out):
+                out.append({"label": f"{mark:g} s", "checkpoint": os.path.join(run_dir, f"checkpoint-{it}.pt"),
+                            "iteration": it, "time_s": times[it]})
+    final = os.path.join(run_dir, "checkpoint.pt")
+    last = load(final, torch.device("cpu"))
+    if not out or out[-1]["iteration"] != last["iteration"]:
+        out.append({"label": "end", "checkpoint": final, "iteration": last["iteration"],
+                    "time_s": round(last["elapsed_s"], 3)})
+    env_args = last["config"]["env_args"]
+    for p in out:
+        p["env_args"] = {"task": env_args["task"], "physics": env_args.get("physics") or {}}
+        p["substeps"] = env_args.get("substeps") or _task(env_args["task"]).substeps
+    return out
+
+
+def _task(name: str):
+    from warpgym.tasks import get_task
+
+    return get_task(name)
+
+
+def run_facts(run_dir: str) -> dict:
+    """What a run's summary.json says about cost and learning."""
+    from agents.logger import first_reaching, read_metrics
+
+    with open(os.path.join(run_dir, "summary.json")) as f:
+        s = json.load(f)
+    with open(os.path.join(run_dir, "config.json")) as f:
+        task = json.load(f)["task"]
+    rows = read_metrics(run_dir)
+    evals = [r for r in rows if "eval/return" in r]
+    target = TARGET_SPEED.get(task)
+    return {"task": task, "device": s.get("device"), "num_envs": s.get("num_envs"), "iterations": s.get("iterations"),
+            "samples_per_s": s.get("steady_samples_per_s_median"), "first_iteration_s": s.get("first_iteration_time_s"),
+            "target_speed": target, "first_at_target": first_reaching(rows, "speed", target) if target else None,
+            "faults": s.get("faults"), "final": s.get("final"), "startup": s.get("startup", {}).get("timeline"),
+            "last_eval": {k: evals[-1][k] for k in ("time_s", "samples", "eval/return", "eval/speed")} if evals else None,
+            "kept_checkpoints": s.get("kept_checkpoints", [])}
+
+
+def train(task: str, name: str, seed: int, args) -> str:
+    run_dir = os.path.join(args.out, "runs", f"{task}-{name}-s{seed}")
+    cmd = [sys.executable, os.path.join(HERE, "train.py"), "--task", task, "--seed", str(seed), "--time-limit",
+           str(args.seconds), "--eval-gap", "20", "--no-plots", "--run-dir", run_dir,
+           *(["--num-envs", str(args.num_envs)] if args.num_envs else []),
+           *(["--device", args.device] if args.device else []),
+           *(["--save-at", *map(str, args.save_at)] if args.save_at else []), *train_flags(CANDIDATES[name])]
+    with open(run_dir + ".train.log", "w") as log:
+        rc = subprocess.run(cmd, stdout=log, stderr=subprocess.STDOUT, timeout=args.seconds + 600).returncode
+    if rc != 0:
+        raise RuntimeError(f"train.py exited {rc}: see {run_dir}.train.log")
+    return run_dir
+
+
+def save(out: str, doc: dict) -> None:
+    path = os.path.join(out, "fidelity.json")
+    with open(path + ".tmp", "w") as f:
+        json.dump(doc, f, indent=1)
+    os.replace(path + ".tmp", path)
+
+
+# ---------------------------------------------------------------- tables
+def tables(doc: dict) -> str:
+    lines = ["| task | candidate | seed | policy | speed at the step | 4x finer | native | native 4x finer | "
+             "torso height | no foot on ground (native) | longest flight (native) | falls (warpgym) | holds |",
+             "|---|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---|"]
+    for run in doc.get("runs", []):
+        for p in run["policies"]:
+            r = p["rows"]
+            lines.append(
+                f"| {run['task']} | {run['candidate']} | {run['seed']} | {p['label']} (it {p['iteration']}) | "
+                f"{r['warpgym']['forward_speed']:.2f} m/s | {r['finer']['speed_ratio']:.2f} | "
+                f"{r['native']['speed_ratio']:.2f} | {r['native_finer']['speed_ratio']:.2f} | "
+                f"{r['warpgym']['torso_height']:.2f} m | {100 * r['native']['no_foot_contact_share']:.0f} % | "
+                f"{r['native']['longest_airborne_steps']:.0f} steps | {r['warpgym']['falls']}/{r['warpgym']['robots']} | "
+                f"{'yes' if p['holds'] else '**no**'} |")
+    lines += ["", "| task | candidate | seed | device | samples/s | first iteration | training episodes at target speed | "
+              "diverged resets | last evaluation |", "|---|---|---:|---|---:|---:|---:|---:|---:|"]
+    for run in doc.get("runs", []):
+        f = run["facts"]
+        hit = f["first_at_target"]
+        ev = f["last_eval"]
+        lines.append(
+            f"| {run['task']} | {run['candidate']} | {run['seed']} | {f['device']} | {f['samples_per_s'] / 1e6:.2f} M | "
+            f"{f['first_iteration_s']:.1f} s | "
+            + (f"{f['target_speed']:g} m/s at {hit['time_s']:.1f} s ({hit['samples'] / 1e6:.1f} M)" if hit else "not reached")
+            + f" | {(f['faults'] or {}).get('diverged_resets', '-')} | "
+            + (f"{ev['eval/return']:.0f} @ {ev['eval/speed']:.2f} m/s ({ev['time_s']:.0f} s)" if ev else "-") + " |")
+    if doc.get("probes"):
+        lines += ["", "| probe | replayed with | at the step | 4x finer | native | native 4x finer | agree |",
+                  "|---|---|---:|---:|---:|---:|---|"]
+        for p in doc["probes"]:
+            r = p["rows"]
+            lines.append(f"| {p['label']} | {p['candidate']} ({p['substeps']} substeps) | "
+                         + " | ".join(f"{r[k]['forward_speed']:.2f} m/s" for k in ("warpgym", "finer", "native", "native_finer"))
+                         + f" | {'yes' if p['agree'] else '**no**'} |")
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--out", help="output directory")
+    ap.add_argument("--task", default="Ant")
+    ap.add_argument("--candidates", nargs="+", default=["default"], choices=sorted(CANDIDATES))
+    ap.add_argument("--seeds", type=int, nargs="+", default=[0])
+    ap.add_argument("--seconds", type=float, default=300.0, help="training wall-clock time per run")
+    ap.add_argument("--save-at", type=float, nargs="*", default=[60.0, 120.0],
+                    help="keep the policies of these seconds since start too (default 60 120)")
+    ap.add_argument("--num-envs", type=int, default=None, help="training envs (train.py's default: 4096 on a GPU)")
+    ap.add_argument("--no-train", action="store_true", help="replay --probes / --replay only")
+    ap.add_argument("--replay", nargs="+", default=[], metavar="RUN_DIR", help="replay runs trained elsewhere")
+    ap.add_argument("--probes", nargs="+", default=[], metavar="CKPT", help="replay these with every candidate")
+    ap.add_argument("--envs", type=int, default=None, help="warpgym robots per replay (default 256 GPU, 8 CPU)")
+    ap.add_argument("--native-copies", type=int, default=32, help="native MuJoCo robots per replay")
+    ap.add_argument("--steps", type=int, default=1000, help="control steps per replay (one episode)")
+    ap.add_argument("--finer", type=int, default=4)
+    ap.add_argument("--seed", type=int, default=7, help="seed of the replays' start states")
+    ap.add_argument("--device", default=None)
+    ap.add_argument("--workers", type=int, default=None, help="native MuJoCo processes (default: cores - 2)")
+    ap.add_argument("--report", nargs="+", metavar="OUT", help="print the tables of these outputs")
+    args = ap.parse_args(argv)
+    if args.report:
+        doc = {"runs": [], "probes": []}
+        for out in args.report:
+            with open(out if out.endswith(".json") else os.path.join(out, "fidelity.json")) as f:
+                part = json.load(f)
+            doc["runs"] += part.get("runs", [])
+            doc["probes"] += part.get("probes", [])
+        print(tables(doc))
+        return 0
+    if not args.out:
+        ap.error("--out is required (or --report)")
+    for name in ("seconds", "native_copies", "steps", "finer"):
+        if not getattr(args, name) > 0:
+            ap.error(f"--{name.replace('_', '-')} {getattr(args, name)}: must be positive")
+    for path in args.probes:
+        if not os.path.isfile(path):
+            ap.error(f"--probes {path}: no such checkpoint file")
+    for path in args.replay:
+        if not os.path.isfile(os.path.join(path, "summary.json")):
+            ap.error(f"--replay {path}: not a finished run directory (no summary.json); pass one written by train.py")
+    os.makedirs(os.path.join(args.out, "runs"), exist_ok=True)
+    doc = {"task": args.task, "argv": sys.argv[1:] if argv is None else list(argv), "runs": [], "probes": []}
+    workers = args.workers or max(1, (os.cpu_count() or 2) - 2)
+    ctx = multiprocessing.get_context("spawn")  # no CUDA context inherited from this process
+    with futures.ProcessPoolExecutor(workers, mp_context=ctx) as pool:
+
+        def add_run(candidate: str, seed: int | None, run_dir: str) -> None:
+            facts = run_facts(run_dir)
+            policies = kept_policies(run_dir, facts, args.save_at)
+            replay_all(policies, args, pool)  # done before the next training: no CPU shared with it
+            doc["runs"].append({"task": facts["task"], "candidate": candidate, "seed": seed, "run_dir": run_dir,
+                                "facts": facts, "policies": policies})
+            save(args.out, doc)
+
+        for name, seed in [] if args.no_train else [(n, sd) for n in args.candidates for sd in args.seeds]:
+            t0 = time.time()
+            run_dir = train(args.task, name, seed, args)
+            print(f"trained {args.task} {name} seed {seed} in {time.time() - t0:.0f} s", flush=True)
+            add_run(name, seed, run_dir)
+        for path in args.replay:
+            add_run(os.path.basename(os.path.normpath(path)), None, path)
+        for name in args.candidates if args.probes else []:
+            cand = CANDIDATES[name]
+            probes = [{"label": os.path.basename(path), "candidate": name, "checkpoint": path,
+                       "env_args": {"task": args.task, "physics": cand.get("physics", {})},
+                       "substeps": cand.get("substeps") or _task(args.task).substeps} for path in args.probes]
+            replay_all(probes, args, pool)
+            doc["probes"] += probes
+            save(args.out, doc)
+    print(tables(doc))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
