@@ -55,9 +55,10 @@ def test_observation_and_reward_match_an_independent_torch_implementation(env):
 
 
 def test_contact_terms_are_live(ant_env):
-    """The foot force/torque block is not stuck at zero once the ant stands on the ground."""
+    """The foot force/torque block is not stuck at zero once the ant stands on the ground (1 s after
+    the reset: with the Ant's 0.1 kg m^2 armature a robot may still rock on three feet at 0.5 s)."""
     ant_env.reset(seed=3)
-    for _ in range(30):
+    for _ in range(60):
         obs, *_ = ant_env.step(torch.zeros(ant_env.num_envs, ant_env.num_actions))
     feet = obs[:, 28:52].view(ant_env.num_envs, 4, 6)
     assert torch.all(feet[:, :, 2] > 0)  # upward force on each foot, scaled by 0.1
