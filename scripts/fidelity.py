@@ -13,7 +13,8 @@ scripts/train.py trains --num-envs envs for --seconds of wall-clock time, keepin
 warpgym at the training step and at --finer times the substeps (--envs robots each, on the GPU when
 there is one), and native MuJoCo at both (--native-copies robots each, in CPU processes beside the
 warpgym replays). Probes (--probes CKPT ...) are policies trained elsewhere, for example on an
-exploitable step; each is replayed with every candidate's physics in the same four settings.
+exploitable step; each is replayed with every candidate's physics (or --probe-candidates') in the same
+four settings.
 
 Writes OUT/fidelity.json after every run and prints two markdown tables. Policies: forward speed at the
 training step, the other settings' speeds as shares of it, torso height, the share of steps with no foot
@@ -246,6 +247,8 @@ def main(argv=None) -> int:
     ap.add_argument("--no-train", action="store_true", help="replay --probes / --replay only")
     ap.add_argument("--replay", nargs="+", default=[], metavar="RUN_DIR", help="replay runs trained elsewhere")
     ap.add_argument("--probes", nargs="+", default=[], metavar="CKPT", help="replay these with every candidate")
+    ap.add_argument("--probe-candidates", nargs="+", default=None, choices=sorted(CANDIDATES),
+                    help="the physics the probes are replayed with (default: --candidates)")
     ap.add_argument("--envs", type=int, default=None, help="warpgym robots per replay (default 256 GPU, 8 CPU)")
     ap.add_argument("--native-copies", type=int, default=32, help="native MuJoCo robots per replay")
     ap.add_argument("--steps", type=int, default=1000, help="control steps per replay (one episode)")
@@ -296,7 +299,7 @@ def main(argv=None) -> int:
             add_run(name, seed, run_dir)
         for path in args.replay:
             add_run(os.path.basename(os.path.normpath(path)), None, path)
-        for name in args.candidates if args.probes else []:
+        for name in (args.probe_candidates or args.candidates) if args.probes else []:
             cand = CANDIDATES[name]
             probes = [{"label": os.path.basename(path), "candidate": name, "checkpoint": path,
                        "env_args": {"task": args.task, "physics": cand.get("physics", {})},
