@@ -4,7 +4,7 @@ step and in native MuJoCo, and write one table.
     python scripts/fidelity.py --out OUT --task Ant --seeds 0 1 --seconds 300 --save-at 60 120
     python scripts/fidelity.py --out OUT --task Ant --candidates substeps4 --seeds 0 --seconds 150
     python scripts/fidelity.py --out OUT --task Ant --no-train --probes tests/data/ant_flying_policy.pt
-    python scripts/fidelity.py --out OUT --replay RUN_DIR [RUN_DIR ...]       # runs trained elsewhere
+    python scripts/fidelity.py --out OUT --replay RUN_DIR [RUN_DIR ...]       # runs trained elsewhere, no training
     python scripts/fidelity.py --report OUT [OUT ...]                         # the tables again
 
 For each candidate (CANDIDATES: named physics settings; "default" is the task's own) and seed,
@@ -44,6 +44,8 @@ sys.path.insert(0, HERE)
 # defaults does not change what a name means). "default" is the task as it stands.
 CANDIDATES: dict[str, dict] = {
     "default": {},
+    # the task's own physics at 3 substeps: 1/180 s, the timestep nv_humanoid.xml itself declares
+    "substeps3": {"substeps": 3},
     # Isaac Gym's step: 2 substeps; 8 solver iterations; nv_ant.xml's armature (0.01)
     "isaac-step": {"substeps": 2, "physics": {"solver_iterations": 8, "ls_iterations": 8, "armature": None}},
     # the Ant's defaults from 2026-11-22 to 2026-11-23: 3 substeps of 4 iterations, nv_ant.xml's armature
@@ -245,7 +247,8 @@ def main(argv=None) -> int:
                     help="keep the policies of these seconds since start too (default 60 120)")
     ap.add_argument("--num-envs", type=int, default=None, help="training envs (train.py's default: 4096 on a GPU)")
     ap.add_argument("--no-train", action="store_true", help="replay --probes / --replay only")
-    ap.add_argument("--replay", nargs="+", default=[], metavar="RUN_DIR", help="replay runs trained elsewhere")
+    ap.add_argument("--replay", nargs="+", default=[], metavar="RUN_DIR",
+                    help="replay runs trained elsewhere (and train nothing)")
     ap.add_argument("--probes", nargs="+", default=[], metavar="CKPT", help="replay these with every candidate")
     ap.add_argument("--probe-candidates", nargs="+", default=None, choices=sorted(CANDIDATES),
                     help="the physics the probes are replayed with (default: --candidates)")
@@ -292,7 +295,8 @@ def main(argv=None) -> int:
                                 "facts": facts, "policies": policies})
             save(args.out, doc)
 
-        for name, seed in [] if args.no_train else [(n, sd) for n in args.candidates for sd in args.seeds]:
+        training = not (args.no_train or args.replay)
+        for name, seed in [(n, sd) for n in args.candidates for sd in args.seeds] if training else []:
             t0 = time.time()
             run_dir = train(args.task, name, seed, args)
             print(f"trained {args.task} {name} seed {seed} in {time.time() - t0:.0f} s", flush=True)
