@@ -208,9 +208,14 @@ class OnPolicyRunner:
                 stop = self.log(stats, last_iter, wants_stop=self._stop_requested or
                                 (time_limit is not None and self.elapsed() >= time_limit))
                 self.timer.lap("logging, evaluation, host read")
-                if self.iteration % self.cfg.save_gap == 0 and self.run_dir:
-                    stop = self.flush_log(last_iter) or stop  # the checkpoint's own row reaches disk first
-                    self.save()
+                if self.iteration % self.cfg.save_gap == 0:
+                    # The checkpoint's own row reaches disk first. Every process flushes here, not only
+                    # rank 0, which saves: a flush reads the stop request of the row it logs, and a
+                    # process that read it one iteration before the others would leave them waiting in
+                    # the next iteration's collectives forever (a finished job that never exits).
+                    stop = self.flush_log(last_iter) or stop
+                    if self.run_dir:
+                        self.save()
                 self._keep_if_due()
             self.flush_log(last_iter, final=True)  # the last iteration always carries an evaluation
         finally:

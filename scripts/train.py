@@ -463,6 +463,7 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
     try:
         history = runner.learn(args.max_iterations, args.total_steps, args.time_limit)
     finally:
+        stopped = runner.stop_requested
         runner.close()
         if live is not None:
             live.clear()
@@ -493,6 +494,8 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
         except ImportError:
             print("matplotlib is not installed: pip install 'warpgym[train]' for the plots", flush=True)
     print(json.dumps(summary), flush=True)
+    if stopped:
+        print(f"stopped on request after iteration {runner.iteration}. {resume_hint(run_dir)}", flush=True)
     return 0
 
 

@@ -152,3 +152,75 @@ def test_a_killed_worker_stops_the_job_and_the_run_resumes_on_one_process(tmp_pa
     assert [r["iteration"] for r in rows] == list(range(1, start + 4))
     assert [r["samples"] for r in rows[start:]] == [start * 32 + 16 * k for k in (1, 2, 3)]  # now 1 x 4 x 4
     assert load(str(run / "checkpoint.pt"), torch.device("cpu"))["iteration"] == start + 3
+
+
+def start_job(tmp_path, name, *flags, script="scripts/train.py", env=None):
+    run = tmp_path / name
+    log = open(tmp_path / f"{name}.log", "w")
+    job = subprocess.Popen([*torchrun_args(2), script, "--task", "Ant", "--device", "cpu", "--num-envs", "4",
+                            "--horizon-len", "4", "--episode-length", "20", "--no-eval", "--no-plots",
+                            "--run-dir", str(run), *flags], cwd=ROOT, stdout=log, stderr=subprocess.STDOUT,
+                           env=dict(ENV, **(env or {})), start_new_session=True)
+    return job, run, tmp_path / f"{name}.log"
+
+
+def wait_for_rows(job, run, log, rows: int, timeout: float = 240) -> None:
+    deadline = time.time() + timeout
+    while time.time() < deadline and job.poll() is None:
+        if (run / "metrics.jsonl").exists() and len(read_metrics(str(run))) >= rows:
+            return
+        time.sleep(0.2)
+    raise AssertionError(f"no {rows} rows: {log.read_text()[-3000:]}")
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc"), reason="finds the worker processes through /proc")
+def test_finished_two_process_runs_exit_within_10_s_of_their_last_row(tmp_path):
+    """A run whose time limit is read at a checkpoint iteration once left rank 0 a step ahead of the
+    others: it finished while they waited in the next iteration's collectives (on GPUs, for ever).
+    --save-gap 1 makes every iteration a checkpoint iteration."""
+    for name, flags in (("gap1", ["--save-gap", "1", "--time-limit", "16"]),
+                        ("gap3", ["--save-gap", "3", "--time-limit", "17"]),
+                        ("iterations", ["--save-gap", "1", "--max-iterations", "12"])):
+        job, run, log = start_job(tmp_path, name, *flags)
+        code = job.wait(timeout=240)
+        ended = time.time()
+        assert code == 0, log.read_text()[-3000:]
+        last_row = os.path.getmtime(run / "metrics.jsonl")
+        assert ended - last_row < 10.0, (name, ended - last_row)
+        assert load(str(run / "checkpoint.pt"), torch.device("cpu"))["iteration"] == read_metrics(str(run))[-1]["iteration"]
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc"), reason="finds the worker processes through /proc")
+def test_sigterm_to_torchrun_stops_every_process_and_names_the_resume(tmp_path):
+    job, run, log = start_job(tmp_path, "term", "--max-iterations", "100000", "--save-gap", "3")
+    wait_for_rows(job, run, log, 6)
+    workers = worker_pids(job.pid)
+    assert len(workers) == 2
+    job.send_signal(signal.SIGTERM)  # a cluster's pre-emption reaches torchrun
+    sent = time.time()
+    job.wait(timeout=90)
+    while time.time() - sent < 60 and any(os.path.exists(f"/proc/{p}") for p in workers.values()):
+        time.sleep(0.2)
+    assert time.time() - sent < 60 and not any(os.path.exists(f"/proc/{p}") for p in workers.values())
+    out = log.read_text()
+    assert f"--resume {run}" in out, out[-3000:]
+    saved = load(str(run / "checkpoint.pt"), torch.device("cpu"))["iteration"]
+    assert saved == read_metrics(str(run))[-1]["iteration"]  # stopped after an iteration and saved it
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc"), reason="finds the worker processes through /proc")
+def test_an_exception_in_one_worker_mid_update_stops_every_process(tmp_path):
+    job, run, log = start_job(tmp_path, "fail", "--max-iterations", "100000", "--save-gap", "3",
+                              script="tests/fail_worker.py", env={"FAIL_AT": "1:6", "WARPGYM_PEER_TIMEOUT": "20"})
+    deadline = time.time() + 240
+    while time.time() < deadline and "planted failure" not in log.read_text():
+        time.sleep(0.2)
+    failed = time.time()
+    workers = worker_pids(job.pid)
+    code = job.wait(timeout=120)
+    while time.time() - failed < 60 and any(os.path.exists(f"/proc/{p}") for p in workers.values()):
+        time.sleep(0.2)
+    assert time.time() - failed < 60 and not any(os.path.exists(f"/proc/{p}") for p in workers.values())
+    out = log.read_text()
+    assert code != 0 and "planted failure in worker 1's update 6" in out
+    assert f"--resume {run}" in out, out[-3000:]
