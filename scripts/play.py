@@ -69,16 +69,13 @@ def main(argv=None) -> int:
     args = parse_args(argv)
     import torch  # noqa: PLC0415
 
-    from agents.checkpoint import load, policy_from_checkpoint  # noqa: PLC0415
+    from agents.checkpoint import load_for_command, policy_from_checkpoint  # noqa: PLC0415
     from agents.evaluate import evaluate  # noqa: PLC0415
     from warpgym.device import resolve_device  # noqa: PLC0415
     from warpgym.envs import LocomotionVecEnv  # noqa: PLC0415
 
-    path = args.checkpoint
-    if os.path.isdir(path):
-        path = os.path.join(path, "checkpoint.pt")
     device = resolve_device(args.device)
-    ckpt = load(path, torch.device(device))
+    path, ckpt = load_for_command(args.checkpoint, torch.device(device))
     cfg = ckpt["config"]
     env_args = cfg["env_args"]
     task = env_args["task"]

@@ -173,16 +173,13 @@ def main(argv=None) -> int:
 
     import torch  # noqa: PLC0415
 
-    from agents.checkpoint import load  # noqa: PLC0415
+    from agents.checkpoint import load, load_for_command  # noqa: PLC0415
     from warpgym.device import resolve_device  # noqa: PLC0415
     from warpgym.tasks import get_task  # noqa: PLC0415
 
-    path = args.checkpoint
-    if os.path.isdir(path):
-        path = os.path.join(path, "checkpoint.pt")
     device = resolve_device(args.device)
     envs = args.envs or (256 if device.startswith("cuda") else 8)
-    ckpt = load(path, torch.device(device))
+    path, ckpt = load_for_command(args.checkpoint, torch.device(device))
     env_args = ckpt["config"]["env_args"]
     task = get_task(env_args["task"])
     trained = int(env_args.get("substeps") or task.substeps)

@@ -354,7 +354,27 @@ def read_run_config(run_dir: str, device: str | None) -> dict:
             raise SystemExit(f"--resume {run_dir}: no config.json there; pass a run directory written by scripts/train.py")
         with open(path, "rb") as f:
             data = f.read()
+        check_run_config(path, data)
     return json.loads(workers.broadcast_bytes(data, torch.device(device or "cpu")))
+
+
+RUN_KEYS = ("task", "device", "num_envs", "seed", "env_args")
+
+
+def check_run_config(path: str, data: bytes) -> None:
+    """A resumed run's config.json is whole JSON with the keys train.py writes, or the run stops with
+    one line saying which file and what is wrong with it."""
+    fix = ("restore it from a copy, or start a new run with --run-dir (the checkpoint alone does not say "
+           "how the envs were built)")
+    try:
+        saved = json.loads(data)
+    except (json.JSONDecodeError, UnicodeDecodeError) as e:
+        what = "empty" if not data.strip() else f"not valid JSON ({e})"
+        raise SystemExit(f"--resume: {path} is damaged: {what}; {fix}") from None
+    missing = [k for k in RUN_KEYS if not isinstance(saved, dict) or k not in saved]
+    if missing or not isinstance(saved.get("env_args"), dict) or saved["task"] not in TASK_NAMES.values():
+        raise SystemExit(f"--resume: {path} is not a warpgym run's config (missing or wrong: "
+                         f"{missing or ['env_args' if not isinstance(saved.get('env_args'), dict) else 'task']}); {fix}")
 
 
 def built(make, what: str, phase):
