@@ -29,7 +29,7 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 from warpgym.device import resolve_device  # noqa: E402
 from warpgym.envs import LocomotionVecEnv  # noqa: E402
-from warpgym.physics import parse_setting  # noqa: E402
+from warpgym.physics import Physics, parse_setting  # noqa: E402
 
 TASK_OF_ROBOT = {"ant": "Ant", "humanoid": "Humanoid"}
 
@@ -158,9 +158,17 @@ def main(argv=None) -> int:
                     help="compile Warp's tile Cholesky without libmathdx (faster to compile; see the timings)")
     ap.add_argument("--out", default=None, help="JSON file to write (default: print only)")
     args = ap.parse_args(argv)
+    bad = [f"--{k.replace('_', '-')} {v}" for k, vs in (("num_envs", args.num_envs), ("steps", [args.steps]),
+                                                        ("repeats", [args.repeats])) for v in vs if v < 1]
+    if bad:
+        ap.error(f"{', '.join(bad)}: must be positive integers")
     if args.no_mathdx:
         wp.config.enable_mathdx_solver = False
-    physics = dict(parse_setting(text) for text in args.physics)
+    try:
+        physics = dict(parse_setting(text) for text in args.physics)
+        Physics.from_dict(physics)
+    except ValueError as e:
+        ap.error(f"--physics: {e}")
     device = resolve_device(args.device)
     gpu = torch.cuda.get_device_name(torch.device(device)) if device.startswith("cuda") else platform.processor()
 

@@ -164,6 +164,8 @@ def main() -> int:
     ap.add_argument("extra", nargs="*", help="more train.py flags, after --, e.g. -- --no-mathdx")
     args = ap.parse_args()
     if args.report:
+        if not os.path.isfile(args.report):
+            ap.error(f"--report {args.report}: no such file; pass the cold_start.json of an earlier run")
         with open(args.report) as f:
             print(report(json.load(f)))
         return 0

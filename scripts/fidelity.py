@@ -130,8 +130,9 @@ def kept_policies(run_dir: str, facts: dict, marks: list[float]) -> list[dict]:
     from agents.checkpoint import load
     from agents.logger import read_metrics
 
-    out = [{"label": f"{k['mark_s']:g} s", "checkpoint": k["path"], "iteration": k["iteration"],
-            "time_s": k["time_s"]} for k in facts["kept_checkpoints"]]
+    # by name in the run directory: the run may have been trained on another machine and moved here
+    out = [{"label": f"{k['mark_s']:g} s", "checkpoint": os.path.join(run_dir, os.path.basename(k["path"])),
+            "iteration": k["iteration"], "time_s": k["time_s"]} for k in facts["kept_checkpoints"]]
     if not out and marks:
         times = {r["iteration"]: r["time_s"] for r in read_metrics(run_dir)}
         saved = sorted(int(f[11:-3]) for f in os.listdir(run_dir) if f.startswith("checkpoint-") and f.endswith(".pt"))
@@ -264,6 +265,8 @@ def main(argv=None) -> int:
     if args.report:
         doc = {"runs": [], "probes": []}
         for out in args.report:
+            if not os.path.isfile(out if out.endswith(".json") else os.path.join(out, "fidelity.json")):
+                ap.error(f"--report {out}: no fidelity.json there; pass an --out directory of an earlier run")
             with open(out if out.endswith(".json") else os.path.join(out, "fidelity.json")) as f:
                 part = json.load(f)
             doc["runs"] += part.get("runs", [])

@@ -121,6 +121,9 @@ def main(argv=None) -> int:
     ap.add_argument("--figure", default=None, help="with --report: write the combined plots into this directory")
     args = ap.parse_args(argv)
     if args.report:
+        for out in args.report:
+            if not os.path.isfile(os.path.join(out, "learners.json")):
+                ap.error(f"--report {out}: no learners.json there; pass an --out directory of an earlier run")
         return report(args)
     if not args.out:
         ap.error("--out is required to run")

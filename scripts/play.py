@@ -50,8 +50,11 @@ def parse_args(argv=None):
     if args.gif and not args.gif.lower().endswith(".gif"):
         ap.error(f"--gif {args.gif}: the file must end in .gif")
     if args.video or args.gif:
-        from warpgym.video import frame_stride  # noqa: PLC0415
+        from warpgym.video import frame_stride, why_no_video  # noqa: PLC0415
 
+        reason = why_no_video(mp4=bool(args.video), gif=bool(args.gif))
+        if reason:
+            ap.error(f"--{'video' if args.video else 'gif'}: {reason}")
         try:
             frame_stride(args.fps)
             frame_stride(args.gif_fps)

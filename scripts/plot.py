@@ -23,7 +23,13 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     if args.labels is not None and len(args.labels) != len(args.runs):
         raise SystemExit(f"--labels has {len(args.labels)} entries for {len(args.runs)} runs: give one per run")
-    for path in plot_runs(args.runs, args.out, args.labels, args.title):
+    try:
+        paths = plot_runs(args.runs, args.out, args.labels, args.title)
+    except (FileNotFoundError, ValueError) as e:  # a run directory that is not one, or a damaged metrics file
+        raise SystemExit(f"error: {e}") from None
+    except ImportError as e:
+        raise SystemExit(f"error: plotting needs matplotlib ({e.name} is missing): pip install \"warpgym[train]\"") from None
+    for path in paths:
         print("wrote", path)
     return 0
 

@@ -159,6 +159,9 @@ def main() -> int:
     ap.add_argument("--report", nargs="+", metavar="JSON", help="print the table of earlier runs")
     args = ap.parse_args()
     if args.report:
+        missing = [p for p in args.report if not os.path.isfile(p)]
+        if missing:
+            ap.error(f"--report {' '.join(missing)}: no such file; pass soak_*.json files of earlier runs")
         print(report(args.report))
         return 0
     if args.mode is None:

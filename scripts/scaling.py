@@ -141,6 +141,10 @@ def main(argv=None) -> int:
                     help="rewrite the table and figures in --out from its scaling_<task>.json and runs_<task>.tar.gz")
     ap.add_argument("--comms-worker", metavar="CHECKPOINT", default=None, help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
+    if args.gpus and min(args.gpus) < 1:
+        ap.error(f"--gpus {' '.join(map(str, args.gpus))}: each is a number of GPUs, 1 or more")
+    if args.num_envs < 1 or not args.seconds > 0:
+        ap.error(f"--num-envs {args.num_envs} and --seconds {args.seconds}: both must be positive")
     TRAIN_FLAGS[:] = args.train_flags.split()
     if args.comms_worker:
         comms_worker(args.comms_worker, os.path.join(args.out, "comms.json"))
@@ -153,7 +157,8 @@ def main(argv=None) -> int:
     available = torch.cuda.device_count()
     gpus = sorted(set(args.gpus or [1, available]))
     if available < 1 or max(gpus) > available:
-        raise SystemExit(f"--gpus {gpus} needs {max(gpus)} GPUs; this host has {available}")
+        raise SystemExit(f"--gpus {' '.join(map(str, gpus))}: this host has {available} GPU(s); pass counts up to "
+                         f"{available}" + (" (scaling.py measures GPUs; run it on a GPU machine)" if not available else ""))
     out = os.path.abspath(args.out)
     runs = os.path.join(out, f"runs_{args.task}")
     os.makedirs(runs, exist_ok=True)

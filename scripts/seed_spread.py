@@ -84,6 +84,8 @@ def main() -> int:
     ap.add_argument("--report", metavar="JSON")
     args = ap.parse_args()
     if args.report:
+        if not os.path.isfile(args.report):
+            ap.error(f"--report {args.report}: no such file; pass the seed_spread.json of an earlier run")
         with open(args.report) as f:
             print(report(json.load(f)))
         return 0

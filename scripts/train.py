@@ -166,17 +166,11 @@ def check_video_args(ap, args) -> None:
     for flag, value in (("--video-every", args.video_every), ("--video-length", args.video_length)):
         if value < 1:
             ap.error(f"{flag} {value}: must be a positive integer")
-    try:
-        import av  # noqa: F401,PLC0415
-        import PIL  # noqa: F401,PLC0415
+    from warpgym.video import why_no_video  # noqa: PLC0415
 
-        from warpgym.render import RendererUnavailable, probe_renderer  # noqa: PLC0415
-
-        probe_renderer()
-    except ImportError as e:
-        ap.error(f"--video needs the video extra ({e.name} is missing): pip install \"warpgym[video]\"")
-    except RendererUnavailable as e:
-        ap.error(f"--video: {e}")
+    reason = why_no_video(mp4=True, gif=True)  # an MP4 per clip, a GIF of it in TensorBoard
+    if reason:
+        ap.error(f"--video: {reason}")
 
 
 def build_config(args, task: str, num_envs: int, device: str, saved: dict | None = None) -> Config:

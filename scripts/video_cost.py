@@ -38,6 +38,8 @@ def main(argv=None) -> int:
     ap.add_argument("--seconds", type=float, default=100.0)
     ap.add_argument("--eval-gap", type=float, default=20.0)
     args = ap.parse_args(argv)
+    if not (args.seconds > 0 and args.eval_gap > 0):
+        ap.error(f"--seconds {args.seconds} and --eval-gap {args.eval_gap}: both must be positive")
     os.makedirs(args.out, exist_ok=True)
     result = {"task": args.task, "seconds": args.seconds, "eval_gap": args.eval_gap}
     for name, extra in (("without", []), ("with", ["--video"])):

@@ -23,6 +23,25 @@ def _import(module: str, what: str):
         raise ImportError(f"{what} needs the '{module}' package, which is not installed: {INSTALL}") from e
 
 
+def why_no_video(mp4: bool = True, gif: bool = True) -> str | None:
+    """What stops clips from being written here, in a line that says how to fix it; None if nothing does.
+    Checked before a run starts, so a missing package never costs a finished evaluation."""
+    try:
+        if mp4:
+            import av  # noqa: F401,PLC0415
+        if gif:
+            import PIL  # noqa: F401,PLC0415
+    except ImportError as e:
+        return f"clips need the video extra ({e.name} is missing): {INSTALL}"
+    from warpgym.render import RendererUnavailable, probe_renderer  # noqa: PLC0415
+
+    try:
+        probe_renderer()
+    except RendererUnavailable as e:
+        return str(e)
+    return None
+
+
 def frame_stride(fps: int, source_fps: int = CONTROL_FPS) -> int:
     """Keep every n-th control step: ``fps`` must divide the control rate."""
     if not isinstance(fps, int) or fps < 1 or source_fps % fps:

@@ -1,0 +1,51 @@
+"""Every script in scripts/ answers a wrong path, a missing extra or an impossible flag with a line
+that names it: no traceback, nothing measured first. (train.py's flags: tests/test_reliability.py;
+damaged checkpoints: tests/test_damaged_files.py.)"""
+
+import os
+import subprocess
+import sys
+
+import pytest
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+POLICY = os.path.join(ROOT, "tests", "data", "ant_armature_policy.pt")
+MISSING = "/nowhere/at/all"
+
+CASES = [
+    ("plot.py", [MISSING], None, f"no metrics.jsonl in {MISSING}"),
+    ("play.py", [MISSING, "--device", "cpu"], None, f"no checkpoint at {MISSING}"),
+    ("play.py", [POLICY, "--steps", "0"], None, "--steps 0: must be a positive integer"),
+    ("play.py", [POLICY, "--device", "cpu", "--video", "a.mp4"], "av", "--video: clips need the video extra (av is missing)"),
+    ("play.py", [POLICY, "--device", "cpu", "--gif", "a.gif"], "PIL", "--gif: clips need the video extra (PIL is missing)"),
+    ("sim2sim.py", [MISSING, "--device", "cpu"], None, f"no checkpoint at {MISSING}"),
+    ("sim2sim.py", [POLICY, "--finer", "0"], None, "--finer=0: must be a positive integer"),
+    ("train_with.py", ["nolearner"], None, "learner 'nolearner': choose one of"),
+    ("train_with.py", ["skrl", "--device", "cpu"], "skrl", 'skrl is not installed: pip install "warpgym[skrl]"'),
+    ("bench.py", ["--num-envs", "0"], None, "--num-envs 0: must be positive integers"),
+    ("bench.py", ["--physics", "armature=-1"], None, "--physics: armature=-1"),
+    ("learner_bench.py", ["--report", MISSING], None, f"--report {MISSING}: no learners.json there"),
+    ("video_cost.py", ["--out", MISSING, "--seconds", "-1"], None, "--seconds -1.0 and --eval-gap 20.0: both must be positive"),
+    ("cold_start.py", ["--report", MISSING], None, f"--report {MISSING}: no such file"),
+    ("seed_spread.py", ["--report", MISSING], None, f"--report {MISSING}: no such file"),
+    ("reliability_soak.py", ["--report", MISSING], None, f"--report {MISSING}: no such file"),
+    ("reliability_soak.py", ["bogus"], None, "invalid choice: 'bogus'"),
+    ("scaling.py", ["--out", MISSING, "--gpus", "0"], None, "--gpus 0: each is a number of GPUs, 1 or more"),
+    ("fidelity.py", ["--out", MISSING, "--replay", MISSING], None, f"--replay {MISSING}: not a finished run directory"),
+    ("fidelity.py", ["--out", MISSING, "--probes", MISSING], None, f"--probes {MISSING}: no such checkpoint file"),
+    ("fidelity.py", ["--report", MISSING], None, f"--report {MISSING}: no fidelity.json"),
+]
+
+
+@pytest.mark.parametrize(("name", "args", "missing", "says"), CASES,
+                         ids=[f"{c[0]} {' '.join(c[1])}" + (f" without {c[2]}" if c[2] else "") for c in CASES])
+def test_a_bad_input_is_named_in_one_line(tmp_path, name, args, missing, says):
+    env = dict(os.environ)
+    if missing:  # a package that fails to import, as if its extra were not installed
+        (tmp_path / missing).mkdir()
+        (tmp_path / missing / "__init__.py").write_text(f"raise ImportError('No module named {missing}', name='{missing}')\n")
+        env["PYTHONPATH"] = os.pathsep.join([str(tmp_path), env.get("PYTHONPATH", "")])
+    done = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", name), *args], cwd=tmp_path, env=env,
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode != 0 and "Traceback" not in done.stderr, done.stderr[-2000:]
+    assert says in done.stderr, done.stderr[-2000:]
