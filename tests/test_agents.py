@@ -309,7 +309,7 @@ def test_checkpoints_never_run_code_and_bad_files_name_themselves(tmp_path):
     torch.save({**base, "rng": _Payload()}, str(evil))
     if os.path.isdir("/tmp/warpgym-pickle-ran"):
         os.rmdir("/tmp/warpgym-pickle-ran")
-    with pytest.raises(ValueError, match=r"evil\.pt holds pickled objects"):
+    with pytest.raises(ValueError, match=r"evil\.pt was not loaded: it holds pickled objects"):
         load(str(evil), torch.device("cpu"))
     assert not os.path.exists("/tmp/warpgym-pickle-ran")  # refused before anything ran
 
@@ -317,11 +317,11 @@ def test_checkpoints_never_run_code_and_bad_files_name_themselves(tmp_path):
     save_atomic(base, str(good))
     truncated = tmp_path / "truncated.pt"
     truncated.write_bytes(good.read_bytes()[: good.stat().st_size // 2])
-    with pytest.raises(ValueError, match=r"truncated\.pt is not a readable torch checkpoint"):
+    with pytest.raises(ValueError, match=r"truncated\.pt is truncated"):
         load(str(truncated), torch.device("cpu"))
     text = tmp_path / "notes.pt"
     text.write_text("not a checkpoint\n")
-    with pytest.raises(ValueError, match=r"notes\.pt is not a readable torch checkpoint"):
+    with pytest.raises(ValueError, match=r"notes\.pt is not a warpgym checkpoint"):
         load(str(text), torch.device("cpu"))
     other = tmp_path / "weights.pt"
     torch.save({"weight": torch.zeros(2)}, str(other))

@@ -131,7 +131,7 @@ def test_a_resume_from_another_task_or_a_broken_run_fails_before_any_model_is_bu
     assert proc.returncode != 0 and "that run trains Ant; drop --task" in proc.stderr, proc.stderr[-1500:]
     (run_dir / "checkpoint.pt").write_bytes(b"not a checkpoint")
     proc = run(["--resume", str(run_dir), "--no-plots"], timeout=60)
-    assert proc.returncode != 0 and "checkpoint.pt is not a readable torch checkpoint" in proc.stderr
+    assert proc.returncode != 0 and "checkpoint.pt is not a warpgym checkpoint" in proc.stderr
     proc = run(["--resume", str(run_dir), "--num-envs", "16", "--no-plots"], timeout=60)
     assert proc.returncode != 0 and "a resumed run keeps the envs it was started with" in proc.stderr
     proc = run(["--resume", str(tmp_path / "missing"), "--no-plots"], timeout=60)
