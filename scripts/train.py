@@ -195,11 +195,14 @@ def build_config(args, task: str, num_envs: int, device: str, saved: dict | None
         batch = max(samples // 2, 1)  # the preset's mini-batch does not fit this env count
     from warpgym.envs import LocomotionVecEnv  # noqa: PLC0415
 
-    common = {"task": task, "device": device, "max_episode_steps": args.episode_length}
-    if args.substeps is not None:
-        common["substeps"] = args.substeps
-    if args.physics:
-        common["physics"] = args.physics
+    from warpgym.tasks import get_task  # noqa: PLC0415
+
+    # The whole physics goes into the config, not only what the flags changed: a checkpoint then
+    # replays (play.py, sim2sim.py) with the physics it was trained with, whatever the defaults later.
+    defined = get_task(task)
+    common = {"task": task, "device": device, "max_episode_steps": args.episode_length,
+              "substeps": args.substeps or defined.substeps,
+              "physics": defined.physics.replace(**(args.physics or {})).to_dict()}
     return cfg.replace(
         batch_size=batch,
         env_class=LocomotionVecEnv,

@@ -34,6 +34,10 @@ def test_short_cpu_run_writes_logs_checkpoint_plots_resumes_and_plays(tmp_path, 
     assert load(os.path.join(run, "checkpoint.pt"), torch.device("cpu"))["iteration"] == 3
     saved = json.load(open(os.path.join(run, "config.json")))
     assert saved["num_envs"] == 8 and saved["batch_size"] == 32  # 8 envs x 8 steps, two mini-batches
+    # the whole physics it trained with, so that later replays use it whatever the defaults become
+    from warpgym.tasks import ANT
+
+    assert saved["env_args"]["substeps"] == ANT.substeps and saved["env_args"]["physics"] == ANT.physics.to_dict()
 
     assert train.main(["--resume", run, "--max-iterations", "5", "--no-plots"]) == 0
     rows = read_metrics(run)
