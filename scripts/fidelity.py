@@ -208,7 +208,7 @@ def tables(doc: dict) -> str:
         for p in run["policies"]:
             r = p["rows"]
             lines.append(
-                f"| {run['task']} | {run['candidate']} | {run['seed']} | {p['label']} (it {p['iteration']}) | "
+                f"| {run['task']} | {run['candidate']} | {'-' if run['seed'] is None else run['seed']} | {p['label']} (it {p['iteration']}) | "
                 f"{r['warpgym']['forward_speed']:.2f} m/s | {r['finer']['speed_ratio']:.2f} | "
                 f"{r['native']['speed_ratio']:.2f} | {r['native_finer']['speed_ratio']:.2f} | "
                 f"{r['warpgym']['torso_height']:.2f} m | {100 * r['native']['no_foot_contact_share']:.0f} % | "
@@ -221,7 +221,7 @@ def tables(doc: dict) -> str:
         hit = f["first_at_target"]
         ev = f["last_eval"]
         lines.append(
-            f"| {run['task']} | {run['candidate']} | {run['seed']} | {f['device']} | {f['samples_per_s'] / 1e6:.2f} M | "
+            f"| {run['task']} | {run['candidate']} | {'-' if run['seed'] is None else run['seed']} | {f['device']} | {f['samples_per_s'] / 1e6:.2f} M | "
             f"{f['first_iteration_s']:.1f} s | "
             + (f"{f['target_speed']:g} m/s at {hit['time_s']:.1f} s ({hit['samples'] / 1e6:.1f} M)" if hit else "not reached")
             + f" | {(f['faults'] or {}).get('diverged_resets', '-')} | "
