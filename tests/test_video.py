@@ -152,3 +152,63 @@ def test_evaluation_clip_is_drawn_off_the_training_process(ant_env, tmp_path):
     assert [i.step for i in images] == [0, 2000] and images[0].encoded_image_string[:6] == b"GIF89a"
     log = (tmp_path / "videos" / "render.log").read_text()
     assert [json.loads(line)["iteration"] for line in log.splitlines() if line.startswith("{")] == [0, 20]
+
+
+def test_gym_make_renders_rgb_frames_of_the_robot_and_declares_it():
+    import gymnasium as gym
+
+    env = gym.make("warpgym/Ant-v0", render_mode="rgb_array", render_size=(160, 120))
+    assert env.metadata["render_modes"] == ["rgb_array", "human"] and env.metadata["render_fps"] == 60
+    env.reset(seed=0)
+    first = env.render()
+    for _ in range(30):
+        env.step(env.action_space.sample())
+    later = env.render()
+    env.close()
+    assert first.shape == (120, 160, 3) and first.dtype == np.uint8
+    assert np.abs(first.astype(int) - later.astype(int)).sum(axis=2).__gt__(30).mean() > 0.005  # the robot moved
+
+
+def test_gym_make_vec_renders_one_frame_per_robot_for_the_first_k():
+    import gymnasium as gym
+
+    envs = gym.make_vec("warpgym/Ant-v0", num_envs=3, device="cpu", render_mode="rgb_array", render_robots=2,
+                        render_size=(160, 120))
+    envs.reset(seed=0)
+    for _ in range(20):
+        envs.step(np.random.default_rng(0).uniform(-1, 1, (3, 8)).astype(np.float32))
+    frames = envs.render()
+    envs.close()
+    assert isinstance(frames, tuple) and len(frames) == 2 and all(f.shape == (120, 160, 3) for f in frames)
+    assert not np.array_equal(frames[0], frames[1])  # two robots, each in its own frame
+
+
+def test_gymnasiums_record_video_writes_a_clip(tmp_path):
+    import av
+    import gymnasium as gym
+
+    pytest.importorskip("moviepy")
+    env = gym.wrappers.RecordVideo(gym.make("warpgym/Ant-v0", render_mode="rgb_array", render_size=(160, 120)),
+                                   str(tmp_path), episode_trigger=lambda e: e == 0, video_length=24,
+                                   disable_logger=True)
+    env.reset(seed=0)
+    for _ in range(30):
+        env.step(env.action_space.sample())
+    env.close()
+    clips = list(tmp_path.glob("*.mp4"))
+    assert len(clips) == 1
+    with av.open(str(clips[0])) as c:
+        frames = sum(1 for _ in c.decode(video=0))
+        assert c.streams.video[0].average_rate == 60
+    assert frames == 24
+
+
+def test_human_rendering_without_a_display_fails_in_one_line(monkeypatch):
+    import gymnasium as gym
+
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    with pytest.raises(RuntimeError, match=r"render_mode='human' opens MuJoCo's viewer, which needs a display"):
+        gym.make("warpgym/Ant-v0", render_mode="human")
+    with pytest.raises(ValueError, match=r"render_mode='video': choose one of \['rgb_array', 'human'\]"):
+        gym.make_vec("warpgym/Ant-v0", num_envs=2, device="cpu", render_mode="video")

@@ -13,6 +13,7 @@ still picks one; other values (GLFW needs a display) fall back to trying both.
 
 from __future__ import annotations
 
+import atexit
 import math
 import os
 from dataclasses import dataclass
@@ -170,3 +171,79 @@ class RobotRenderer:
 
     def __exit__(self, *exc) -> None:
         self.close()
+
+
+RENDER_MODES = ("rgb_array", "human")
+
+
+class EnvView:
+    """What Gymnasium's ``render()`` shows of a warpgym env.
+
+    ``"rgb_array"``: one (height, width, 3) frame per robot for the env's first ``robots`` robots,
+    each with its own tracking camera (Gymnasium's vector convention: a tuple with a frame per env;
+    ``gymnasium.wrappers.vector.RecordVideo`` tiles them). ``"human"``: MuJoCo's viewer window on the
+    first robot, which needs a display; without one the constructor says so in one line.
+    """
+
+    def __init__(self, task, mode: str, robots: int = 1, width: int = 640, height: int = 480):
+        if mode not in RENDER_MODES:
+            raise ValueError(f"render_mode={mode!r}: choose one of {list(RENDER_MODES)} or None")
+        if isinstance(robots, bool) or not isinstance(robots, int) or robots < 1:
+            raise ValueError(f"render_robots={robots!r} must be a positive integer (how many robots render() draws)")
+        self.task, self.mode, self.robots = task, mode, robots
+        # [renderer, viewer]: freed by close(), or at exit before mujoco's own exit hook ends EGL (a
+        # context left to the garbage collector after that raises in its destructor). The hook holds
+        # the list, not the view, so an env that is dropped is still collected.
+        self._open: list = [None, None]
+        self._at_exit = None
+        if mode == "human":
+            if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY") or os.name == "nt"):
+                raise RuntimeError("render_mode='human' opens MuJoCo's viewer, which needs a display, and this "
+                                   "machine has none (DISPLAY is not set): use render_mode='rgb_array' for frames")
+            self._robot = NativeRobot(task, copies=1, visual=True)
+        else:
+            RobotRenderer.check_size(width, height)
+            self._size = (width, height)
+
+    def render(self, states: dict):
+        """``states``: warpgym-layout arrays (root_pose, root_vel, dof_pos, dof_vel) of at least
+        ``robots`` rows. Returns a tuple of frames (rgb_array) or None (human)."""
+        keys = ("root_pose", "root_vel", "dof_pos", "dof_vel")
+        if self.mode == "human":
+            return self._show({k: np.asarray(states[k])[:1] for k in keys})
+        if self._open[0] is None:
+            self._open[0] = RobotRenderer(self.task, copies=1, width=self._size[0], height=self._size[1])
+            self._free_at_exit()
+        return tuple(self._open[0].render(*(np.asarray(states[k])[i : i + 1] for k in keys))
+                     for i in range(self.robots))
+
+    def _show(self, state: dict) -> None:
+        import mujoco.viewer  # noqa: PLC0415
+
+        self._robot.set_state(state["root_pose"], state["root_vel"], state["dof_pos"], state["dof_vel"])
+        if self._open[1] is None:
+            self._open[1] = mujoco.viewer.launch_passive(self._robot.model, self._robot.data[0])
+            self._free_at_exit()
+        self._open[1].sync()
+
+    def _free_at_exit(self) -> None:
+        # registered after the GL library's own hook (made at its import), so run before it
+        if self._at_exit is None:
+            held = self._open
+            self._at_exit = lambda: EnvView._free(held)
+            atexit.register(self._at_exit)
+
+    def close(self) -> None:
+        EnvView._free(self._open)
+        if self._at_exit is not None:
+            atexit.unregister(self._at_exit)
+            self._at_exit = None
+
+    @staticmethod
+    def _free(open_: list) -> None:
+        renderer, viewer = open_
+        open_[:] = [None, None]
+        if renderer is not None:
+            renderer.close()
+        if viewer is not None:
+            viewer.close()

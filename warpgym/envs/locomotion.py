@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 import torch
 import warp as wp
+from gymnasium import logger as gymnasium_logger
 from gymnasium import spaces
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
@@ -34,11 +35,16 @@ class LocomotionVecEnv(VectorEnv):
         seed: seed of the reset noise; ``reset(seed=...)`` replaces it.
         max_episode_steps: episode length (default: the task's, 1000).
         sim_options: extra ``Sim`` arguments (njmax, nconmax, check_inputs).
+        render_mode: None, "rgb_array" (``render()`` returns a tuple with one frame per robot for the
+            first ``render_robots``) or "human" (MuJoCo's viewer on the first robot; needs a display).
+        render_robots: how many robots an "rgb_array" render draws, each with its own camera.
+        render_size: (width, height) of those frames in pixels.
         **task_overrides: any ``LocomotionTask`` field, e.g. ``termination_height=0.25``, ``substeps=4`` or
             ``physics={"armature": 0.05}`` (merged into the task's ``Physics``).
     """
 
-    metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
+    # one frame per 1/60 s control step (render_fps follows a task's dt when it differs)
+    metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": ["rgb_array", "human"], "render_fps": 60}
     # step() never waits on the host and returns persistent buffers, so a learner may record it into
     # a torch CUDA graph (agents.protocol); the Warp launches then join torch's capture.
     graph_capturable = True
@@ -51,6 +57,9 @@ class LocomotionVecEnv(VectorEnv):
         seed: int = 0,
         max_episode_steps: int | None = None,
         sim_options: dict | None = None,
+        render_mode: str | None = None,
+        render_robots: int = 1,
+        render_size: tuple[int, int] = (640, 480),
         **task_overrides,
     ):
         task = get_task(task)
@@ -60,6 +69,14 @@ class LocomotionVecEnv(VectorEnv):
             task = task.replace(**task_overrides)
         task.validate()
         self.task = task
+        self.render_mode = render_mode
+        self._view = None
+        if render_mode is not None:
+            from warpgym.render import EnvView  # noqa: PLC0415  (MuJoCo's renderer: only when asked for)
+
+            self._view = EnvView(task, render_mode, render_robots, *render_size)
+            if round(1.0 / task.dt) != self.metadata["render_fps"]:
+                self.metadata = {**self.metadata, "render_fps": round(1.0 / task.dt)}
         self.sim = sim = Sim(task.robot, num_envs, device, seed, dt=task.dt, substeps=task.substeps,
                              physics=task.physics, **(sim_options or {}))
         self.num_envs = n = sim.num_envs
@@ -205,8 +222,21 @@ class LocomotionVecEnv(VectorEnv):
         tensors; reading them costs nothing until they are copied to the host."""
         return self._fault_views
 
+    def render(self):
+        """Gymnasium's render: a tuple of (height, width, 3) uint8 frames of the first ``render_robots``
+        robots ("rgb_array"), or the viewer window updated ("human"). One host copy of their states."""
+        if self._view is None:
+            gymnasium_logger.warn("render() was called on an env made without render_mode: pass render_mode="
+                                  "'rgb_array' (or 'human') to gym.make / gym.make_vec")
+            return None
+        k = min(self._view.robots, self.num_envs)
+        states = {key: getattr(self.sim, key)[:k].cpu().numpy() for key in ("root_pose", "root_vel", "dof_pos", "dof_vel")}
+        return self._view.render(states)
+
     def close(self, **kwargs) -> None:
         self._graph = None
+        if self._view is not None:
+            self._view.close()
         self.closed = True
 
     def __repr__(self) -> str:

@@ -10,12 +10,15 @@ from warpgym.envs.locomotion import LocomotionVecEnv
 
 
 class LocomotionEnv(gym.Env):
-    metadata = {"render_modes": []}
+    """``render_mode="rgb_array"``: ``render()`` returns one frame of the robot; ``"human"``: MuJoCo's
+    viewer (needs a display)."""
+
+    metadata = LocomotionVecEnv.metadata
 
     def __init__(self, task="Ant", device: str = "cpu", seed: int = 0, render_mode=None, **kwargs):
-        if render_mode is not None:
-            raise ValueError(f"render_mode={render_mode!r}: warpgym envs do not render; pass render_mode=None")
-        self._vec = LocomotionVecEnv(task, num_envs=1, device=device, seed=seed, **kwargs)
+        self._vec = LocomotionVecEnv(task, num_envs=1, device=device, seed=seed, render_mode=render_mode, **kwargs)
+        self.render_mode = render_mode
+        self.metadata = self._vec.metadata
         self.task = self._vec.task
         self.observation_space = self._vec.single_observation_space
         self.action_space = self._vec.single_action_space
@@ -36,6 +39,10 @@ class LocomotionEnv(gym.Env):
             ep = info["episode"]
             extra["episode"] = {"r": float(ep["r"][0]), "l": int(ep["l"][0]), "s": float(ep["s"][0])}
         return out.cpu().numpy().copy(), float(reward[0]), bool(terminated[0]), bool(truncated[0]), extra
+
+    def render(self):
+        frames = self._vec.render()
+        return frames[0] if frames else None
 
     def close(self):
         self._vec.close()
