@@ -10,7 +10,20 @@ import os
 import numpy as np
 import pytest
 
+import torch
+
 elegantrl = pytest.importorskip("elegantrl")
+
+
+@pytest.fixture(autouse=True)
+def torch_global_state():
+    """ElegantRL's train_agent switches autograd off for the whole process (torch.set_grad_enabled(False))
+    and sets torch's thread count; the tests after this one need both back."""
+    grad, dtype, threads = torch.is_grad_enabled(), torch.get_default_dtype(), torch.get_num_threads()
+    yield
+    torch.set_grad_enabled(grad)
+    torch.set_default_dtype(dtype)
+    torch.set_num_threads(threads)
 
 
 def test_elegantrl_0_3_6_trains_warpgym_for_a_few_hundred_steps(tmp_path):
