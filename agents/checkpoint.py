@@ -79,14 +79,14 @@ def _check_seal(data: bytes, end: int, path: str) -> None:
 
 def read_checkpoint_bytes(path: str) -> bytes:
     if not os.path.isfile(path):
-        raise FileNotFoundError(f"no checkpoint at {path}: pass a file written by scripts/train.py")
+        raise FileNotFoundError(f"no checkpoint at {path}: pass a file written by warpgym train")
     with open(path, "rb") as f:
         return f.read()
 
 
 # What to do about a damaged checkpoint, said once for every message below.
 EARLIER = ("use an earlier checkpoint of the run (checkpoint-<iteration>.pt, which train.py keeps with "
-           "--keep-checkpoints or --save-at) or one written by scripts/train.py")
+           "--keep-checkpoints or --save-at) or one written by warpgym train")
 
 
 def _first_line(e: BaseException) -> str:
@@ -140,7 +140,7 @@ def load_for_command(path: str, device: torch.device) -> tuple[str, dict]:
     config = ckpt["config"] if isinstance(ckpt["config"], dict) else {}
     if not isinstance(config.get("env_args"), dict) or "task" not in config["env_args"]:
         raise SystemExit(f"error: {file} holds a policy but not the task it was trained on (its config has no "
-                         "env_args.task): it was not written by scripts/train.py; use one that was")
+                         "env_args.task): it was not written by warpgym train; use one that was")
     return file, ckpt
 
 

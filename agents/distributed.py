@@ -1,6 +1,6 @@
 """Worker parallelism across GPUs: one process per GPU, each stepping its own envs, one policy.
 
-Launch with ``torchrun --nproc_per_node=G scripts/train.py ...`` (add ``--nnodes`` and a c10d
+Launch with ``torchrun --nproc_per_node=G -m warpgym train ...`` (add ``--nnodes`` and a c10d
 rendezvous for several machines). Every process collects its own rollouts; gradients, the KL that
 steers the learning rate, observation-normaliser statistics and episode statistics are averaged or
 summed across processes, so the policies stay identical and the run is one learner with G times

@@ -102,7 +102,7 @@ def read_metrics(run_dir: str) -> list[dict]:
     """The rows of a run; a torn last line (the process was killed mid-write) is skipped."""
     path = os.path.join(run_dir, "metrics.jsonl")
     if not os.path.isfile(path):
-        raise FileNotFoundError(f"no metrics.jsonl in {run_dir}: pass a run directory written by scripts/train.py")
+        raise FileNotFoundError(f"no metrics.jsonl in {run_dir}: pass a run directory written by warpgym train")
     rows = []
     with open(path) as f:
         lines = f.read().split("\n")

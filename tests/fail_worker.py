@@ -5,7 +5,6 @@ import os
 import sys
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, os.path.join(ROOT, "scripts"))
 sys.path.insert(0, ROOT)
 
 from agents import runner as runner_module  # noqa: E402
@@ -32,6 +31,6 @@ def failing_update(self):
 
 runner_module.OnPolicyRunner.update = failing_update
 
-import train  # noqa: E402
+from warpgym.cli import train  # noqa: E402
 
 sys.exit(train.main(sys.argv[1:]))

@@ -13,7 +13,6 @@ import sys
 import torch
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, os.path.join(ROOT, "scripts"))
 sys.path.insert(0, ROOT)
 
 from agents import runner as runner_module  # noqa: E402
@@ -83,6 +82,6 @@ def torn_save(obj, f, *args, **kwargs):
 
 torch.save = torn_save
 
-import train  # noqa: E402
+from warpgym.cli import train  # noqa: E402
 
 sys.exit(train.main(sys.argv[1:]))

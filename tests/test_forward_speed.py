@@ -6,16 +6,11 @@ The conveyor writes each robot's root state before every step through the Tensor
 ground, moving forward at SPEED and sideways at DRIFT (sideways is not forward), motors off
 (power_scale 0), so nothing but the conveyor moves the root."""
 
-import os
-import sys
-
 import numpy as np
 import pytest
 import torch
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "scripts"))
-
-import sim2sim  # noqa: E402
+from warpgym.cli import sim2sim
 
 SPEED, DRIFT, HEIGHT = 2.5, 0.8, 1.2  # m/s forward, m/s sideways, m above the ground
 EPISODE = 40  # steps: short enough for a clip and a training iteration to span a reset
@@ -118,7 +113,7 @@ def test_evaluation_reports_the_conveyor_speed(conveyor, steps):
 
 def test_a_clip_spanning_a_reset_reports_the_conveyor_speed(conveyor):
     from agents.evaluate import evaluate
-    from warpgym.clips import StateRecorder, clip_forward_speed
+    from warpgym.media.clips import StateRecorder, clip_forward_speed
 
     steps = EPISODE + 30
     recorder = StateRecorder(steps + 1, copies=2)

@@ -9,7 +9,7 @@ import pytest
 import warp as wp
 import warp._src.context as wp_context
 
-from warpgym import mathdx
+from warpgym.compile import mathdx
 
 wp.init()
 runtime = wp_context.runtime

@@ -13,7 +13,7 @@ import pytest
 import torch
 
 from warpgym.native import NativeRobot, observation_slices, quat_rotate, quat_rotate_inv
-from warpgym.physics import Physics
+from warpgym.sim.physics import Physics
 
 TOLERANCE = 1e-3
 # Zero-action steps from a reset until every robot stands on the ground, before any has fallen.

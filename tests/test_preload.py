@@ -4,7 +4,7 @@ import importlib
 
 import warp as wp
 
-from warpgym import compile_log, preload
+from warpgym.compile import log as compile_log, preload
 
 
 def test_sim_modules_are_set_to_skip_adjoint_code():

@@ -43,7 +43,7 @@ def tensors(draw, shapes):
 
 
 def expected_error(name, t, shapes):
-    """The documented checks, in order: tensor, device, dtype, shape (warpgym/checks.py)."""
+    """The documented checks, in order: tensor, device, dtype, shape (warpgym/sim/checks.py)."""
     if t.device.type != "cpu":
         return ValueError, f"{name} is on {t.device}"
     if t.dtype != torch.float32:

@@ -1,4 +1,4 @@
-"""Every script in scripts/ answers a wrong path, a missing extra or an impossible flag with a line
+"""Every script in scripts/ and benchmarks/ answers a wrong path, a missing extra or an impossible flag with a line
 that names it: no traceback, nothing measured first. (train.py's flags: tests/test_reliability.py;
 damaged checkpoints: tests/test_damaged_files.py.)"""
 
@@ -45,7 +45,8 @@ def test_a_bad_input_is_named_in_one_line(tmp_path, name, args, missing, says):
         (tmp_path / missing).mkdir()
         (tmp_path / missing / "__init__.py").write_text(f"raise ImportError('No module named {missing}', name='{missing}')\n")
         env["PYTHONPATH"] = os.pathsep.join([str(tmp_path), env.get("PYTHONPATH", "")])
-    done = subprocess.run([sys.executable, os.path.join(ROOT, "scripts", name), *args], cwd=tmp_path, env=env,
+    folder = "scripts" if os.path.exists(os.path.join(ROOT, "scripts", name)) else "benchmarks"
+    done = subprocess.run([sys.executable, os.path.join(ROOT, folder, name), *args], cwd=tmp_path, env=env,
                           capture_output=True, text=True, timeout=120)
     assert done.returncode != 0 and "Traceback" not in done.stderr, done.stderr[-2000:]
     assert says in done.stderr, done.stderr[-2000:]

@@ -212,7 +212,7 @@ def test_bad_tensors_and_indices_are_refused(ant_sim):
 
 
 def test_too_many_envs_for_the_gpu_is_refused_before_allocating(monkeypatch):
-    from warpgym.robots import robot_spec
+    from warpgym.sim.robots import robot_spec
 
     sim = Sim.__new__(Sim)  # only the check, on a pretend GPU with 1 GiB free
     sim.spec, sim.num_envs, sim.device, sim.torch_device = robot_spec("humanoid"), 100_000, "cuda:0", None

@@ -7,12 +7,9 @@ import sys
 import torch
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, os.path.join(ROOT, "scripts"))
 
 import numpy as np  # noqa: E402
-import play  # noqa: E402
-import sim2sim  # noqa: E402
-import train  # noqa: E402
+from warpgym.cli import play, sim2sim, train  # noqa: E402
 
 from agents.checkpoint import load  # noqa: E402
 from agents.logger import read_metrics  # noqa: E402
@@ -104,6 +101,7 @@ def test_play_prints_one_forward_speed_per_thing_measured_and_they_agree(tmp_pat
 
 
 def test_fidelity_replays_a_probe_in_four_settings_and_reports_it(tmp_path, capsys):
+    sys.path.insert(0, os.path.join(ROOT, "benchmarks"))
     import fidelity
 
     flying = os.path.join(ROOT, "tests", "data", "ant_flying_policy.pt")

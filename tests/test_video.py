@@ -33,7 +33,7 @@ def _clip(state: dict, steps: int) -> dict:
 
 @pytest.mark.parametrize("task", ["Ant", "Humanoid"])
 def test_frames_have_the_stated_size_and_show_the_robot(task):
-    from warpgym.render import RobotRenderer
+    from warpgym.media.render import RobotRenderer
 
     robot, empty = _fixed_state(task), _fixed_state(task, below_floor=True)
     with RobotRenderer(task, width=160, height=120) as r:
@@ -48,7 +48,7 @@ def test_frames_have_the_stated_size_and_show_the_robot(task):
 
 
 def test_a_grid_draws_every_robot():
-    from warpgym.render import RobotRenderer, grid_offsets
+    from warpgym.media.render import RobotRenderer, grid_offsets
 
     offsets = grid_offsets(4, 2.5)
     assert len({tuple(o) for o in offsets}) == 4 and np.ptp(offsets[:, 1]) == 2.5
@@ -64,7 +64,7 @@ def test_mp4_and_gif_decode_to_the_frames_written(tmp_path):
     import av
     from PIL import Image
 
-    from warpgym.video import render_clip
+    from warpgym.media.video import render_clip
 
     mp4, gif = str(tmp_path / "a.mp4"), str(tmp_path / "a.gif")
     frames = render_clip("Ant", _clip(_fixed_state("Ant"), 10), {mp4: {"fps": 60}, gif: {"fps": 20, "width": 80}},
@@ -80,8 +80,8 @@ def test_mp4_and_gif_decode_to_the_frames_written(tmp_path):
 
 
 def test_bad_video_settings_are_refused(tmp_path):
-    from warpgym.render import RobotRenderer
-    from warpgym.video import VideoWriter, frame_stride
+    from warpgym.media.render import RobotRenderer
+    from warpgym.media.video import VideoWriter, frame_stride
 
     with pytest.raises(ValueError, match="must end in .mp4 or .gif"):
         VideoWriter(str(tmp_path / "a.avi"), 30)
@@ -96,8 +96,8 @@ def test_bad_video_settings_are_refused(tmp_path):
 
 
 def test_a_missing_encoder_or_renderer_names_what_to_install(tmp_path, monkeypatch):
-    from warpgym import render
-    from warpgym.video import VideoWriter
+    from warpgym.media import render
+    from warpgym.media.video import VideoWriter
 
     monkeypatch.setitem(sys.modules, "av", None)  # as if PyAV were not installed
     with pytest.raises(ImportError, match=r"warpgym\[video\]"):
@@ -109,8 +109,7 @@ def test_a_missing_encoder_or_renderer_names_what_to_install(tmp_path, monkeypat
 
 
 def test_train_video_flag_fails_before_building_anything(monkeypatch, capsys):
-    sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(__file__)), "scripts"))
-    import train
+    from warpgym.cli import train
 
     with pytest.raises(SystemExit):
         train.parse_args(["--video", "--no-eval"])
@@ -128,7 +127,7 @@ def test_evaluation_clip_is_drawn_off_the_training_process(ant_env, tmp_path):
     from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
 
     from agents.evaluate import evaluate
-    from warpgym.clips import EvalVideoRecorder
+    from warpgym.media.clips import EvalVideoRecorder
 
     class Still:  # a policy that holds every joint at zero torque
         def act_deterministic(self, obs):

@@ -1,14 +1,9 @@
 """Learner adapters: each trains a few iterations, counts the same episodes warpgym does, and
 hands the learner warpgym's own buffers wherever the learner allows it."""
 
-import os
-import sys
-
 import numpy as np
 import pytest
 import torch
-
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "scripts"))
 
 LEARNERS = {"rsl_rl": "rsl_rl", "skrl": "skrl", "rl_games": "rl_games", "sb3": "stable_baselines3"}
 
@@ -27,7 +22,7 @@ def learner_returns(name: str, learner) -> list[float]:
 @pytest.mark.parametrize("name", list(LEARNERS))
 def test_each_learner_trains_and_counts_warpgym_episodes(name, tmp_path):
     pytest.importorskip(LEARNERS[name])
-    import train_with
+    from warpgym.cli import train_with
 
     from agents.logger import read_metrics
 

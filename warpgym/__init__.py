@@ -11,9 +11,9 @@ if not _os.environ.get("WARPGYM_WARP_INFO"):
         _wp.config.log_level = _wp.LOG_WARNING
     _wp.config.quiet = True
 
-from warpgym.device import default_device, resolve_device  # noqa: E402
-from warpgym.registration import register_envs  # noqa: E402
-from warpgym.sim import Sim  # noqa: E402
+from warpgym.sim.device import default_device, resolve_device  # noqa: E402
+from warpgym.envs.registration import register_envs  # noqa: E402
+from warpgym.sim.simulator import Sim  # noqa: E402
 
 register_envs()
 

@@ -1,6 +1,6 @@
 """A warpgym robot in native MuJoCo (the ``mujoco`` package: C, CPU), loaded from the same MJCF.
 
-A second simulator to check trained policies against (``scripts/sim2sim.py``) and the state mapping
+A second simulator to check trained policies against (``warpgym sim2sim``) and the state mapping
 that rendering needs. It imports neither Warp nor Newton: nothing here can inherit a mistake of
 warpgym's own model import, which is the point of the check.
 
@@ -22,8 +22,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from warpgym.physics import Physics
-from warpgym.robots import hinge_joint_names, mjcf_path, robot_spec
+from warpgym.sim.physics import Physics
+from warpgym.sim.robots import hinge_joint_names, mjcf_path, robot_spec
 from warpgym.tasks import LocomotionTask, get_task
 
 # Newton's ground plane as MuJoCo Warp receives it (ShapeConfig defaults): friction, condim, margin.
@@ -65,7 +65,7 @@ def load_native_model(robot: str, timestep: float, physics: Physics | None = Non
     """The robot's MJCF compiled by MuJoCo itself, with warpgym's ground and physics settings.
 
     ``visual`` adds what only a camera sees (a checker floor, a sky, a light that follows no body):
-    the same physics, dressed for ``warpgym.render``."""
+    the same physics, dressed for ``warpgym.media.render``."""
     physics = physics or Physics()
     if not (timestep > 0):
         raise ValueError(f"timestep={timestep!r} must be a positive number of seconds")

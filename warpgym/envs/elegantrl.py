@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import torch
 
-from warpgym.device import default_device
+from warpgym.sim.device import default_device
 from warpgym.envs.locomotion import LocomotionVecEnv
 
 

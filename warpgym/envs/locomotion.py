@@ -20,8 +20,8 @@ from kernels.buffers import EpisodeBuffers, RobotView, StepOutputs
 from kernels.locomotion import advance_rng, locomotion_step
 from kernels.resets import reset_finished_envs
 from kernels.solver_load import count_faults
-from warpgym.checks import check_float_tensor
-from warpgym.sim import Sim
+from warpgym.sim.checks import check_float_tensor
+from warpgym.sim.simulator import Sim
 from warpgym.tasks import LocomotionTask, get_task
 
 
@@ -72,7 +72,7 @@ class LocomotionVecEnv(VectorEnv):
         self.render_mode = render_mode
         self._view = None
         if render_mode is not None:
-            from warpgym.render import EnvView  # noqa: PLC0415  (MuJoCo's renderer: only when asked for)
+            from warpgym.media.render import EnvView  # noqa: PLC0415  (MuJoCo's renderer: only when asked for)
 
             self._view = EnvView(task, render_mode, render_robots, *render_size)
             if round(1.0 / task.dt) != self.metadata["render_fps"]:
@@ -155,7 +155,7 @@ class LocomotionVecEnv(VectorEnv):
         self._fault_views = {name: totals[i] for i, name in enumerate(self.FAULTS)}
         self._graph = None
         # Every kernel a step launches, compiled here and side by side rather than one by one
-        # inside the first step (warpgym.preload); a warm cache makes this a quick check.
+        # inside the first step (warpgym.compile.preload); a warm cache makes this a quick check.
         sim.compile_ahead(self._launch_step)
         self._reset_all()
 

@@ -10,7 +10,7 @@ armature 1). The physics takes 3 substeps of 4 solver iterations per 1/60 s step
 Gym's 2. docs/tasks.md, "Physics settings", holds the measurements.
 """
 
-from warpgym.physics import Physics
+from warpgym.sim.physics import Physics
 from warpgym.tasks.locomotion import LocomotionTask
 
 ANT = LocomotionTask(

@@ -8,7 +8,7 @@ from dataclasses import asdict, dataclass, field
 import warp as wp
 
 from kernels.params import LocomotionParams
-from warpgym.physics import Physics
+from warpgym.sim.physics import Physics
 
 
 @dataclass(frozen=True)

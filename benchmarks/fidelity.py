@@ -1,11 +1,11 @@
 """Does the physics hold at convergence? Train, keep policies at set times, replay each at a 4x finer
 step and in native MuJoCo, and write one table.
 
-    python scripts/fidelity.py --out OUT --task Ant --seeds 0 1 --seconds 300 --save-at 60 120
-    python scripts/fidelity.py --out OUT --task Ant --candidates substeps4 --seeds 0 --seconds 150
-    python scripts/fidelity.py --out OUT --task Ant --no-train --probes tests/data/ant_flying_policy.pt
-    python scripts/fidelity.py --out OUT --replay RUN_DIR [RUN_DIR ...]       # runs trained elsewhere, no training
-    python scripts/fidelity.py --report OUT [OUT ...]                         # the tables again
+    python benchmarks/fidelity.py --out OUT --task Ant --seeds 0 1 --seconds 300 --save-at 60 120
+    python benchmarks/fidelity.py --out OUT --task Ant --candidates substeps4 --seeds 0 --seconds 150
+    python benchmarks/fidelity.py --out OUT --task Ant --no-train --probes tests/data/ant_flying_policy.pt
+    python benchmarks/fidelity.py --out OUT --replay RUN_DIR [RUN_DIR ...]       # runs trained elsewhere, no training
+    python benchmarks/fidelity.py --report OUT [OUT ...]                         # the tables again
 
 For each candidate (CANDIDATES: named physics settings; "default" is the task's own) and seed,
 scripts/train.py trains --num-envs envs for --seconds of wall-clock time, keeping a checkpoint at each
@@ -38,7 +38,6 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.dirname(HERE))
-sys.path.insert(0, HERE)
 
 # Named physics settings, each complete for the fields it names (so a later change of the task's
 # defaults does not change what a name means). "default" is the task as it stands.
@@ -74,7 +73,7 @@ def _native(job: dict) -> dict:
     os.environ["CUDA_VISIBLE_DEVICES"] = ""
     import torch
 
-    import sim2sim
+    from warpgym.cli import sim2sim
     from agents.checkpoint import load
 
     torch.set_num_threads(1)
@@ -89,9 +88,9 @@ def replay_all(policies: list[dict], args, pool) -> None:
     ``pool`` meanwhile. ``policies`` items: checkpoint, env_args (task, physics), substeps."""
     import torch
 
-    import sim2sim
+    from warpgym.cli import sim2sim
     from agents.checkpoint import load
-    from warpgym.device import resolve_device
+    from warpgym.sim.device import resolve_device
 
     device = resolve_device(args.device)
     envs = args.envs or (256 if device.startswith("cuda") else 8)
@@ -180,7 +179,7 @@ def run_facts(run_dir: str) -> dict:
 
 def train(task: str, name: str, seed: int, args) -> str:
     run_dir = os.path.join(args.out, "runs", f"{task}-{name}-s{seed}")
-    cmd = [sys.executable, os.path.join(HERE, "train.py"), "--task", task, "--seed", str(seed), "--time-limit",
+    cmd = [sys.executable, os.path.join(os.path.dirname(HERE), "scripts", "train.py"), "--task", task, "--seed", str(seed), "--time-limit",
            str(args.seconds), "--eval-gap", "20", "--no-plots", "--run-dir", run_dir,
            *(["--num-envs", str(args.num_envs)] if args.num_envs else []),
            *(["--device", args.device] if args.device else []),

@@ -17,12 +17,12 @@ import warp as wp
 
 from kernels import tensor_api as k_api
 from kernels.solver_load import track_solver_load
-from warpgym.device import resolve_device
-from warpgym.physics import Physics
-from warpgym.preload import Preload, compile_ahead
-from warpgym.robots import RobotSpec, hinge_joint_names, mjcf_path, motor_gears, robot_spec
-from warpgym.streams import StreamOrder
-from warpgym.tensor_api import TensorAPI
+from warpgym.compile.preload import Preload, compile_ahead
+from warpgym.sim.device import resolve_device
+from warpgym.sim.physics import Physics
+from warpgym.sim.robots import RobotSpec, hinge_joint_names, mjcf_path, motor_gears, robot_spec
+from warpgym.sim.streams import StreamOrder
+from warpgym.sim.tensor_api import TensorAPI
 
 
 def _check_positive_int(name: str, value, fix: str) -> int:
@@ -66,7 +66,7 @@ class Sim(TensorAPI):
         physics: a ``Physics`` (or a dict of its fields): integrator, iteration caps, armature, joint
             speed clamp, contact time constant. Default: ``Physics()``.
         njmax, nconmax: constraint rows and contacts per world that MuJoCo Warp makes room for
-            (default: the robot's, see ``warpgym/robots.py``); a world that needs more loses the rest.
+            (default: the robot's, see ``warpgym/sim/robots.py``); a world that needs more loses the rest.
         check_inputs: validate index tensors on the host (one synchronisation per indexed set).
     """
 
@@ -285,7 +285,7 @@ class Sim(TensorAPI):
         """One substep on MuJoCo Warp's data: SolverMuJoCo.step's phases, with Newton's state pushed
         in only before the first substep and pulled out (forward kinematics of every body included)
         only after the last. Between substeps nothing reads Newton's state, and the conversions cost
-        about a tenth of the Ant's physics time on an H100 (scripts/bench.py, "MuJoCo Warp" against
+        about a tenth of the Ant's physics time on an H100 (``warpgym bench``, "MuJoCo Warp" against
         "raw Newton"). These are SolverMuJoCo internals of newton 1.8, which pyproject.toml pins;
         tests/test_sim.py checks this path against the public step."""
         s, m = self.solver, self.model
@@ -331,7 +331,7 @@ class Sim(TensorAPI):
         return cap.graph
 
     def compile_ahead(self, fn) -> None:
-        """Compile, side by side, every module ``fn``'s launches need (``warpgym.preload``). Newton
+        """Compile, side by side, every module ``fn``'s launches need (``warpgym.compile.preload``). Newton
         counts solver steps on the host; the launch-free pass must not move that count."""
         count = getattr(self.solver, "_step", None)
         self.compile_log.append(("step", compile_ahead(fn)))

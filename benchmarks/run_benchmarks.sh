@@ -1,14 +1,14 @@
 #!/usr/bin/env bash
-# Produce the numbers in docs/benchmarks.md on one GPU machine. Usage: scripts/run_benchmarks.sh OUT_DIR
+# Produce the numbers in docs/benchmarks.md on one GPU machine. Usage: benchmarks/run_benchmarks.sh OUT_DIR
 # Writes logs, JSON and run directories under OUT_DIR. All runs share one Warp kernel cache that starts
 # empty, so the first run measures a fresh machine's cold start.
 #   QUICK=1  the runs behind issue 5's targets (~10 min on an H100): cold start, libmathdx on/off,
 #            GPU checks, Ant and Humanoid at 4096 envs
 #   default  also the env-step table at 1024-16384 envs, profiles and the Ant scaling runs (~30 min)
 #   COLD=0   skip the cold start and the --no-mathdx env step, and keep Warp's own kernel cache
-#            (warm after any earlier run; scripts/cold_start.py measures cold starts in full)
+#            (warm after any earlier run; benchmarks/cold_start.py measures cold starts in full)
 set -uo pipefail
-out=${1:?usage: scripts/run_benchmarks.sh OUT_DIR}
+out=${1:?usage: benchmarks/run_benchmarks.sh OUT_DIR}
 mkdir -p "$out"
 export PYTHONUNBUFFERED=1
 quick=${QUICK:-0}

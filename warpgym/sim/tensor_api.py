@@ -12,7 +12,7 @@ import torch
 import warp as wp
 
 from kernels import tensor_api as k_api
-from warpgym.checks import check_env_ids, check_float_tensor
+from warpgym.sim.checks import check_env_ids, check_float_tensor
 
 
 class TensorAPI:

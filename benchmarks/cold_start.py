@@ -1,9 +1,9 @@
 """Time a fresh machine's first training runs: empty Warp kernel cache, then warm, then a copied cache.
 
-    python scripts/cold_start.py --out OUT                # the runs of docs/benchmarks.md, "Cold start"
-    python scripts/cold_start.py --out OUT --profile-warm # and a warm start under cProfile
-    python scripts/cold_start.py --out OUT --env WARPGYM_LTO_PROCESSES=0 -- --no-mathdx
-    python scripts/cold_start.py --report OUT/cold_start.json
+    python benchmarks/cold_start.py --out OUT                # the runs of docs/benchmarks.md, "Cold start"
+    python benchmarks/cold_start.py --out OUT --profile-warm # and a warm start under cProfile
+    python benchmarks/cold_start.py --out OUT --env WARPGYM_LTO_PROCESSES=0 -- --no-mathdx
+    python benchmarks/cold_start.py --report OUT/cold_start.json
 
 Every run is ``scripts/train.py`` with default settings in its own process; ``WARP_CACHE_PATH``
 picks the cache each starts from:

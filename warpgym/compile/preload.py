@@ -16,12 +16,12 @@ before the first step. Two things shorten that:
   and queues the modules on the pool above (``Preload.add``) while it builds the full model; the env checks its whole step with ``compile_ahead``, which
   compiles whatever is still missing, side by side. Five of those kernels factor small matrices with Warp's tile
   Cholesky, which by default links NVIDIA's libmathdx (slow to compile, fast to run). Those LTO
-  objects are built in child processes first (``warpgym.mathdx``), since Warp builds them one at
+  objects are built in child processes first (``warpgym.compile.mathdx``), since Warp builds them one at
   a time under its code-generation lock; ``use_mathdx(False)`` compiles Warp's own implementation
   instead.
 
-``warpgym.compile_log`` records what this process compiled and where the time went, for the
-start-up timeline that ``scripts/train.py`` prints.
+``warpgym.compile.log`` records what this process compiled and where the time went, for the
+start-up timeline that ``warpgym train`` prints.
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ from concurrent.futures import ThreadPoolExecutor
 import warp as wp
 import warp._src.context as _wp_context
 
-from warpgym import compile_log, mathdx
+from warpgym.compile import log as compile_log, mathdx
 
 # Importable before the model exists, and launched by every Sim step or reset.
 SIM_MODULES = (
@@ -109,7 +109,7 @@ def use_mathdx(enabled: bool) -> None:
 
 # ----------------------------------------------------------------------------- compile ahead
 # Warp compiles a module inside ``Module.load``, which every launch calls first. One wrapper,
-# installed once, both logs real compiles (``warpgym.compile_log``, for the start-up timeline) and,
+# installed once, both logs real compiles (``warpgym.compile.log``, for the start-up timeline) and,
 # in a thread that is recording, answers "not loaded" so that the launch returns without running
 # (Warp's ``launch`` skips a kernel whose module did not load).
 _local = threading.local()
@@ -244,7 +244,7 @@ def _thread_local_patch(patched, original):
 def submit_loads(pool, todo: list) -> list:
     """Load each (module, device, block_dim) of ``todo`` on ``pool``. On a GPU, the libmathdx LTO
     objects that modules about to compile would build are first started in child processes
-    (``warpgym.mathdx``), and those modules load once theirs are built; the others load at once."""
+    (``warpgym.compile.mathdx``), and those modules load once theirs are built; the others load at once."""
     waits = _start_lto_builds(todo)
     plain = [pool.submit(m.load, d, b) for m, d, b in todo if (id(m), _variant(m, b)) not in waits]
     return plain + [pool.submit(_load_after, waits[(id(m), _variant(m, b))], m, d, b)

@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import warp as wp
 import warp._src.build as _wp_build
 
-from warpgym import compile_log
+from warpgym.compile import log as compile_log
 
 # Warp builtins whose CUDA code links a libmathdx LTO object (their lto_dispatch_func in warp._src.builtins)
 LTO_BUILTINS = ("tile_cholesky", "tile_lower_solve", "tile_upper_solve", "tile_matmul", "tile_fft", "tile_ifft")

@@ -6,7 +6,7 @@ a separate process that draws it, writes ``videos/eval-<iteration>.mp4`` and put
 TensorBoard, so training never waits for a frame. Both follow the recorder protocol of
 ``agents/protocol.py``.
 
-    python -m warpgym.clips CLIP.npz --mp4 OUT.mp4 [--gif OUT.gif] [--tensorboard DIR --step N]
+    python -m warpgym.media.clips CLIP.npz --mp4 OUT.mp4 [--gif OUT.gif] [--tensorboard DIR --step N]
 
 draws a stored clip (what the background process runs).
 """
@@ -22,7 +22,7 @@ import sys
 import numpy as np
 import torch
 
-from warpgym.video import STATE_KEYS, frame_stride, render_clip
+from warpgym.media.video import STATE_KEYS, frame_stride, render_clip
 
 
 class StateRecorder:
@@ -77,7 +77,7 @@ def clip_forward_speed(task, states: dict) -> np.ndarray:
 
 
 class EvalVideoRecorder(StateRecorder):
-    """Records one clip every ``every`` evaluations during training (``scripts/train.py --video``).
+    """Records one clip every ``every`` evaluations during training (``warpgym train --video``).
 
     Args:
         run_dir: clips go to ``run_dir/videos``, their GIFs into ``run_dir/tensorboard``.
@@ -119,7 +119,7 @@ class EvalVideoRecorder(StateRecorder):
                 "height": self.height, "fps": self.fps}
         np.savez(f"{stem}.npz", meta=json.dumps(meta), **self.states())
         self.clear()
-        self._queue.append([sys.executable, "-m", "warpgym.clips", f"{stem}.npz", "--mp4", f"{stem}.mp4",
+        self._queue.append([sys.executable, "-m", "warpgym.media.clips", f"{stem}.npz", "--mp4", f"{stem}.mp4",
                             "--tensorboard", self.tensorboard, "--step", str(samples), "--remove-input"])
         self._poll()
 

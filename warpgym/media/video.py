@@ -2,7 +2,7 @@
 system ffmpeg), GIF through Pillow. Both come with ``pip install "warpgym[video]"``.
 
 ``render_clip`` turns a stored sequence of states (warpgym's layout) into either file; the frames
-come from ``warpgym.render``.
+come from ``warpgym.media.render``.
 """
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ def why_no_video(mp4: bool = True, gif: bool = True) -> str | None:
             import PIL  # noqa: F401,PLC0415
     except ImportError as e:
         return f"clips need the video extra ({e.name} is missing): {INSTALL}"
-    from warpgym.render import RendererUnavailable, probe_renderer  # noqa: PLC0415
+    from warpgym.media.render import RendererUnavailable, probe_renderer  # noqa: PLC0415
 
     try:
         probe_renderer()
@@ -162,7 +162,7 @@ def render_clip(task, states: dict, outputs: dict[str, dict], width: int = 640, 
         copies: draw the first ``copies`` robots (default: all K, as a grid).
     Returns: path -> frames written.
     """
-    from warpgym.render import RobotRenderer  # noqa: PLC0415
+    from warpgym.media.render import RobotRenderer  # noqa: PLC0415
 
     missing = [k for k in STATE_KEYS if k not in states]
     if missing:

@@ -1,7 +1,7 @@
 """How much does time-to-3 m/s vary between seeds, and between two runs of one seed?
 
-    python scripts/seed_spread.py --out OUT                    # Ant, seeds 0 1 2, two runs each, 60 s
-    python scripts/seed_spread.py --report OUT/seed_spread.json
+    python benchmarks/seed_spread.py --out OUT                    # Ant, seeds 0 1 2, two runs each, 60 s
+    python benchmarks/seed_spread.py --report OUT/seed_spread.json
 
 Each run is ``scripts/train.py --task TASK --seed S --time-limit SECONDS`` in its own process, on a
 warm kernel cache (a throwaway first run warms it). On a GPU two runs of one seed differ: CUDA's

@@ -1,7 +1,7 @@
 """Multi-GPU scaling of PPO training on one host: throughput, where the time goes, and learning.
 
-    python scripts/scaling.py --out OUT --task Ant --gpus 1 2 --seconds 60
-    python scripts/scaling.py --out OUT --task Humanoid --gpus 1 2 4 --seconds 90
+    python benchmarks/scaling.py --out OUT --task Ant --gpus 1 2 --seconds 60
+    python benchmarks/scaling.py --out OUT --task Humanoid --gpus 1 2 4 --seconds 90
 
 For one task it runs, with the same envs per GPU and a warm kernel cache:
   1 GPU    one `scripts/train.py` run on each GPU of the host, side by side (seeds 0, 1, ...): the
@@ -186,7 +186,7 @@ def main(argv=None) -> int:
                   {"CUDA_VISIBLE_DEVICES": ",".join(map(str, range(g)))})], [d + ".log"])
         results["gpus"][str(g)] = {"runs": {os.path.basename(d): summary_of(d)}}
         say(f"{g} GPUs: the collectives alone")
-        wait([run([*torchrun, "scripts/scaling.py", "--comms-worker", os.path.join(d, "checkpoint.pt"),
+        wait([run([*torchrun, "benchmarks/scaling.py", "--comms-worker", os.path.join(d, "checkpoint.pt"),
                    "--out", runs], os.path.join(runs, f"comms{g}.log"))], [os.path.join(runs, f"comms{g}.log")])
         with open(os.path.join(runs, "comms.json")) as f:
             results["gpus"][str(g)]["comms"] = json.load(f)

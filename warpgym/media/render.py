@@ -2,7 +2,7 @@
 
 The physics stays in warpgym: each frame the robots' states (warpgym's layout, docs/tensor_api.md)
 are written into native MuJoCo copies of the robot (``warpgym.native``, the mapping
-``scripts/sim2sim.py`` uses) and drawn; nothing is simulated here. ``K`` robots are drawn side by
+``warpgym sim2sim`` uses) and drawn; nothing is simulated here. ``K`` robots are drawn side by
 side in one scene, as Isaac Gym's viewer shows its envs, each shifted by its place in a grid.
 
 OpenGL comes from EGL (an NVIDIA driver's on a GPU machine, Mesa's software renderer on a CPU-only

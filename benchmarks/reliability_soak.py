@@ -1,8 +1,8 @@
 """Long runs that must neither produce a NaN nor drift: random actions, then training, at scale.
 
-    python scripts/reliability_soak.py random --task Ant --num-envs 16384 --steps 5e8 --out OUT
-    python scripts/reliability_soak.py train  --task Ant --num-envs 16384 --steps 5e8 --out OUT
-    python scripts/reliability_soak.py --report OUT/soak_*.json
+    python benchmarks/reliability_soak.py random --task Ant --num-envs 16384 --steps 5e8 --out OUT
+    python benchmarks/reliability_soak.py train  --task Ant --num-envs 16384 --steps 5e8 --out OUT
+    python benchmarks/reliability_soak.py --report OUT/soak_*.json
 
 ``random``: ``env.step`` with uniform random actions in [-1, 1] for STEPS env-steps. On the device,
 every step: the count of non-finite observation and reward entries. Every WINDOW steps (one host

@@ -1,0 +1,58 @@
+"""The ``warpgym`` command: subcommands, --version, one-line errors, and a wheel that carries it.
+(CI also installs the wheel into a fresh environment and trains from another directory: .ci/run.)"""
+
+import os
+import subprocess
+import sys
+import tomllib
+import zipfile
+
+import pytest
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+PYPROJECT = tomllib.load(open(os.path.join(ROOT, "pyproject.toml"), "rb"))
+
+
+def warpgym(*args, cwd=ROOT):
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([ROOT, os.environ.get("PYTHONPATH", "")]))
+    return subprocess.run([sys.executable, "-m", "warpgym", *args], capture_output=True, text=True, cwd=cwd,
+                          env=env, timeout=120)
+
+
+def test_version_is_the_projects():
+    done = warpgym("--version")
+    assert done.returncode == 0 and done.stdout.strip() == f"warpgym {PYPROJECT['project']['version']}"
+
+
+def test_every_subcommand_answers_help_under_its_own_name():
+    from warpgym.cli import COMMANDS
+
+    assert set(COMMANDS) == {"train", "play", "plot", "sim2sim", "train-with", "bench"}
+    for name in COMMANDS:
+        done = warpgym(name, "--help")
+        assert done.returncode == 0 and f"usage: warpgym {name}" in done.stdout, (name, done.stderr[-500:])
+
+
+@pytest.mark.parametrize(("args", "code", "says"), [
+    (["nonsense"], 2, "unknown command 'nonsense'; choose one of train, play"),
+    (["play", "/nowhere/at/all", "--device", "cpu"], 1, "no checkpoint at /nowhere/at/all"),
+    (["train", "--num-envs", "0"], 2, "--num-envs"),
+])
+def test_a_wrong_command_or_path_gets_one_line(args, code, says, tmp_path):
+    done = warpgym(*args, cwd=tmp_path)
+    assert done.returncode == code and "Traceback" not in done.stderr, done.stderr[-2000:]
+    assert says in done.stderr, done.stderr[-2000:]
+
+
+def test_the_wheel_carries_the_command_and_all_three_packages(tmp_path):
+    subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q", "-w",
+                    str(tmp_path), ROOT], check=True, capture_output=True, timeout=300)
+    (wheel,) = tmp_path.glob("warpgym-*.whl")
+    names = zipfile.ZipFile(wheel).namelist()
+    for module in ("warpgym/cli/train.py", "warpgym/__main__.py", "warpgym/sim/simulator.py",
+                   "warpgym/compile/preload.py", "warpgym/media/render.py", "kernels/observations.py",
+                   "agents/runner.py"):
+        assert module in names, module
+    assert not [n for n in names if n.startswith(("tests/", "benchmarks/", "scripts/"))]
+    entry_points = next(n for n in names if n.endswith("entry_points.txt"))
+    assert "warpgym = warpgym.cli:main" in zipfile.ZipFile(wheel).read(entry_points).decode()

@@ -1,0 +1,204 @@
+"""Throughput of the simulation, in env-steps per second (one env-step = one control step of one env).
+
+For each robot and env count, one model is built and four loops are timed on it:
+  mjwarp   MuJoCo Warp's own step on the solver's data, no Newton state in or out (what Newton's
+           conversions cost), graph-captured;
+  raw      Newton's SolverMuJoCo alone: the usual double-buffered substep loop, graph-captured;
+  physics  warpgym.Sim.step(): the same substeps as the Sim runs them (in place, one graph);
+  env      LocomotionVecEnv.step(random actions): actions in, physics, task kernels, resets.
+Each figure is the median of --repeats timings of --steps steps, after a warm-up. --physics
+NAME=VALUE (repeatable) times other solver settings, e.g. --physics ls_iterations=2.
+
+    warpgym bench --robots ant humanoid --num-envs 1024 4096 16384
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import statistics
+import sys
+import time
+
+import torch
+import warp as wp
+
+from warpgym.envs import LocomotionVecEnv
+from warpgym.sim.device import resolve_device
+from warpgym.sim.physics import Physics, parse_setting
+
+TASK_OF_ROBOT = {"ant": "Ant", "humanoid": "Humanoid"}
+
+
+def timed(fn, steps: int, repeats: int, device: str) -> list[float]:
+    """Seconds per ``steps`` calls of ``fn``, ``repeats`` times, device-synchronised."""
+    out = []
+    for _ in range(repeats):
+        wp.synchronize_device(device)
+        if device.startswith("cuda"):
+            torch.cuda.synchronize(device)
+        t0 = time.perf_counter()
+        for _ in range(steps):
+            fn()
+        wp.synchronize_device(device)
+        if device.startswith("cuda"):
+            torch.cuda.synchronize(device)
+        out.append(time.perf_counter() - t0)
+    return out
+
+
+def raw_newton_loop(sim):
+    """Newton's own pattern: two states swapped each substep, captured once as a graph."""
+    s0, s1 = sim.model.state(), sim.model.state()
+    wp.copy(s0.joint_q, sim.state.joint_q)
+    wp.copy(s0.joint_qd, sim.state.joint_qd)
+    states = [s0, s1]
+
+    def substeps():
+        for _ in range(sim.substeps):
+            sim.solver.step(states[0], states[1], sim.control, None, sim.sub_dt)
+            states.reverse()
+
+    graph = sim.capture(substeps)
+    if graph is None:
+        return substeps
+
+    def launch():
+        wp.capture_launch(graph)
+
+    launch.keep_alive = states  # the graph holds raw pointers into these states
+    return launch
+
+
+def mujoco_warp_loop(sim):
+    """MuJoCo Warp's step alone, ``substeps`` times, without contact forces, captured once."""
+    import mujoco_warp  # noqa: PLC0415
+
+    m, d = sim.solver.mjw_model, sim.solver.mjw_data
+
+    def substeps():
+        m.opt.run_rne_postconstraint = False
+        # under the solver's compile options, so these are the very kernels Sim.simulate launches
+        with wp.ScopedDevice(sim.device), sim.solver._scoped_mujoco_warp_execution():
+            for _ in range(sim.substeps):
+                mujoco_warp.step(m, d)
+
+    graph = sim.capture(substeps)
+    return substeps if graph is None else (lambda: wp.capture_launch(graph))
+
+
+def gpu_memory_used(device: str) -> int:
+    if not device.startswith("cuda"):
+        return 0
+    free, total = torch.cuda.mem_get_info(torch.device(device))
+    return total - free
+
+
+def bench_one(robot: str, num_envs: int, device: str, steps: int, repeats: int, physics: dict,
+              njmax: int | None = None) -> dict:
+    mem0 = gpu_memory_used(device)
+    t0 = time.perf_counter()
+    env = LocomotionVecEnv(TASK_OF_ROBOT[robot], num_envs=num_envs, device=device, seed=0,
+                           physics=physics, sim_options={"njmax": njmax})
+    build_s = time.perf_counter() - t0
+    sim = env.sim
+    gen = torch.Generator(device=device).manual_seed(0)
+    actions = [torch.rand(num_envs, env.num_actions, device=device, generator=gen) * 2 - 1 for _ in range(8)]
+    k = [0]
+
+    def env_step():
+        env.step(actions[k[0] % 8])
+        k[0] += 1
+
+    t0 = time.perf_counter()
+    for _ in range(3):  # compile kernels and capture graphs outside the timings
+        env_step()
+        sim.step()
+    raw = raw_newton_loop(sim)
+    raw()
+    mjwarp = mujoco_warp_loop(sim)
+    mjwarp()
+    wp.synchronize_device(device)
+    warmup_s = time.perf_counter() - t0
+    mem1 = gpu_memory_used(device)
+
+    result = {"robot": robot, "num_envs": num_envs, "njmax": sim.njmax, "steps": steps, "repeats": repeats,
+              "build_s": round(build_s, 2), "warmup_s": round(warmup_s, 2),
+              "gpu_mem_mib": round((mem1 - mem0) / 2**20, 1)}
+    for name, fn in (("mjwarp", mjwarp), ("raw", raw), ("physics", sim.step), ("env", env_step)):
+        fn()
+        times = timed(fn, steps, repeats, device)
+        med = statistics.median(times)
+        result[f"{name}_steps_per_s"] = num_envs * steps / med
+        result[f"{name}_spread"] = (max(times) - min(times)) / med
+    result["raw_over_mjwarp"] = result["raw_steps_per_s"] / result["mjwarp_steps_per_s"]
+    result["physics_over_raw"] = result["physics_steps_per_s"] / result["raw_steps_per_s"]
+    result["env_over_physics"] = result["env_steps_per_s"] / result["physics_steps_per_s"]
+    env.close()
+    del env, sim, raw, mjwarp
+    return result
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--robots", nargs="+", default=["ant", "humanoid"], choices=sorted(TASK_OF_ROBOT))
+    ap.add_argument("--num-envs", nargs="+", type=int, default=[1024, 4096, 16384])
+    ap.add_argument("--device", default=None)
+    ap.add_argument("--steps", type=int, default=200, help="steps per timing")
+    ap.add_argument("--repeats", type=int, default=5, help="timings per figure; the median is reported")
+    ap.add_argument("--physics", action="append", default=[], metavar="NAME=VALUE",
+                    help="a warpgym.sim.physics.Physics setting, e.g. solver_iterations=4 (default: the task's)")
+    ap.add_argument("--njmax", type=int, nargs="+", default=[None],
+                    help="constraint rows per world to compare (default: each robot's, warpgym/sim/robots.py)")
+    ap.add_argument("--no-mathdx", action="store_true",
+                    help="compile Warp's tile Cholesky without libmathdx (faster to compile; see the timings)")
+    ap.add_argument("--out", default=None, help="JSON file to write (default: print only)")
+    args = ap.parse_args(argv)
+    bad = [f"--{k.replace('_', '-')} {v}" for k, vs in (("num_envs", args.num_envs), ("steps", [args.steps]),
+                                                        ("repeats", [args.repeats])) for v in vs if v < 1]
+    if bad:
+        ap.error(f"{', '.join(bad)}: must be positive integers")
+    if args.no_mathdx:
+        wp.config.enable_mathdx_solver = False
+    try:
+        physics = dict(parse_setting(text) for text in args.physics)
+        Physics.from_dict(physics)
+    except ValueError as e:
+        ap.error(f"--physics: {e}")
+    device = resolve_device(args.device)
+    gpu = torch.cuda.get_device_name(torch.device(device)) if device.startswith("cuda") else platform.processor()
+
+    rows = []
+    for robot in args.robots:
+        for n in args.num_envs:
+            for njmax in args.njmax:
+                r = bench_one(robot, n, device, args.steps, args.repeats, physics, njmax)
+                rows.append(r)
+                print(json.dumps(r), flush=True)
+
+    print(f"\n{gpu}, {args.steps} steps x {args.repeats} repeats, median env-steps/s")
+    print(f"physics settings: {physics or 'the task defaults'}")
+    print("| robot | envs | njmax | MuJoCo Warp | raw Newton | warpgym physics | physics/raw | env (task) | "
+          "env/physics | MiB/1k envs |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    for r in rows:
+        print(f"| {r['robot']} | {r['num_envs']} | {r['njmax']} | {r['mjwarp_steps_per_s'] / 1e6:.2f}M | "
+              f"{r['raw_steps_per_s'] / 1e6:.2f}M | "
+              f"{r['physics_steps_per_s'] / 1e6:.2f}M | {r['physics_over_raw']:.3f} | "
+              f"{r['env_steps_per_s'] / 1e6:.2f}M | {r['env_over_physics']:.3f} | "
+              f"{r['gpu_mem_mib'] / r['num_envs'] * 1000:.0f} |")
+    if args.out:
+        meta = {"device": device, "gpu": gpu, "warp": wp.__version__, "torch": torch.__version__,
+                "mathdx_solver": bool(wp.config.enable_mathdx_solver),
+                "command": " ".join([os.path.basename(sys.argv[0])] + (argv if argv is not None else sys.argv[1:]))}
+        os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
+        with open(args.out + ".tmp", "w") as f:
+            json.dump({"meta": meta, "results": rows}, f, indent=1)
+        os.replace(args.out + ".tmp", args.out)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,125 @@
+"""Play a trained policy: mean return and forward speed of the deterministic policy, and videos.
+
+    warpgym play runs/Ant-20261122-120000                      # its checkpoint.pt
+    warpgym play runs/Ant-20261122-120000/checkpoint.pt --num-envs 256 --seed 3
+    warpgym play runs/Ant-20261122-120000 --video ant.mp4     # one episode, tracking camera
+    warpgym play runs/Ant-20261122-120000 --gif ant.gif --steps 300 --num-envs 9   # a 3x3 grid
+
+Each env plays one episode with the action mean (no exploration noise), cut short after --steps.
+Forward speed, here as everywhere in warpgym, is the distance travelled towards the target over the
+time the episode lasted (warpgym.tasks.LocomotionTask.forward_speed). With --video or --gif the
+physics runs in warpgym as in training, and each control step's state is drawn by MuJoCo's renderer
+from the same MJCF (headless: EGL or OSMesa; pip install "warpgym[video]"). MP4 runs at 60 fps (one
+frame per 1/60 s control step), GIF at 20. A clip's forward speed counts the strides it shows; a
+robot that fell and was reset inside it adds no travel for its reset.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+
+
+
+def parse_args(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("checkpoint", help="a checkpoint file, or a run directory holding checkpoint.pt")
+    ap.add_argument("--num-envs", type=int, default=None,
+                    help="episodes at once (default 64 on a GPU, 4 on the CPU; 1 with --video/--gif, "
+                         "more draws a grid of robots)")
+    ap.add_argument("--device", default=None)
+    ap.add_argument("--seed", type=int, default=12345)
+    ap.add_argument("--video", default=None, metavar="OUT.mp4", help="write an MP4 of the episode")
+    ap.add_argument("--gif", default=None, metavar="OUT.gif", help="write a GIF of the episode")
+    ap.add_argument("--steps", type=int, default=None, help="control steps to play (default: one episode)")
+    ap.add_argument("--width", type=int, default=640, help="frame width in pixels (default 640)")
+    ap.add_argument("--height", type=int, default=480, help="frame height in pixels (default 480)")
+    ap.add_argument("--fps", type=int, default=60, help="MP4 frame rate, dividing 60 (default 60)")
+    ap.add_argument("--gif-fps", type=int, default=20, help="GIF frame rate, dividing 60 and 100 (default 20)")
+    ap.add_argument("--gif-width", type=int, default=320, help="GIF width in pixels (default 320)")
+    args = ap.parse_args(argv)
+    for flag in ("num_envs", "steps", "width", "height", "fps", "gif_fps", "gif_width"):
+        value = getattr(args, flag)
+        if value is not None and value < 1:
+            ap.error(f"--{flag.replace('_', '-')} {value}: must be a positive integer")
+    if args.video and not args.video.lower().endswith(".mp4"):
+        ap.error(f"--video {args.video}: the file must end in .mp4 (use --gif for a GIF)")
+    if args.gif and not args.gif.lower().endswith(".gif"):
+        ap.error(f"--gif {args.gif}: the file must end in .gif")
+    if args.video or args.gif:
+        from warpgym.media.video import frame_stride, why_no_video  # noqa: PLC0415
+
+        reason = why_no_video(mp4=bool(args.video), gif=bool(args.gif))
+        if reason:
+            ap.error(f"--{'video' if args.video else 'gif'}: {reason}")
+        try:
+            frame_stride(args.fps)
+            frame_stride(args.gif_fps)
+            if 100 % args.gif_fps:
+                raise ValueError(f"--gif-fps {args.gif_fps}: a GIF's rate must divide 100 and 60 (10 or 20)")
+            from warpgym.media.render import RobotRenderer  # noqa: PLC0415,F401
+
+            RobotRenderer.check_size(args.width, args.height)
+        except ValueError as e:
+            ap.error(str(e))
+    return args
+
+
+def main(argv=None) -> int:
+    args = parse_args(argv)
+    import torch  # noqa: PLC0415
+
+    from agents.checkpoint import load_for_command, policy_from_checkpoint  # noqa: PLC0415
+    from agents.evaluate import evaluate  # noqa: PLC0415
+    from warpgym.sim.device import resolve_device  # noqa: PLC0415
+    from warpgym.envs import LocomotionVecEnv  # noqa: PLC0415
+
+    device = resolve_device(args.device)
+    path, ckpt = load_for_command(args.checkpoint, torch.device(device))
+    cfg = ckpt["config"]
+    env_args = cfg["env_args"]
+    task = env_args["task"]
+    filming = bool(args.video or args.gif)
+    n = args.num_envs or (1 if filming else 64 if device.startswith("cuda") else 4)
+    # the trained task as it was trained (episode length, substeps, physics), on this device
+    env = LocomotionVecEnv(**{**env_args, "num_envs": n, "device": device, "seed": args.seed})
+    policy, normalize = policy_from_checkpoint(ckpt, env.num_obs, env.num_actions, torch.device(device))
+    steps = args.steps or env.task.episode_length
+    recorder = None
+    if filming:
+        from warpgym.media.clips import StateRecorder  # noqa: PLC0415
+
+        recorder = StateRecorder(steps + 1, copies=n)  # the reset state, then one per step
+    result = evaluate(env, policy, normalize, steps, recorder)
+    result = {"task": task, "checkpoint": path, "iteration": ckpt["iteration"], "samples": ckpt["samples"],
+              "episodes": n, **result}
+    print(f"{task}, policy of iteration {ckpt['iteration']}, {n} episodes of the deterministic policy: "
+          f"return {result['eval/return']:.1f}, forward speed {result['eval/speed']:.2f} m/s, "
+          f"length {result['eval/length']:.0f} steps (means)")
+    if filming:
+        from warpgym.media.clips import clip_forward_speed  # noqa: PLC0415
+        from warpgym.media.video import render_clip  # noqa: PLC0415
+
+        states = recorder.states()
+        shown = states["root_pose"].shape[0] - 1  # steps after the first frame
+        result["clip/forward_speed"] = float(clip_forward_speed(env.task, states).mean())
+        print(f"clip: {shown} steps ({shown * env.task.dt:.1f} s) of {n} robot(s): forward speed "
+              f"{result['clip/forward_speed']:.2f} m/s")
+
+        outputs = {}
+        if args.video:
+            outputs[args.video] = {"fps": args.fps}
+        if args.gif:
+            outputs[args.gif] = {"fps": args.gif_fps, "width": min(args.gif_width, args.width)}
+        frames = render_clip(env.task, states, outputs, args.width, args.height)
+        for out, count in frames.items():
+            print(f"wrote {out}: {count} frames, {os.path.getsize(out) / 1e6:.2f} MB")
+        result["videos"] = frames
+    print(json.dumps(result))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

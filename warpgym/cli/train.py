@@ -1,0 +1,519 @@
+"""Train PPO on a warpgym task and show episodic reward against wall-clock time and against samples.
+
+    warpgym train --task Ant                       # GPU: 4096 envs; CPU: 64 envs, a 1-minute demo
+    warpgym train --task Humanoid --time-limit 300
+    warpgym train --resume runs/Ant-20261122-120000 --max-iterations 800
+    torchrun --nproc_per_node=4 -m warpgym train --task Ant  # 4 GPUs, 4096 envs each, one policy
+
+A run directory holds config.json, metrics.jsonl/.csv, tensorboard/, checkpoint.pt (written
+atomically every --save-gap iterations and at the end), summary.json, and the two plots
+reward_vs_time.png and reward_vs_samples.png.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+import time
+from dataclasses import fields
+
+from agents import Config, OnPolicyRunner
+from agents.config import PRESETS
+from warpgym.cli import process_start_time
+
+# The wall-clock axis starts when the process did: the interpreter, imports and kernel compiles count.
+PROCESS_START = process_start_time()
+
+# On a 2-core CPU the Ant default takes about 50 s after the kernels are compiled and its training
+# episodes go from drifting backwards to about 0.8 m/s: enough to see it learn.
+DEFAULT_ITERATIONS = {"cuda": {"Ant": 500, "Humanoid": 1000}, "cpu": {"Ant": 200, "Humanoid": 20}}
+DEFAULT_ENVS = {"cuda": 4096, "cpu": 64}
+TASK_NAMES = {t.lower(): t for t in PRESETS}
+
+
+def parse_args(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--task", default=None, help="Ant (default) or Humanoid")
+    ap.add_argument("--num-envs", type=int, default=None, help="default: 4096 on a GPU, 64 on the CPU")
+    ap.add_argument("--device", default=None, help="default: cuda:0 when present, else cpu")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--max-iterations", type=int, default=None)
+    ap.add_argument("--total-steps", type=int, default=None, help="stop after this many samples")
+    ap.add_argument("--time-limit", type=float, default=None, help="stop after this many seconds since start")
+    ap.add_argument("--run-dir", default=None, help="default: runs/<Task>-<date>-<time>")
+    ap.add_argument("--resume", default=None, metavar="RUN_DIR", help="continue the run saved in RUN_DIR")
+    ap.add_argument("--eval-gap", type=float, default=None, help="seconds between deterministic evaluations")
+    ap.add_argument("--eval-envs", type=int, default=None, help="envs per evaluation (the seed's eval env: 1)")
+    ap.add_argument("--no-eval", action="store_true")
+    ap.add_argument("--save-gap", type=int, default=None, help="iterations between checkpoints")
+    ap.add_argument("--horizon-len", type=int, default=None)
+    ap.add_argument("--batch-size", type=int, default=None)
+    ap.add_argument("--repeat-times", type=int, default=None)
+    ap.add_argument("--learning-rate", type=float, default=None)
+    ap.add_argument("--episode-length", type=int, default=None, help="steps per episode (task default: 1000)")
+    ap.add_argument("--substeps", type=int, default=None, help="physics substeps per 1/60 s step (default: the task's)")
+    ap.add_argument("--physics", action="append", default=[], metavar="NAME=VALUE",
+                    help="a physics setting (warpgym/sim/physics.py), e.g. --physics armature=0.05; repeat for more")
+    ap.add_argument("--save-at", type=float, nargs="+", default=None, metavar="SECONDS",
+                    help="also keep checkpoint-<iteration>.pt at the first iteration after each of these "
+                         "wall-clock seconds since start, e.g. --save-at 60 120 (summary.json lists them)")
+    ap.add_argument("--keep-checkpoints", action="store_true",
+                    help="keep checkpoint-<iteration>.pt at every save, not only the latest checkpoint.pt")
+    ap.add_argument("--video", action="store_true",
+                    help="record a clip of the evaluation episode into RUN_DIR/videos and TensorBoard "
+                         "(drawn by a separate process; needs warpgym[video])")
+    ap.add_argument("--video-every", type=int, default=1, metavar="N", help="record every N-th evaluation (default 1)")
+    ap.add_argument("--video-length", type=int, default=300, metavar="STEPS",
+                    help="control steps per clip (default 300: 5 s)")
+    ap.add_argument("--no-plots", action="store_true")
+    ap.add_argument("--no-cuda-graph", action="store_true",
+                    help="run everything eagerly: no CUDA graph of the rollout or of the PPO update")
+    ap.add_argument("--no-rollout-graph", action="store_true",
+                    help="launch each rollout step from Python instead of replaying one captured rollout")
+    ap.add_argument("--no-mathdx", action="store_true",
+                    help="compile Warp's tile Cholesky without libmathdx: a faster cold start (warpgym.compile.preload)")
+    ap.add_argument("--profile", action="store_true",
+                    help="time each phase of an iteration (synchronises the GPU between phases: slower)")
+    args = ap.parse_args(argv)
+    check_values(ap, args)
+    from warpgym.sim.physics import Physics, parse_setting  # noqa: PLC0415
+
+    try:
+        args.physics = dict(parse_setting(text) for text in args.physics)
+        Physics.from_dict(args.physics)
+    except ValueError as e:
+        ap.error(f"--physics: {e}")
+    if args.video:
+        check_video_args(ap, args)
+    return args
+
+
+# flag -> a value that works, quoted in the error; every flag is checked before anything is built
+POSITIVE = {"num_envs": 4096, "max_iterations": 500, "total_steps": 100_000_000, "eval_envs": 64, "save_gap": 50,
+            "horizon_len": 16, "batch_size": 32768, "repeat_times": 4, "episode_length": 1000, "substeps": 2,
+            "time_limit": 300, "learning_rate": 3e-4}
+NON_NEGATIVE = {"eval_gap": 30, "seed": 0}
+
+
+def flag(name: str) -> str:
+    return "--" + name.replace("_", "-")
+
+
+def check_values(ap, args) -> None:
+    """Impossible numbers and unknown tasks fail here, naming the flag and a value that works."""
+    for name, example in {**POSITIVE, **NON_NEGATIVE}.items():
+        v = getattr(args, name)
+        if v is None:
+            continue
+        low_ok = v > 0 if name in POSITIVE else v >= 0
+        if not (low_ok and math.isfinite(v)):
+            need = "a positive" if name in POSITIVE else "a non-negative"
+            ap.error(f"{flag(name)} {v}: must be {need} number, e.g. {flag(name)} {example}")
+    for v in args.save_at or ():
+        if not (v >= 0 and math.isfinite(v)):
+            ap.error(f"--save-at {v}: must be non-negative seconds since start, e.g. --save-at 60 120")
+    if args.task is not None and args.task.lower() not in TASK_NAMES:
+        ap.error(f"--task {args.task!r}: choose one of {sorted(TASK_NAMES.values())}")
+    if args.resume is not None:
+        given = [f for f in ("num_envs", "horizon_len", "episode_length", "substeps") if getattr(args, f) is not None]
+        if given or args.physics:
+            names = ", ".join([flag(f) for f in given] + (["--physics"] if args.physics else []))
+            ap.error(f"{names}: a resumed run keeps the envs it was started with; drop {names} "
+                     "or start a new run with --run-dir")
+
+
+def with_flag_names(message: str) -> str:
+    """A config error as the user wrote it: ``batch_size=8`` becomes ``--batch-size 8``."""
+    for name in sorted({*POSITIVE, *NON_NEGATIVE}, key=len, reverse=True):
+        message = message.replace(f"{name}=", f"{flag(name)} ").replace(f"lower {name}", f"lower {flag(name)}")
+    return message
+
+
+def check_resume(run_dir: str, saved: dict, task_flag: str | None) -> bool:
+    """The run directory's checkpoint, if it has one yet (the return value), is readable and of the
+    task its config names, and the task asked for (if any) is that one: checked on the CPU before
+    any model is built."""
+    from agents.checkpoint import load  # noqa: PLC0415
+
+    import torch  # noqa: PLC0415
+
+    task = saved.get("task")
+    if task_flag is not None and TASK_NAMES.get(task_flag.lower()) != task:
+        raise SystemExit(f"--task {task_flag} --resume {run_dir}: that run trains {task}; drop --task, or start "
+                         f"a new {TASK_NAMES.get(task_flag.lower(), task_flag)} run with --run-dir")
+    path = os.path.join(run_dir, "checkpoint.pt")
+    if not os.path.exists(path):
+        return False  # stopped before its first save: the run starts again from iteration 0
+    try:
+        ckpt = load(path, torch.device("cpu"))
+    except (FileNotFoundError, ValueError) as e:
+        raise SystemExit(f"--resume {run_dir}: {e}") from None
+    ckpt_task = (ckpt["config"].get("env_args") or {}).get("task")
+    if ckpt_task is not None and ckpt_task != task:
+        raise SystemExit(f"--resume {run_dir}: its checkpoint.pt was trained on {ckpt_task} but config.json says "
+                         f"{task}; the folder mixes two runs: resume from a run directory written by one run")
+    return True
+
+
+def check_video_args(ap, args) -> None:
+    """--video fails here, before any model is built, if it cannot work."""
+    if args.no_eval:
+        ap.error("--video records the evaluation episode: drop --no-eval")
+    for flag, value in (("--video-every", args.video_every), ("--video-length", args.video_length)):
+        if value < 1:
+            ap.error(f"{flag} {value}: must be a positive integer")
+    from warpgym.media.video import why_no_video  # noqa: PLC0415
+
+    reason = why_no_video(mp4=True, gif=True)  # an MP4 per clip, a GIF of it in TensorBoard
+    if reason:
+        ap.error(f"--video: {reason}")
+
+
+def build_config(args, task: str, num_envs: int, device: str, saved: dict | None = None) -> Config:
+    """The task's preset, or the saved config of the run being resumed, then the flags given."""
+    if saved is not None:
+        known = {f.name for f in fields(Config)} - {"env_class", "env_args", "eval_env_class", "eval_env_args"}
+        cfg = Config(**{k: (tuple(v) if k == "net_dims" else v) for k, v in saved.items() if k in known})
+    else:
+        cfg = Config.for_task(task, seed=args.seed)
+    changes = {k: v for k, v in {
+        "horizon_len": args.horizon_len, "repeat_times": args.repeat_times, "learning_rate": args.learning_rate,
+        "save_gap": args.save_gap, "eval_gap": args.eval_gap, "eval_envs": args.eval_envs,
+        "batch_size": args.batch_size, "keep_checkpoints": args.keep_checkpoints or None,
+        "save_at": tuple(args.save_at) if args.save_at else None,
+    }.items() if v is not None}
+    if saved is None and "eval_envs" not in changes and device == "cpu":
+        changes["eval_envs"] = 4
+    cfg = cfg.replace(**changes)
+    samples = num_envs * cfg.horizon_len
+    batch = cfg.batch_size
+    if saved is None and args.batch_size is None and (batch > samples // 2 or samples % batch):
+        batch = max(samples // 2, 1)  # the preset's mini-batch does not fit this env count
+    from warpgym.envs import LocomotionVecEnv  # noqa: PLC0415
+
+    from warpgym.tasks import get_task  # noqa: PLC0415
+
+    # The whole physics goes into the config, not only what the flags changed: a checkpoint then
+    # replays (play.py, sim2sim.py) with the physics it was trained with, whatever the defaults later.
+    defined = get_task(task)
+    common = {"task": task, "device": device, "max_episode_steps": args.episode_length,
+              "substeps": args.substeps or defined.substeps,
+              "physics": defined.physics.replace(**(args.physics or {})).to_dict()}
+    return cfg.replace(
+        batch_size=batch,
+        env_class=LocomotionVecEnv,
+        env_args={**common, "num_envs": num_envs, "seed": args.seed},
+        eval_env_class=LocomotionVecEnv,
+        eval_env_args={**common, "num_envs": cfg.eval_envs, "seed": args.seed + 1},
+    )
+
+
+def write_json(path: str, obj) -> None:
+    with open(path + ".tmp", "w") as f:
+        json.dump(obj, f, indent=1)
+    os.replace(path + ".tmp", path)
+
+
+def summarize(history: list[dict], device_name: str, cfg: Config) -> dict:
+    """Steady-state throughput and the first time each forward speed was reached."""
+    from agents.logger import first_reaching, steady_median  # noqa: PLC0415
+
+    rows = history[len(history) // 5 :]
+    out = {"device": device_name, "num_envs": cfg.env_args["num_envs"], "iterations": len(history),
+           "workers": int(os.environ.get("WORLD_SIZE", "1")),
+           "steady_samples_per_s_median": steady_median(history) or 0.0}
+    phases = sorted({k for r in rows for k in r if k.startswith("phase/")} | {"iteration_s"})
+    out["steady_phase_s_median"] = {k: steady_median(history, k) for k in phases if any(k in r for r in rows)}
+    if history:
+        out["final"] = {k: history[-1].get(k) for k in ("time_s", "samples", "return", "speed")}
+    evals = [r for r in history if "eval/return" in r]
+    if evals:
+        best = max(evals, key=lambda r: r["eval/return"])
+        out["best_eval"] = {k: best[k] for k in ("time_s", "samples", "eval/return", "eval/speed")}
+        for v in (1.0, 2.0, 3.0):
+            out[f"first_eval_speed_{v:g}ms"] = first_reaching(evals, "eval/speed", v)
+    for v in (1.0, 2.0, 3.0):  # training episodes (stochastic policy), logged every iteration
+        out[f"first_train_speed_{v:g}ms"] = first_reaching(history, "speed", v)
+    out["first_iteration_time_s"] = history[0]["time_s"] if history else None
+    return out
+
+
+def start_workers(args) -> tuple[int, str | None]:
+    """Under torchrun (WORLD_SIZE > 1): join the process group; return (rank, this process's device).
+
+    On several machines each process takes the GPU of its LOCAL_RANK, and ranks are global."""
+    if int(os.environ.get("WORLD_SIZE", "1")) <= 1:
+        return 0, args.device
+    import torch  # noqa: PLC0415
+    import torch.distributed as dist  # noqa: PLC0415
+
+    from agents.distributed import init_workers  # noqa: PLC0415
+
+    local = int(os.environ.get("LOCAL_RANK", "0"))
+    on_cpu = args.device == "cpu" or (args.device is None and not torch.cuda.is_available())
+    if on_cpu:
+        init_workers("gloo")
+        return dist.get_rank(), "cpu"
+    if local >= torch.cuda.device_count():
+        raise SystemExit(f"LOCAL_RANK={local} but this machine has {torch.cuda.device_count()} GPUs: "
+                         "pass torchrun --nproc_per_node <= the number of GPUs")
+    torch.cuda.set_device(local)
+    init_workers("nccl", torch.device(f"cuda:{local}"))
+    return dist.get_rank(), f"cuda:{local}"
+
+
+def watch_peers(rank: int):
+    """Under torchrun, end this process with a message when another worker goes silent (see
+    agents.distributed.PeerWatch); WARPGYM_PEER_TIMEOUT sets the seconds of silence allowed."""
+    from agents.distributed import PeerWatch, job_store  # noqa: PLC0415
+
+    size = int(os.environ.get("WORLD_SIZE", "1"))
+    store = job_store() if size > 1 else None
+    if store is None:
+        return None
+    timeout = float(os.environ.get("WARPGYM_PEER_TIMEOUT", "30"))
+    return PeerWatch(store, rank, size, timeout=timeout)
+
+
+def resume_hint(run_dir: str) -> str:
+    """How to go on, as rank 0 sees it (its machine holds the checkpoint)."""
+    if not os.path.isfile(os.path.join(run_dir, "checkpoint.pt")):
+        return f"No checkpoint was written to {run_dir} yet."
+    return (f"The run's last checkpoint is in {run_dir}; continue it with: warpgym train --resume "
+            f"{run_dir} (or torchrun ... -m warpgym train --resume {run_dir}, on any number of GPUs)")
+
+
+def main(argv=None) -> int:
+    import signal  # noqa: PLC0415
+
+    import torch.distributed as dist  # noqa: PLC0415
+
+    args = parse_args(argv)
+    rank, args.device = start_workers(args)
+    watch = watch_peers(rank)
+    live: dict = {}  # train() puts its runner here, for the signal handler
+
+    def on_signal(signum, frame):
+        runner = live.get("runner")
+        if runner is None or runner.stop_requested:
+            raise SystemExit(128 + signum)
+        # Ctrl-C, a cluster's pre-emption, or torchrun ending the job because a worker failed
+        sys.stderr.write(f"\nwarpgym worker {rank}: signal {signum}: stopping after this iteration and saving "
+                         "(send it again to stop at once)\n")
+        runner.request_stop()
+
+    previous = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
+    finished = False
+    try:
+        code = train(args, rank, watch, live)
+        finished = True
+        return code
+    except BaseException as e:
+        if args.run_dir and not (isinstance(e, SystemExit) and e.code in (0, None)):
+            why = f"{type(e).__name__}: {str(e).splitlines()[0][:300]}" if str(e) else type(e).__name__
+            hint = resume_hint(args.run_dir) if rank == 0 else "Rank 0's output says how to resume."
+            sys.stderr.write(f"\nwarpgym worker {rank}: training stopped ({why}). {hint}\n")
+        raise
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+        if watch is not None:
+            watch.stop(finished=finished)
+        if dist.is_available() and dist.is_initialized():
+            dist.destroy_process_group()
+
+
+def same_on_every_worker(text: str, device: str) -> str:
+    import torch  # noqa: PLC0415
+
+    from agents.distributed import Workers  # noqa: PLC0415
+
+    workers = Workers()
+    return workers.broadcast_bytes(text.encode() if workers.is_main else None, torch.device(device)).decode()
+
+
+def read_run_config(run_dir: str, device: str | None) -> dict:
+    """The config.json of the run to resume. Only rank 0 needs the file: on several machines the
+    others receive its bytes."""
+    import torch  # noqa: PLC0415
+
+    from agents.distributed import Workers  # noqa: PLC0415
+
+    workers = Workers()
+    data = None
+    if workers.is_main:
+        path = os.path.join(run_dir, "config.json")
+        if not os.path.isfile(path):
+            raise SystemExit(f"--resume {run_dir}: no config.json there; pass a run directory written by warpgym train")
+        with open(path, "rb") as f:
+            data = f.read()
+        check_run_config(path, data)
+    return json.loads(workers.broadcast_bytes(data, torch.device(device or "cpu")))
+
+
+RUN_KEYS = ("task", "device", "num_envs", "seed", "env_args")
+
+
+def check_run_config(path: str, data: bytes) -> None:
+    """A resumed run's config.json is whole JSON with the keys train.py writes, or the run stops with
+    one line saying which file and what is wrong with it."""
+    fix = ("restore it from a copy, or start a new run with --run-dir (the checkpoint alone does not say "
+           "how the envs were built)")
+    try:
+        saved = json.loads(data)
+    except (json.JSONDecodeError, UnicodeDecodeError) as e:
+        what = "empty" if not data.strip() else f"not valid JSON ({e})"
+        raise SystemExit(f"--resume: {path} is damaged: {what}; {fix}") from None
+    missing = [k for k in RUN_KEYS if not isinstance(saved, dict) or k not in saved]
+    if missing or not isinstance(saved.get("env_args"), dict) or saved["task"] not in TASK_NAMES.values():
+        raise SystemExit(f"--resume: {path} is not a warpgym run's config (missing or wrong: "
+                         f"{missing or ['env_args' if not isinstance(saved.get('env_args'), dict) else 'task']}); {fix}")
+
+
+def built(make, what: str, phase):
+    """``make()``, with one timeline line: how long it took and what Warp compiled meanwhile."""
+    from warpgym.compile.log import describe_compiles, mark  # noqa: PLC0415
+
+    start, before = time.time(), mark()
+    obj = make()
+    parts = getattr(getattr(obj, "sim", None), "build_times", {})
+    parts = f" ({', '.join(f'{k} {v:.1f} s' for k, v in parts.items() if v >= 0.05)})" if parts else ""
+    phase(f"{what} built in {time.time() - start:.1f} s{parts}; {describe_compiles(before)}")
+    return obj
+
+
+def train(args, rank: int, watch=None, live: dict | None = None) -> int:
+    import torch  # noqa: PLC0415
+
+    import warpgym  # noqa: PLC0415,F401  (registers the envs, quiets Warp)
+    from warpgym.sim.device import resolve_device  # noqa: PLC0415
+    from warpgym.envs import LocomotionVecEnv  # noqa: PLC0415
+
+    saved = None
+    if args.resume:
+        saved = read_run_config(args.resume, args.device)
+        task, run_dir = saved["task"], args.resume
+        device = resolve_device(args.device or saved["device"])
+        found = str(int(check_resume(run_dir, saved, args.task))) if rank == 0 else ""
+        has_checkpoint = same_on_every_worker(found, device) == "1"
+        num_envs = saved["num_envs"]
+        args.seed = saved["seed"]
+        args.episode_length = saved["env_args"].get("max_episode_steps")
+        args.substeps = saved["env_args"].get("substeps")
+        args.physics = saved["env_args"].get("physics") or {}
+    else:
+        has_checkpoint = False
+        task = TASK_NAMES[(args.task or "Ant").lower()]
+        device = resolve_device(args.device)
+        num_envs = args.num_envs or DEFAULT_ENVS["cuda" if device.startswith("cuda") else "cpu"]
+        run_dir = args.run_dir or os.path.join("runs", f"{task}-{time.strftime('%Y%m%d-%H%M%S')}")
+        run_dir = same_on_every_worker(run_dir, device)  # a default name could differ by a second
+    kind = "cuda" if device.startswith("cuda") else "cpu"
+    try:
+        cfg = build_config(args, task, num_envs, device, saved)
+        cfg.check_batch(num_envs)
+    except ValueError as e:
+        raise SystemExit(f"error: {with_flag_names(str(e))}") from None
+    if rank > 0:  # each process draws its own reset noise; rank 0 alone logs, evaluates and saves
+        cfg = cfg.replace(env_args={**cfg.env_args, "seed": cfg.env_args["seed"] + 1000 * rank})
+        args.no_eval = True
+    if args.max_iterations is None and args.total_steps is None and args.time_limit is None:
+        args.max_iterations = DEFAULT_ITERATIONS[kind][task]
+
+    args.run_dir = run_dir
+    if rank == 0:
+        os.makedirs(run_dir, exist_ok=True)
+    if watch is not None:
+        watch.hint = resume_hint(run_dir)
+    device_name = torch.cuda.get_device_name(torch.device(device)) if kind == "cuda" else "cpu"
+    if not args.resume and rank == 0:
+        write_json(os.path.join(run_dir, "config.json"),
+                   {"task": task, "device": device, "num_envs": num_envs, "seed": args.seed, **cfg.to_dict()})
+    say = print if rank == 0 else (lambda *a, **k: None)
+    workers = int(os.environ.get("WORLD_SIZE", "1"))
+    say(f"warpgym PPO | {task} | {num_envs} envs on {device} ({device_name})"
+        + (f" x {workers} processes" if workers > 1 else "") + f" | run dir {run_dir}", flush=True)
+    from warpgym.compile import log as compile_log, preload  # noqa: PLC0415
+
+    timeline: list[tuple[float, str]] = []
+
+    def phase(text: str) -> None:  # a cold start should say where its time goes, not sit silent
+        timeline.append((round(time.time() - PROCESS_START, 2), text))
+        say(f"[{timeline[-1][0]:6.1f} s] {text}", flush=True)
+
+    note = preload.bytecode_note()
+    if note:
+        say(f"note: {note}", flush=True)
+    cache, cached = preload.kernel_cache()
+    phase(f"imports done; Warp kernel cache {cache} holds {cached} modules"
+          + ("" if cached else " (empty: this run compiles them, about 15 s on an H100 or on two "
+                                "CPU cores; WARP_CACHE_PATH points Warp at a shared cache)"))
+    if args.no_mathdx:
+        preload.use_mathdx(False)
+    env = built(lambda: cfg.env_class(**cfg.env_args), f"training env: {task} x {num_envs}", phase)
+    eval_env = None if args.no_eval else built(lambda: cfg.eval_env_class(**cfg.eval_env_args),
+                                               f"evaluation env: {task} x {cfg.eval_env_args['num_envs']}", phase)
+    assert isinstance(env, LocomotionVecEnv)
+    recorder = None
+    if args.video and eval_env is not None:
+        from warpgym.media.clips import EvalVideoRecorder  # noqa: PLC0415
+
+        recorder = EvalVideoRecorder(run_dir, steps=args.video_length, every=args.video_every,
+                                     print_fn=lambda s: print(s, flush=True))
+    runner = OnPolicyRunner(env, cfg, run_dir=run_dir, eval_env=eval_env, start_time=PROCESS_START,
+                            print_fn=lambda s: print(s, flush=True), profile=args.profile,
+                            cuda_graph=not args.no_cuda_graph, rollout_graph=not args.no_rollout_graph,
+                            eval_recorder=recorder)
+    phase("policy and optimiser ready; the first iteration captures the rollout and update graphs")
+    if live is not None:
+        live["runner"] = runner
+    if args.resume and has_checkpoint:
+        runner.load(os.path.join(run_dir, "checkpoint.pt"), resume=True)
+        say(f"resumed at iteration {runner.iteration} ({runner.samples} samples)", flush=True)
+    elif args.resume:
+        runner.logger.drop_rows_after(0, 0)
+        say(f"{run_dir} has no checkpoint yet: the run starts again from iteration 0", flush=True)
+    try:
+        history = runner.learn(args.max_iterations, args.total_steps, args.time_limit)
+    finally:
+        stopped = runner.stop_requested
+        runner.close()
+        if live is not None:
+            live.clear()
+    if watch is not None:  # every process has left the collectives: peers may end at their own pace
+        watch.stop(finished=True)
+    if rank > 0:
+        return 0
+    summary = summarize(history, device_name, cfg)
+    summary["solver_load"] = env.sim.solver_load()  # this process's envs, over the whole run
+    summary["kept_checkpoints"] = runner.kept
+    summary["startup"] = {"timeline": timeline, "kernel_cache": cache, "cached_modules_at_start": cached,
+                          "compiled": compile_log.compile_trace(since=PROCESS_START),
+                          "lto_builds": compile_log.lto_builds_since(PROCESS_START)}
+    summary["faults"] = {k[len("faults/"):]: v for k, v in (history[-1] if history else {}).items()
+                         if k.startswith("faults/")}
+    if args.profile:
+        summary["profile"] = runner.timer.table()
+        print("| phase | ms / iteration | share |\n|---|---:|---:|")
+        for p in summary["profile"]:
+            print(f"| {p['phase']} | {p['ms_per_iteration']:.2f} | {100 * p['share']:.1f}% |")
+    write_json(os.path.join(run_dir, "summary.json"), summary)
+    if not args.no_plots:
+        try:
+            from agents.plotting import plot_runs  # noqa: PLC0415
+
+            paths = plot_runs([run_dir], run_dir, labels=[f"{task} {num_envs} envs"], title=f"warpgym {task}")
+            print("wrote " + ", ".join(paths), flush=True)
+        except ImportError:
+            print("matplotlib is not installed: pip install 'warpgym[train]' for the plots", flush=True)
+    print(json.dumps(summary), flush=True)
+    if stopped:
+        print(f"stopped on request after iteration {runner.iteration}. {resume_hint(run_dir)}", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
