@@ -229,6 +229,9 @@ def test_one_conversion_per_step_moves_the_robot_as_newtons_step_does():
     joint state, body poses and contact wrenches, apart from float32 round trips: within 1e-5 of
     each value's scale after one step and 1e-4 after 30 steps of a robot kicking the ground."""
     sims = [Sim("ant", num_envs=3, device="cpu", substeps=3) for _ in range(2)]
+    # the pinned Newton has the private phases (warpgym/sim/newton_internals.py): a Newton that moved
+    # them fails here, not by silently falling back to the slower public step
+    assert sims[0].convert_once_per_step, "SolverMuJoCo lacks the phases newton_internals.mujoco_substep calls"
     sims[1].convert_once_per_step = False
     gen = torch.Generator().manual_seed(5)
     torques = [(torch.rand(3, 8, generator=gen) * 2 - 1) * 10 for _ in range(30)]

@@ -26,6 +26,7 @@ import torch
 import warp as wp
 
 from warpgym.envs import LocomotionVecEnv
+from warpgym.sim import newton_internals
 from warpgym.sim.device import resolve_device
 from warpgym.sim.physics import Physics, parse_setting
 
@@ -81,7 +82,7 @@ def mujoco_warp_loop(sim):
     def substeps():
         m.opt.run_rne_postconstraint = False
         # under the solver's compile options, so these are the very kernels Sim.simulate launches
-        with wp.ScopedDevice(sim.device), sim.solver._scoped_mujoco_warp_execution():
+        with newton_internals.compile_options(sim.solver, sim.device):
             for _ in range(sim.substeps):
                 mujoco_warp.step(m, d)
 

@@ -18,6 +18,7 @@ import warp as wp
 from kernels import tensor_api as k_api
 from kernels.solver_load import track_solver_load
 from warpgym.compile.preload import Preload, compile_ahead
+from warpgym.sim import newton_internals
 from warpgym.sim.device import resolve_device
 from warpgym.sim.physics import Physics
 from warpgym.sim.robots import RobotSpec, hinge_joint_names, mjcf_path, motor_gears, robot_spec
@@ -101,7 +102,8 @@ class Sim(TensorAPI):
         self._graph = None
         self._contact_forces = False
         # Convert Newton's state to MuJoCo's and back once per control step, not once per substep
-        # (simulate()); False takes Newton's public step every substep (the reference in tests).
+        # (simulate()); False takes Newton's public step every substep (the reference in tests), as
+        # does a Newton without the private phases this needs (newton_internals).
         self.convert_once_per_step = True
         self._tensors: dict[str, tuple[wp.array, torch.Tensor]] = {}
         self._build()
@@ -228,6 +230,7 @@ class Sim(TensorAPI):
         self.compile_log = [("solver", {"queued": queued, "seconds": time.perf_counter() - start,
                                         "stopped_early": repr(stopped_early) if stopped_early else None})]
         self.solver = make_solver(model)
+        self.convert_once_per_step &= newton_internals.supports_split_substeps(self.solver)
         clock.lap("solver")
         self._peak_nefc = wp.zeros(n, dtype=wp.int32, device=self.device)
         self._peak_nacon = wp.zeros(1, dtype=wp.int32, device=self.device)
@@ -282,22 +285,9 @@ class Sim(TensorAPI):
                       outputs=[d.overflow, self._peak_nefc, self._peak_nacon, self._overflowed], device=self.device)
 
     def _mujoco_substep(self, push: bool, pull: bool) -> None:
-        """One substep on MuJoCo Warp's data: SolverMuJoCo.step's phases, with Newton's state pushed
-        in only before the first substep and pulled out (forward kinematics of every body included)
-        only after the last. Between substeps nothing reads Newton's state, and the conversions cost
-        about a tenth of the Ant's physics time on an H100 (``warpgym bench``, "MuJoCo Warp" against
-        "raw Newton"). These are SolverMuJoCo internals of newton 1.8, which pyproject.toml pins;
-        tests/test_sim.py checks this path against the public step."""
-        s, m = self.solver, self.model
-        with wp.ScopedDevice(self.device), s._scoped_mujoco_warp_execution():
-            if push:
-                s._apply_mjc_control(m, self.state, self.control, s.mjw_data)
-                s._update_mjc_data(s.mjw_data, m, self.state)
-                s.mjw_model.opt.timestep.fill_(self.sub_dt)
-            s._mujoco_warp_step()
-            if pull:
-                s._update_newton_state(m, self.state, s.mjw_data, state_prev=self.state)
-        s._step += 1
+        # Newton's state goes in before the first substep and out after the last (newton_internals)
+        newton_internals.mujoco_substep(self.solver, self.model, self.state, self.control, self.sub_dt,
+                                        self.device, push=push, pull=pull)
 
     @property
     def solver_overflows(self) -> wp.array:
@@ -333,10 +323,8 @@ class Sim(TensorAPI):
     def compile_ahead(self, fn) -> None:
         """Compile, side by side, every module ``fn``'s launches need (``warpgym.compile.preload``). Newton
         counts solver steps on the host; the launch-free pass must not move that count."""
-        count = getattr(self.solver, "_step", None)
-        self.compile_log.append(("step", compile_ahead(fn)))
-        if count is not None:
-            self.solver._step = count
+        with newton_internals.keep_step_count(self.solver):
+            self.compile_log.append(("step", compile_ahead(fn)))
 
     def launch(self, graph, fn) -> None:
         """Run ``fn`` (captured as ``graph``), ordered after and before torch's stream.
