@@ -52,6 +52,10 @@ CANDIDATES: dict[str, dict] = {
     "substeps4": {"substeps": 4, "physics": {"solver_iterations": 4, "ls_iterations": 4, "armature": None}},
     "armature0.05": {"substeps": 3, "physics": {"solver_iterations": 4, "ls_iterations": 4, "armature": 0.05}},
     "armature0.1": {"substeps": 3, "physics": {"solver_iterations": 4, "ls_iterations": 4, "armature": 0.1}},
+    # the Humanoid's own step (2 substeps of 8 iterations) with a stiffer rotor on every hinge, against
+    # nv_humanoid.xml's 0.006-0.02 kg m^2: the Ant's remedy, probed on Humanoid policies
+    "humanoid-armature0.1": {"substeps": 2, "physics": {"solver_iterations": 8, "ls_iterations": 8, "armature": 0.1}},
+    "humanoid-armature0.3": {"substeps": 2, "physics": {"solver_iterations": 8, "ls_iterations": 8, "armature": 0.3}},
     # a softer contact than the MJCF's 0.02 s: the step a flying gait is fitted to (tests/data)
     "soft-contact": {"substeps": 3, "physics": {"solver_iterations": 4, "ls_iterations": 4, "armature": None,
                                                 "contact_timeconst": 0.04}},
