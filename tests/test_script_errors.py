@@ -34,6 +34,8 @@ CASES = [
     ("fidelity.py", ["--out", MISSING, "--replay", MISSING], None, f"--replay {MISSING}: not a finished run directory"),
     ("fidelity.py", ["--out", MISSING, "--probes", MISSING], None, f"--probes {MISSING}: no such checkpoint file"),
     ("fidelity.py", ["--report", MISSING], None, f"--report {MISSING}: no fidelity.json"),
+    ("exits.py", ["--report", MISSING], None, f"--report {MISSING}: no such file"),
+    ("exits.py", ["--out", MISSING, "--gpus", "0"], None, "--gpus 0"),
 ]
 
 
