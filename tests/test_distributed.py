@@ -68,7 +68,8 @@ def test_two_machines_on_localhost_keep_one_policy(tmp_path):
 
 def test_train_command_under_torchrun_on_the_cpu(tmp_path):
     run = tmp_path / "ant"
-    done = torchrun("-m", "warpgym", "train", "--task", "Ant",  # as the README writes it "--device", "cpu", "--num-envs", "4",
+    # -m warpgym train, as the README writes it
+    done = torchrun("-m", "warpgym", "train", "--task", "Ant", "--device", "cpu", "--num-envs", "4",
                     "--max-iterations", "2", "--horizon-len", "4", "--episode-length", "20",
                     "--no-eval", "--no-plots", "--run-dir", str(run))
     assert "x 2 processes" in done.stdout
