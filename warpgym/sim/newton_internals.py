@@ -23,11 +23,19 @@ def supports_split_substeps(solver) -> bool:
     return all(callable(getattr(solver, name, None)) for name in PHASES)
 
 
+@contextlib.contextmanager
+def compile_options(solver, device):
+    """The scope under which the solver launches MuJoCo Warp's kernels (its compile options), for code
+    that launches MuJoCo Warp directly and must hit the same compiled kernels."""
+    with wp.ScopedDevice(device), solver._scoped_mujoco_warp_execution():
+        yield
+
+
 def mujoco_substep(solver, model, state, control, sub_dt: float, device, push: bool, pull: bool) -> None:
     """One substep on MuJoCo Warp's data: ``SolverMuJoCo.step``'s phases, with Newton's ``state`` pushed
     in only when ``push`` (before the first substep) and pulled out, forward kinematics of every body
     included, only when ``pull`` (after the last)."""
-    with wp.ScopedDevice(device), solver._scoped_mujoco_warp_execution():
+    with compile_options(solver, device):
         if push:
             solver._apply_mjc_control(model, state, control, solver.mjw_data)
             solver._update_mjc_data(solver.mjw_data, model, state)
@@ -36,15 +44,6 @@ def mujoco_substep(solver, model, state, control, sub_dt: float, device, push: b
         if pull:
             solver._update_newton_state(model, state, solver.mjw_data, state_prev=state)
     solver._step += 1
-
-
-def compile_options(solver, device):
-    """The scope under which the solver launches MuJoCo Warp's kernels (its compile options), for code
-    that launches MuJoCo Warp directly and must hit the same compiled kernels."""
-    scope = contextlib.ExitStack()
-    scope.enter_context(wp.ScopedDevice(device))
-    scope.enter_context(solver._scoped_mujoco_warp_execution())
-    return scope
 
 
 @contextlib.contextmanager
