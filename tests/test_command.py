@@ -56,3 +56,11 @@ def test_the_wheel_carries_the_command_and_all_three_packages(tmp_path):
     assert not [n for n in names if n.startswith(("tests/", "benchmarks/", "scripts/"))]
     entry_points = next(n for n in names if n.endswith("entry_points.txt"))
     assert "warpgym = warpgym.cli:main" in zipfile.ZipFile(wheel).read(entry_points).decode()
+
+
+def test_the_training_clock_starts_with_the_process():
+    """train's wall-clock axis starts at the process's start (from /proc), before any import."""
+    psutil = pytest.importorskip("psutil")
+    from warpgym.cli import process_start_time
+
+    assert process_start_time() == pytest.approx(psutil.Process().create_time(), abs=0.05)
