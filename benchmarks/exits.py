@@ -64,7 +64,8 @@ class Job:
                                      env=dict(os.environ, OMP_NUM_THREADS="1", **(env or {})), start_new_session=True)
 
     def output(self) -> str:
-        self.log.flush()
+        if not self.log.closed:
+            self.log.flush()
         with open(self.log_path) as f:
             return f.read()
 
@@ -89,6 +90,7 @@ def finished_run(args, k: int) -> dict:
     job = Job(args, f"run{k:02d}-{task}", task, ["--time-limit", str(args.seconds), "--eval-gap", "5"])
     code = job.proc.wait(timeout=args.seconds + 600)
     ended = time.time()
+    job.log.close()
     metrics = os.path.join(job.run_dir, "metrics.jsonl")
     last_row = os.path.getmtime(metrics) if os.path.exists(metrics) else None
     return {"kind": "finished", "task": task, "exit_code": code, "rows": rows_written(job.run_dir),
@@ -116,6 +118,7 @@ def failure(args, kind: str) -> dict:
         workers = worker_pids(job.proc.pid)
         event = time.time()
     gone = job.wait_gone(event, workers, STOP_WITHIN_S + 30)
+    job.log.close()
     return {"kind": kind, "task": task, "exit_code": job.proc.returncode, "workers": len(workers),
             "all_stopped_s": None if gone == float("inf") else round(gone, 2),
             "names_resume": f"--resume {job.run_dir}" in job.output(), "rows": rows_written(job.run_dir)}
