@@ -1,4 +1,6 @@
-"""The Ant's physics holds at a finer step for gaits that would exploit it.
+"""Each task's physics holds at a finer step for the gaits PPO learns on it.
+
+Ant:
 
 Two policies trained on an H100 (tests/data, each checkpoint's "note"), replayed closed loop in
 warpgym on the CPU at the task's step and at 4x the substeps:
@@ -7,6 +9,12 @@ warpgym on the CPU at the task's step and at 4x the substeps:
   loses half its speed at the finer step: the physics pays out the integration error. With the
   task's physics it runs at the same speed at both steps;
 - the armature policy was trained 5 minutes with the task's physics: its gait keeps its speed.
+
+Humanoid: two policies trained on an H100 at 4096 envs, one at the step of each default. The 200-second
+policy of the old default (2 substeps of 8 iterations) runs faster at its own step than at a 4x finer one;
+the 10-minute policy of today's default (3 substeps of 8) keeps its speed. The default test picks the
+committed policy trained with the task's physics, so it fails if the default goes back.
+
 docs/tasks.md ("Physics settings") has the same replays at full length on the GPU and in native MuJoCo.
 """
 
@@ -19,16 +27,18 @@ import torch
 DATA = os.path.join(os.path.dirname(os.path.abspath(__file__)), "data")
 STEPS, ROBOTS = 600, 8
 OLD_ANT_PHYSICS = {"armature": None, "solver_iterations": 4, "ls_iterations": 4}  # the defaults until 2026-11-23
+OLD_HUMANOID_PHYSICS = {"armature": None, "solver_iterations": 8, "ls_iterations": 8}  # at 2 substeps, until 2026-11-24
+HUMANOID_POLICIES = ("humanoid_2x8_policy.pt", "humanoid_3x8_policy.pt")
 
 
-def replay(name: str, substeps: int, physics: dict | None = None) -> dict:
+def replay(name: str, substeps: int, physics: dict | None = None, task: str = "Ant") -> dict:
     """Mean forward speed and torso height of ROBOTS robots over STEPS steps of the policy ``name``."""
     from agents.checkpoint import load, policy_from_checkpoint
     from warpgym.envs import LocomotionVecEnv
 
     ckpt = load(os.path.join(DATA, name), torch.device("cpu"))
     overrides = {"physics": physics} if physics is not None else {}  # else the task's, not the checkpoint's
-    env = LocomotionVecEnv("Ant", num_envs=ROBOTS, device="cpu", seed=3, substeps=substeps,
+    env = LocomotionVecEnv(task, num_envs=ROBOTS, device="cpu", seed=3, substeps=substeps,
                            max_episode_steps=STEPS, **overrides)
     policy, normalize = policy_from_checkpoint(ckpt, env.num_obs, env.num_actions, torch.device("cpu"))
     obs, _ = env.reset(seed=3)
@@ -66,4 +76,35 @@ def test_an_exploiting_gait_flies_on_the_old_physics_and_not_on_the_tasks():
 def test_a_gait_trained_on_the_tasks_physics_keeps_its_speed_at_a_finer_step():
     coarse, fine = replay("ant_armature_policy.pt", 3), replay("ant_armature_policy.pt", 12)
     assert coarse["speed"] > 5.0, coarse  # a real gait, not a robot standing still
+    assert fine["speed"] >= 0.9 * coarse["speed"], (coarse, fine)
+
+
+def trained_with(name: str) -> tuple[int, dict]:
+    """The substeps and physics a committed policy was trained with (its checkpoint's config)."""
+    from agents.checkpoint import load
+
+    env_args = load(os.path.join(DATA, name), torch.device("cpu"))["config"]["env_args"]
+    return env_args["substeps"], env_args["physics"]
+
+
+@pytest.mark.slow
+def test_the_humanoids_old_step_pays_out_speed_that_a_finer_step_does_not():
+    coarse = replay("humanoid_2x8_policy.pt", 2, OLD_HUMANOID_PHYSICS, task="Humanoid")
+    fine = replay("humanoid_2x8_policy.pt", 8, OLD_HUMANOID_PHYSICS, task="Humanoid")
+    assert coarse["speed"] > 5.0, coarse
+    assert fine["speed"] < 0.9 * coarse["speed"], (coarse, fine)  # 0.84 here, 0.81 on the GPU and in native MuJoCo
+
+
+@pytest.mark.slow
+def test_a_humanoid_gait_trained_on_the_default_physics_keeps_its_speed_at_a_finer_step():
+    from warpgym.tasks import get_task
+
+    task = get_task("Humanoid")
+    trained_on_default = [n for n in HUMANOID_POLICIES if trained_with(n) == (task.substeps, task.physics.to_dict())]
+    assert len(trained_on_default) == 1, (
+        f"no committed policy was trained with the Humanoid's default ({task.substeps} substeps, {task.physics}): "
+        "train one with benchmarks/fidelity.py and commit it to tests/data")
+    coarse = replay(trained_on_default[0], task.substeps, task="Humanoid")
+    fine = replay(trained_on_default[0], 4 * task.substeps, task="Humanoid")
+    assert coarse["speed"] > 5.0, coarse
     assert fine["speed"] >= 0.9 * coarse["speed"], (coarse, fine)
