@@ -22,6 +22,7 @@ CASES = [
     ("sim2sim.py", [POLICY, "--finer", "0"], None, "--finer=0: must be a positive integer"),
     ("train_with.py", ["nolearner"], None, "learner 'nolearner': choose one of"),
     ("train_with.py", ["skrl", "--device", "cpu"], "skrl", 'skrl is not installed: pip install "warpgym[skrl]"'),
+    ("train_with.py", ["rllib", "--device", "cpu"], "ray", 'rllib is not installed: pip install "warpgym[rllib]"'),
     ("bench.py", ["--num-envs", "0"], None, "--num-envs 0: must be positive integers"),
     ("bench.py", ["--physics", "armature=-1"], None, "--physics: armature=-1"),
     ("learner_bench.py", ["--report", MISSING], None, f"--report {MISSING}: no learners.json there"),

@@ -4,13 +4,14 @@
     warpgym train-with skrl --task Ant --num-envs 4096
     warpgym train-with rl_games --task Humanoid
     warpgym train-with sb3 --task Ant --num-envs 64      # numpy: the slow path
+    warpgym train-with rllib --task Ant                   # RLlib's PPO, numpy through the host
 
 Each learner runs with its own published hyperparameters for Isaac Gym's Ant and Humanoid
 (rsl_rl: Isaac Lab's; skrl: skrl's IsaacGymEnvs examples; rl_games: IsaacGymEnvs' AntPPO and
-HumanoidPPO; SB3: its defaults scaled to the batch). Whatever the learner logs itself, the run
+HumanoidPPO; SB3: its defaults scaled to the batch; RLlib: rl_games' numbers in RLlib's PPO). Whatever the learner logs itself, the run
 directory gets warpgym's metrics.jsonl/csv (return, length and forward speed of the training
 episodes, samples, wall-clock time) and the two plots, so the learners compare on one figure.
-Install the learner with its extra: pip install "warpgym[rsl_rl]" (or skrl, rl_games, sb3).
+Install the learner with its extra: pip install "warpgym[rsl_rl]" (or skrl, rl_games, sb3, rllib).
 """
 
 from __future__ import annotations
@@ -25,11 +26,12 @@ from warpgym.cli import process_start_time
 
 PROCESS_START = process_start_time()  # as train.py's: the clock starts with the process
 
-LEARNERS = ("rsl_rl", "skrl", "rl_games", "sb3")
-PIP_NAME = {"rsl_rl": "rsl_rl", "skrl": "skrl", "rl_games": "rl_games", "sb3": "stable_baselines3"}
+LEARNERS = ("rsl_rl", "skrl", "rl_games", "sb3", "rllib")
+PIP_NAME = {"rsl_rl": "rsl_rl", "skrl": "skrl", "rl_games": "rl_games", "sb3": "stable_baselines3", "rllib": "ray.rllib"}
 # samples per environment between updates, as each learner's published Ant/Humanoid config has it
 HORIZON = {"rsl_rl": {"Ant": 32, "Humanoid": 32}, "skrl": {"Ant": 16, "Humanoid": 32},
-           "rl_games": {"Ant": 16, "Humanoid": 32}, "sb3": {"Ant": 64, "Humanoid": 64}}
+           "rl_games": {"Ant": 16, "Humanoid": 32}, "sb3": {"Ant": 64, "Humanoid": 64},
+           "rllib": {"Ant": 16, "Humanoid": 32}}
 
 
 def parse_args(argv=None):
@@ -213,6 +215,46 @@ def run_sb3(env, args, horizon: int, run_dir: str) -> None:
     model.learn(total_timesteps=args.iterations * batch)
 
 
+def rllib_config(task: str, num_envs: int, horizon: int, gpu: bool, env_name: str):
+    """RLlib's PPO (new API stack) with rl_games' published Ant/Humanoid numbers, stepping warpgym's
+    envs in one env runner in this process (``num_env_runners=0``) and learning on one learner."""
+    from ray.rllib.algorithms.ppo import PPOConfig  # noqa: PLC0415
+    from ray.rllib.connectors.env_to_module import MeanStdFilter  # noqa: PLC0415
+
+    humanoid = task == "Humanoid"
+    batch = num_envs * horizon
+    return (PPOConfig()
+            .environment(env_name)
+            .env_runners(num_env_runners=0, num_envs_per_env_runner=num_envs, rollout_fragment_length=horizon,
+                         gym_env_vectorize_mode="vector_entry_point",
+                         env_to_module_connector=lambda env, spaces=None, device=None: MeanStdFilter())
+            .learners(num_learners=0, num_gpus_per_learner=1 if gpu else 0)
+            .training(train_batch_size_per_learner=batch, minibatch_size=min(32768, batch // 4 or batch),
+                      num_epochs=5 if humanoid else 4, lr=5e-4 if humanoid else 3e-4, gamma=0.99, lambda_=0.95,
+                      clip_param=0.2, vf_clip_param=1e6,  # RLlib's default clips value errors at 10 reward units
+                      kl_coeff=0.0, entropy_coeff=0.0, grad_clip=1.0, vf_loss_coeff=1.0)
+            .rl_module(model_config={"fcnet_hiddens": [400, 200, 100] if humanoid else [256, 128, 64],
+                                     "fcnet_activation": "elu", "vf_share_layers": False}))
+
+
+def run_rllib(env, args, horizon: int, run_dir: str) -> None:
+    import ray  # noqa: PLC0415
+    from warpgym.wrappers.common import base_env  # noqa: PLC0415
+    from warpgym.wrappers.rllib import register_built_env  # noqa: PLC0415
+
+    base = base_env(env)
+    if not ray.is_initialized():
+        ray.init(include_dashboard=False, log_to_driver=False, configure_logging=False)
+    name = register_built_env(f"warpgym-train-with-{args.task}", env)  # the env runner lives in this process
+    algo = rllib_config(args.task, base.num_envs, horizon, str(base.device).startswith("cuda"), name).build_algo()
+    args.learner_object, args.rllib_results = algo, []
+    try:
+        for _ in range(args.iterations):
+            args.rllib_results.append(algo.train())
+    finally:
+        algo.stop()
+
+
 # ---------------------------------------------------------------- common frame
 def adapter(learner: str, env, log):
     if learner == "rsl_rl":
@@ -221,6 +263,8 @@ def adapter(learner: str, env, log):
         from warpgym.wrappers.skrl import SkrlVecEnv as Adapter  # noqa: PLC0415
     elif learner == "rl_games":
         from warpgym.wrappers.rl_games import RlGamesVecEnv as Adapter  # noqa: PLC0415
+    elif learner == "rllib":
+        from warpgym.wrappers.rllib import RllibVecEnv as Adapter  # noqa: PLC0415
     else:
         from warpgym.wrappers.sb3 import Sb3VecEnv as Adapter  # noqa: PLC0415
     return Adapter(env, log=log)
@@ -262,7 +306,8 @@ def main(argv=None, args=None) -> int:
 
     log = args.episode_log = EpisodeLog(env, every=horizon, sink=sink, stop_after_s=args.time_limit,
                                         start=PROCESS_START, keep_returns=getattr(args, "keep_returns", False))
-    run = {"rsl_rl": run_rsl_rl, "skrl": run_skrl, "rl_games": run_rl_games, "sb3": run_sb3}[args.learner]
+    run = {"rsl_rl": run_rsl_rl, "skrl": run_skrl, "rl_games": run_rl_games, "sb3": run_sb3,
+           "rllib": run_rllib}[args.learner]
     stopped = "iterations"
     try:
         run(adapter(args.learner, env, log), args, horizon, run_dir)

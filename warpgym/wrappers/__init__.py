@@ -7,6 +7,7 @@ rsl_rl         ``rsl_rl.RslRlVecEnv``           ``pip install "warpgym[rsl_rl]"`
 skrl           ``skrl.SkrlVecEnv``              ``pip install "warpgym[skrl]"``    torch, env device
 rl_games       ``rl_games.RlGamesVecEnv``       ``pip install "warpgym[rl_games]"``  torch, env device
 SB3            ``sb3.Sb3VecEnv``                ``pip install "warpgym[sb3]"``     numpy, host (slow)
+RLlib          ``rllib.RllibVecEnv``            ``pip install "warpgym[rllib]"``   numpy, host (slow)
 Gymnasium      ``numpy_vec.NumpyVecEnv``        (core)                           numpy, host (slow)
 =============  ==============================  ===============================  ==================
 

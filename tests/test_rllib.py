@@ -1,0 +1,74 @@
+"""RLlib's PPO (new API stack) trains warpgym through warpgym.wrappers.rllib, whose next-step autoreset
+is checked against warpgym's own same-step autoreset and info["final_obs"].
+
+RLlib pins gymnasium 1.2.2: CI runs this file in a second environment with that gymnasium and the
+rllib extra (.ci/run); where RLlib is not installed it is skipped."""
+
+import numpy as np
+import pytest
+import torch
+
+pytest.importorskip("ray.rllib")
+
+
+def test_rllib_ppo_trains_warpgym_and_counts_the_same_episodes(tmp_path):
+    from agents.logger import read_metrics
+    from warpgym.cli import train_with
+
+    args = train_with.parse_args(["rllib", "--num-envs", "4", "--iterations", "2", "--device", "cpu",
+                                  "--episode-length", "16", "--run-dir", str(tmp_path), "--no-plots"])
+    args.keep_returns = True
+    assert train_with.main(args=args) == 0
+    first, last = (r["env_runners"] for r in args.rllib_results)
+    ours = args.episode_log.returns
+    # 2 iterations x 16 steps of 16-step episodes: every env finishes one episode per iteration
+    assert len(ours) == 8 and last["num_episodes_lifetime"] == len(ours)
+    assert first["episode_len_max"] == 16  # the first episodes start at warpgym's reset
+    assert last["episode_len_max"] == 15 and last["episode_len_min"] == 15  # later ones after the hidden step
+    rows = read_metrics(str(tmp_path))
+    assert len(rows) == 2 and rows[-1]["samples"] == 4 * 32 and rows[-1]["episodes"] == 4
+    assert args.learner_object.iteration == 2  # RLlib's own count of finished training iterations
+
+
+def test_next_step_autoreset_against_warpgyms_final_obs():
+    from gymnasium.vector import AutoresetMode
+
+    from warpgym.envs import LocomotionVecEnv
+    from warpgym.wrappers.rllib import RllibVecEnv
+
+    base = LocomotionVecEnv("Ant", num_envs=3, device="cpu", seed=2, max_episode_steps=4)
+    env = RllibVecEnv(base)
+    assert env.metadata["autoreset_mode"] == AutoresetMode.NEXT_STEP
+    obs, _ = env.reset(seed=5)
+    assert isinstance(obs, np.ndarray) and obs.shape == (3, base.num_obs)
+    rng = np.random.default_rng(0)
+    ended = restarted = 0
+    restarting = np.zeros(3, bool)
+    for _ in range(13):
+        actions = rng.uniform(-1, 1, (3, base.num_actions)).astype(np.float32)
+        obs, reward, terminated, truncated, info = env.step(actions)
+        done = base.info["_final_obs"].numpy()
+        assert info == {} and reward.dtype == np.float64 and terminated.dtype == bool
+        # the env's last observation where it finished, its current one elsewhere
+        np.testing.assert_array_equal(obs[done & ~restarting], base.info["final_obs"].numpy()[done & ~restarting])
+        np.testing.assert_array_equal(obs[~done], base.obs.numpy()[~done])
+        # the step after a finish starts the next episode: no reward, no flag, zero actions
+        assert not (terminated | truncated)[restarting].any() and (reward[restarting] == 0).all()
+        if restarting.any():
+            np.testing.assert_array_equal(obs[restarting], base.obs.numpy()[restarting])
+            assert (base.actions.numpy()[restarting & ~done] == 0).all()  # the actions this step applied
+        np.testing.assert_array_equal(reward[~restarting], base.reward.numpy()[~restarting])
+        ended += int((terminated | truncated).sum())
+        restarted += int(restarting.sum())
+        restarting = terminated | truncated
+    assert ended >= 6 and restarted >= 6  # 4-step episodes: three rounds of finishes and restarts
+
+
+def test_registered_creator_builds_the_task_with_rllibs_env_count():
+    from warpgym.wrappers.rllib import RLLIB_ENV, register_rllib_env, rllib_env_creator
+
+    assert register_rllib_env() == RLLIB_ENV
+    env = rllib_env_creator({"task": "Humanoid", "device": "cpu", "num_envs": 2, "seed": 1})
+    assert env.num_envs == 2 and env.single_observation_space.shape == (108,)
+    obs, _ = env.reset(seed=0)
+    assert obs.shape == (2, 108) and torch.is_tensor(env._base.obs)
