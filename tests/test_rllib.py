@@ -72,3 +72,22 @@ def test_registered_creator_builds_the_task_with_rllibs_env_count():
     assert env.num_envs == 2 and env.single_observation_space.shape == (108,)
     obs, _ = env.reset(seed=0)
     assert obs.shape == (2, 108) and torch.is_tensor(env._base.obs)
+
+
+def test_two_env_runners_and_two_learners_train_one_policy(tmp_path):
+    """--gpus 2: two env runners and two DDP learners as Ray actors (on the CPU here); the rows come
+    from RLlib's metrics, with warpgym's forward speed from the ForwardSpeed callback."""
+    import math
+
+    from agents.logger import read_metrics
+    from warpgym.cli import train_with
+
+    args = train_with.parse_args(["rllib", "--gpus", "2", "--num-envs", "4", "--iterations", "3", "--device", "cpu",
+                                  "--episode-length", "12", "--horizon-len", "8", "--run-dir", str(tmp_path),
+                                  "--no-plots"])
+    assert train_with.main(args=args) == 0
+    rows = read_metrics(str(tmp_path))
+    assert [r["samples"] for r in rows] == [64, 128, 192]  # 2 runners x 4 envs x 8 steps per iteration
+    finished = [r for r in rows if r["episodes"]]
+    assert finished and all(math.isfinite(r["speed"]) and r["length"] <= 12 for r in finished)
+    assert args.learner_object.learner_group.is_remote  # the learners are actors, not this process

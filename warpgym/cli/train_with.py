@@ -48,13 +48,26 @@ def parse_args(argv=None):
     ap.add_argument("--run-dir", default=None, help="default: runs/<Task>-<learner>-<date>-<time>")
     ap.add_argument("--no-plots", action="store_true")
     ap.add_argument("--no-compile", action="store_true", help="rl_games: no torch.compile of its model (its default)")
+    ap.add_argument("--gpus", type=int, default=1,
+                    help="rllib: env runners and learners, one of each per GPU (on the CPU: that many processes)")
+    for flag, kind, what in (("--horizon-len", int, "steps per env between updates"),
+                             ("--batch-size", int, "samples per minibatch"), ("--repeat-times", int, "epochs per update"),
+                             ("--learning-rate", float, "Adam's step size")):
+        ap.add_argument(flag, type=kind, default=None, help=f"rllib: {what} (default: the task's rl_games numbers)")
     args = ap.parse_args(argv)
     if args.learner not in LEARNERS:
         ap.error(f"learner {args.learner!r}: choose one of {', '.join(LEARNERS)}")
     if args.task.lower() not in ("ant", "humanoid"):
         ap.error(f"--task {args.task!r}: choose Ant or Humanoid")
     args.task = args.task.capitalize()
-    for flag in ("num_envs", "iterations", "episode_length"):
+    rllib_only = [f for f in ("horizon_len", "batch_size", "repeat_times", "learning_rate") if getattr(args, f) is not None]
+    if args.gpus != 1:
+        rllib_only.append("gpus")
+    if rllib_only and args.learner != "rllib":
+        ap.error(f"--{rllib_only[0].replace('_', '-')} is an rllib setting: the other learners run their published numbers")
+    if args.learning_rate is not None and not args.learning_rate > 0:
+        ap.error(f"--learning-rate {args.learning_rate}: must be a positive number")
+    for flag in ("num_envs", "iterations", "episode_length", "horizon_len", "batch_size", "repeat_times", "gpus"):
         v = getattr(args, flag)
         if v is not None and v < 1:
             ap.error(f"--{flag.replace('_', '-')} {v}: must be a positive integer")
@@ -215,46 +228,6 @@ def run_sb3(env, args, horizon: int, run_dir: str) -> None:
     model.learn(total_timesteps=args.iterations * batch)
 
 
-def rllib_config(task: str, num_envs: int, horizon: int, gpu: bool, env_name: str):
-    """RLlib's PPO (new API stack) with rl_games' published Ant/Humanoid numbers, stepping warpgym's
-    envs in one env runner in this process (``num_env_runners=0``) and learning on one learner."""
-    from ray.rllib.algorithms.ppo import PPOConfig  # noqa: PLC0415
-    from ray.rllib.connectors.env_to_module import MeanStdFilter  # noqa: PLC0415
-
-    humanoid = task == "Humanoid"
-    batch = num_envs * horizon
-    return (PPOConfig()
-            .environment(env_name)
-            .env_runners(num_env_runners=0, num_envs_per_env_runner=num_envs, rollout_fragment_length=horizon,
-                         gym_env_vectorize_mode="vector_entry_point",
-                         env_to_module_connector=lambda env, spaces=None, device=None: MeanStdFilter())
-            .learners(num_learners=0, num_gpus_per_learner=1 if gpu else 0)
-            .training(train_batch_size_per_learner=batch, minibatch_size=min(32768, batch // 4 or batch),
-                      num_epochs=5 if humanoid else 4, lr=5e-4 if humanoid else 3e-4, gamma=0.99, lambda_=0.95,
-                      clip_param=0.2, vf_clip_param=1e6,  # RLlib's default clips value errors at 10 reward units
-                      kl_coeff=0.0, entropy_coeff=0.0, grad_clip=1.0, vf_loss_coeff=1.0)
-            .rl_module(model_config={"fcnet_hiddens": [400, 200, 100] if humanoid else [256, 128, 64],
-                                     "fcnet_activation": "elu", "vf_share_layers": False}))
-
-
-def run_rllib(env, args, horizon: int, run_dir: str) -> None:
-    import ray  # noqa: PLC0415
-    from warpgym.wrappers.common import base_env  # noqa: PLC0415
-    from warpgym.wrappers.rllib import register_built_env  # noqa: PLC0415
-
-    base = base_env(env)
-    if not ray.is_initialized():
-        ray.init(include_dashboard=False, log_to_driver=False, configure_logging=False)
-    name = register_built_env(f"warpgym-train-with-{args.task}", env)  # the env runner lives in this process
-    algo = rllib_config(args.task, base.num_envs, horizon, str(base.device).startswith("cuda"), name).build_algo()
-    args.learner_object, args.rllib_results = algo, []
-    try:
-        for _ in range(args.iterations):
-            args.rllib_results.append(algo.train())
-    finally:
-        algo.stop()
-
-
 # ---------------------------------------------------------------- common frame
 def adapter(learner: str, env, log):
     if learner == "rsl_rl":
@@ -285,18 +258,19 @@ def main(argv=None, args=None) -> int:
     gpu = device.startswith("cuda")
     num_envs = args.num_envs or (4096 if gpu else 64)
     args.iterations = args.iterations or (500 if gpu else 20)
-    horizon = HORIZON[args.learner][args.task]
+    horizon = getattr(args, "horizon_len", None) or HORIZON[args.learner][args.task]
+    if getattr(args, "batch_size", None) and args.batch_size > num_envs * horizon:
+        raise SystemExit(f"error: --batch-size {args.batch_size} exceeds the {num_envs * horizon} samples of one rollout "
+                         f"({num_envs} envs x horizon {horizon}): lower --batch-size or raise --num-envs")
     run_dir = args.run_dir or os.path.join("runs", f"{args.task}-{args.learner}-{time.strftime('%Y%m%d-%H%M%S')}")
     os.makedirs(run_dir, exist_ok=True)
     torch.manual_seed(args.seed)
     print(f"warpgym + {args.learner} | {args.task} | {num_envs} envs on {device} | run dir {run_dir}", flush=True)
-    env = LocomotionVecEnv(args.task, num_envs=num_envs, device=device, seed=args.seed,
-                           max_episode_steps=args.episode_length)
     logger = MetricsLogger(run_dir)
     rows: list[dict] = []
 
     def sink(row: dict) -> None:
-        row = {"iteration": len(rows) + 1, **row, "samples_per_s": horizon * num_envs / max(row["steps_s"], 1e-9)}
+        row = {"iteration": len(rows) + 1, "samples_per_s": horizon * num_envs / max(row["steps_s"], 1e-9), **row}
         rows.append(row)
         logger.log(row)
         if len(rows) % 10 == 0:
@@ -304,15 +278,24 @@ def main(argv=None, args=None) -> int:
                   f"return {row.get('return', float('nan')):8.1f} | speed {row.get('speed', float('nan')):5.2f} m/s | "
                   f"{row['time_s']:6.1f} s", flush=True)
 
-    log = args.episode_log = EpisodeLog(env, every=horizon, sink=sink, stop_after_s=args.time_limit,
-                                        start=PROCESS_START, keep_returns=getattr(args, "keep_returns", False))
-    run = {"rsl_rl": run_rsl_rl, "skrl": run_skrl, "rl_games": run_rl_games, "sb3": run_sb3,
-           "rllib": run_rllib}[args.learner]
     stopped = "iterations"
-    try:
-        run(adapter(args.learner, env, log), args, horizon, run_dir)
-    except TimeLimitReached:
-        stopped = "time limit"
+    if args.learner == "rllib" and args.gpus > 1:  # env runners in their own processes build their own envs
+        from warpgym.cli.rllib_run import run_rllib_remote  # noqa: PLC0415
+
+        stopped = run_rllib_remote(args, horizon, num_envs, device, run_dir, sink, PROCESS_START)
+    else:
+        env = LocomotionVecEnv(args.task, num_envs=num_envs, device=device, seed=args.seed,
+                               max_episode_steps=args.episode_length)
+        log = args.episode_log = EpisodeLog(env, every=horizon, sink=sink, stop_after_s=args.time_limit,
+                                            start=PROCESS_START, keep_returns=getattr(args, "keep_returns", False))
+        if args.learner == "rllib":
+            from warpgym.cli.rllib_run import run_rllib as run  # noqa: PLC0415
+        else:
+            run = {"rsl_rl": run_rsl_rl, "skrl": run_skrl, "rl_games": run_rl_games, "sb3": run_sb3}[args.learner]
+        try:
+            run(adapter(args.learner, env, log), args, horizon, run_dir)
+        except TimeLimitReached:
+            stopped = "time limit"
     logger.close()
     summary = summarize(rows, args, device, num_envs, stopped)
     with open(os.path.join(run_dir, "summary.json"), "w") as f:

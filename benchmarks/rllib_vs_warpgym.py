@@ -1,0 +1,234 @@
+"""The seed's experiment: warpgym's PPO beside RLlib's PPO, the same robots, GPUs and wall-clock budget.
+
+    python benchmarks/rllib_vs_warpgym.py --out OUT                                   # Ant, Humanoid x 1, 2 GPUs
+    python benchmarks/rllib_vs_warpgym.py --out OUT --tasks Ant --gpus 1 --seconds 60
+    python benchmarks/rllib_vs_warpgym.py --report OUT --figures docs/figures         # table and figures again
+
+For each task and GPU count G, one run of each learner, one after another:
+- warpgym: ``warpgym train`` (G = 1) or ``torchrun --nproc_per_node=G -m warpgym train``: G processes, each
+  stepping --num-envs robots and all-reducing every minibatch's gradients;
+- RLlib: ``warpgym train-with rllib --gpus G``: PPO on RLlib's new API stack, G env runners each stepping
+  --num-envs robots in one warpgym vector env, and G learners training one policy with torch DDP. That is
+  RLlib's successor of DD-PPO (see warpgym/cli/rllib_run.py for how they map).
+
+Both take the same settings as far as each exposes them: the network (the task's), steps per env
+between updates, minibatch size, epochs and learning rate. ``--hparams preset`` uses warpgym's task
+preset for both (Ant: 16 steps, 32768-sample minibatches, 4 epochs, 3e-4; Humanoid: 32, 32768, 5, 5e-4);
+``--hparams seed`` the seed's stated numbers, a minibatch of 1024 samples and a learning rate of 0.001,
+with the preset's steps and epochs (the seed's "replay buffer of 4096" is read as 4096 envs per GPU).
+
+During each run the GPUs' utilisation (nvidia-smi) and the machine's CPU use (/proc/stat) are sampled
+every 2 s. Writes OUT/comparison.json (after every run) and OUT/<task>_rllib_vs_warpgym_reward_vs_*.png
+(all of a task's runs on one pair of axes), and prints a table: steady samples/s, when the training
+episodes first reached the target speed (Ant 3 m/s, Humanoid 2 m/s), the last return and speed, and
+median GPU and CPU use.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import threading
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+sys.path.insert(0, ROOT)
+TARGET = {"Ant": 3.0, "Humanoid": 2.0}
+PRESET = {"Ant": {"horizon_len": 16, "batch_size": 32768, "repeat_times": 4, "learning_rate": 3e-4},
+          "Humanoid": {"horizon_len": 32, "batch_size": 32768, "repeat_times": 5, "learning_rate": 5e-4}}
+SEED = {"batch_size": 1024, "learning_rate": 1e-3}
+
+
+def settings(task: str, hparams: str, num_envs: int) -> dict:
+    out = {**PRESET[task], **(SEED if hparams == "seed" else {})}
+    out["batch_size"] = min(out["batch_size"], num_envs * out["horizon_len"])  # no larger than one rollout
+    return out
+
+
+def command(learner: str, task: str, gpus: int, args, run_dir: str) -> list[str]:
+    flags = [f"--{k.replace('_', '-')}={v}" for k, v in settings(task, args.hparams, args.num_envs).items()]
+    common = ["--task", task, "--num-envs", str(args.num_envs), "--time-limit", str(args.seconds), "--seed",
+              str(args.seed), "--run-dir", run_dir, "--no-plots", *flags]
+    if args.device:
+        common += ["--device", args.device]
+    if learner == "rllib":
+        return [sys.executable, "-m", "warpgym", "train-with", "rllib", "--gpus", str(gpus), "--iterations", "1000000",
+                *common]
+    train = ["-m", "warpgym", "train", *common, "--max-iterations", "1000000", "--no-eval"]
+    if gpus == 1:
+        return [sys.executable, *train]
+    return [sys.executable, "-m", "torch.distributed.run", "--standalone", f"--nproc_per_node={gpus}", *train]
+
+
+class Usage:
+    """GPU utilisation and CPU use, sampled every ``every`` seconds in a thread while a run lasts."""
+
+    def __init__(self, gpus: int, every: float = 2.0):
+        self.gpus, self.every = gpus, every
+        self.gpu: list[float] = []
+        self.cpu: list[float] = []
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._loop, daemon=True)
+
+    @staticmethod
+    def _cpu_times() -> tuple[int, int]:
+        with open("/proc/stat") as f:
+            values = [int(v) for v in f.readline().split()[1:]]
+        return sum(values), values[3] + values[4]  # all, idle + iowait
+
+    def _loop(self) -> None:
+        total, idle = self._cpu_times()
+        while not self._stop.wait(self.every):
+            t, i = self._cpu_times()
+            if t > total:
+                self.cpu.append(100.0 * (1 - (i - idle) / (t - total)))
+            total, idle = t, i
+            try:
+                out = subprocess.run(["nvidia-smi", "--query-gpu=utilization.gpu", "--format=csv,noheader,nounits"],
+                                     capture_output=True, text=True, timeout=10).stdout.split()
+                self.gpu.append(statistics.mean(float(v) for v in out[: self.gpus]))
+            except (OSError, ValueError, subprocess.TimeoutExpired, statistics.StatisticsError):
+                pass
+
+    def __enter__(self):
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc):
+        self._stop.set()
+        self._thread.join()
+
+    def summary(self) -> dict:
+        med = (lambda v: round(statistics.median(v), 1) if v else None)  # noqa: E731
+        return {"gpu_util_pct": med(self.gpu), "cpu_use_pct": med(self.cpu)}
+
+
+def row_of(task: str, learner: str, gpus: int, run_dir: str, wall_s: float, rc: int, usage: dict) -> dict:
+    from agents.logger import first_reaching, read_metrics, steady_median
+
+    row = {"task": task, "learner": learner, "gpus": gpus, "run_dir": run_dir, "rc": rc, "wall_s": round(wall_s, 1),
+           **usage}
+    try:
+        rows = read_metrics(run_dir)
+    except FileNotFoundError:
+        return {**row, "error": "no metrics"}
+    done = [r for r in rows if r.get("speed") is not None]
+    hit = first_reaching(rows, "speed", TARGET[task]) or {}
+    row.update({"iterations": len(rows), "samples": rows[-1]["samples"] if rows else 0,
+                "samples_per_s": steady_median(rows), "first_row_s": rows[0]["time_s"] if rows else None,
+                "time_to_target_s": hit.get("time_s"), "samples_to_target": hit.get("samples"),
+                "final_return": done[-1]["return"] if done else None, "final_speed": done[-1]["speed"] if done else None})
+    return row
+
+
+def label(r: dict) -> str:
+    return f"{'warpgym PPO' if r['learner'] == 'warpgym' else 'RLlib PPO'}, {r['gpus']} GPU{'s' if r['gpus'] > 1 else ''}"
+
+
+def table(doc: dict) -> str:
+    def fmt(v, spec, unit=""):
+        return "-" if v is None else format(v, spec) + unit
+
+    lines = [f"{doc['device']}, {doc['num_envs']} envs per GPU, {doc['seconds']:g} s per run, hparams {doc['hparams']}",
+             "", "| task | learner | GPUs | samples/s | training episodes at target speed | last return | last speed "
+             "| GPU use | CPU use |", "|---|---|---:|---:|---:|---:|---:|---:|---:|"]
+    for r in doc["rows"]:
+        hit = ("not within the run" if r.get("time_to_target_s") is None else
+               f"{TARGET[r['task']]:g} m/s at {r['time_to_target_s']:.0f} s ({r['samples_to_target'] / 1e6:.1f} M)")
+        sps = r.get("samples_per_s")
+        lines.append(f"| {r['task']} | {'warpgym' if r['learner'] == 'warpgym' else 'RLlib'} | {r['gpus']} | "
+                     f"{fmt(None if sps is None else sps / 1e6, '.3f', ' M')} | {hit} | {fmt(r.get('final_return'), '.0f')} | "
+                     f"{fmt(r.get('final_speed'), '.2f', ' m/s')} | {fmt(r.get('gpu_util_pct'), '.0f', ' %')} | "
+                     f"{fmt(r.get('cpu_use_pct'), '.0f', ' %')} |")
+    return "\n".join(lines)
+
+
+def figures(doc: dict, out_dir: str) -> list[str]:
+    from agents.plotting import plot_runs
+
+    written = []
+    for task in dict.fromkeys(r["task"] for r in doc["rows"]):
+        runs = [r for r in doc["rows"] if r["task"] == task and r.get("iterations")]
+        if not runs:
+            continue
+        paths = plot_runs([r["run_dir"] for r in runs], out_dir, labels=[label(r) for r in runs],
+                          title=f"warpgym {task}: warpgym's PPO and RLlib's ({doc['device']})")
+        for p in paths:
+            dest = os.path.join(out_dir, f"{task.lower()}_rllib_vs_warpgym_{os.path.basename(p)}")
+            os.replace(p, dest)
+            written.append(dest)
+    return written
+
+
+def save(out: str, doc: dict) -> None:
+    path = os.path.join(out, "comparison.json")
+    with open(path + ".tmp", "w") as f:
+        json.dump(doc, f, indent=1)
+    os.replace(path + ".tmp", path)
+
+
+def run(args) -> int:
+    import torch
+
+    os.makedirs(args.out, exist_ok=True)
+    device = torch.cuda.get_device_name(0) if torch.cuda.is_available() and args.device != "cpu" else "cpu"
+    doc = {"device": device, "date": time.strftime("%Y-%m-%d"), "num_envs": args.num_envs, "seconds": args.seconds,
+           "hparams": args.hparams, "settings": {t: settings(t, args.hparams, args.num_envs) for t in args.tasks}, "rows": []}
+    for task in args.tasks:
+        for gpus in args.gpus:
+            for learner in args.learners:
+                run_dir = os.path.join(args.out, f"{task}-{learner}-{gpus}gpu")
+                env = {**os.environ, "PYTHONPATH": os.pathsep.join([ROOT, os.environ.get("PYTHONPATH", "")])}
+                if device != "cpu":
+                    env["CUDA_VISIBLE_DEVICES"] = ",".join(str(i) for i in range(gpus))
+                t0 = time.time()
+                with open(run_dir + ".log", "w") as log, Usage(gpus) as usage:
+                    rc = subprocess.run(command(learner, task, gpus, args, run_dir), stdout=log, stderr=subprocess.STDOUT,
+                                        env=env, timeout=args.seconds + 900, check=False).returncode
+                doc["rows"].append(row_of(task, learner, gpus, run_dir, time.time() - t0, rc, usage.summary()))
+                print(json.dumps(doc["rows"][-1]), flush=True)
+                save(args.out, doc)
+    print(table(doc))
+    figures(doc, args.out)
+    return 0
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--out", help="directory for the runs, comparison.json and the figures")
+    ap.add_argument("--tasks", nargs="+", default=["Ant", "Humanoid"], choices=["Ant", "Humanoid"])
+    ap.add_argument("--gpus", type=int, nargs="+", default=[1, 2], help="GPU counts to run (default 1 2)")
+    ap.add_argument("--learners", nargs="+", default=["warpgym", "rllib"], choices=["warpgym", "rllib"])
+    ap.add_argument("--num-envs", type=int, default=4096, help="robots per GPU (per env runner for RLlib)")
+    ap.add_argument("--seconds", type=float, default=240.0, help="wall-clock budget per run, from process start")
+    ap.add_argument("--hparams", choices=["preset", "seed"], default="preset")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--device", default=None, help="cpu to run on the CPU (a check of the script, not a figure)")
+    ap.add_argument("--report", metavar="OUT", help="print the table of an earlier OUT and draw its figures again")
+    ap.add_argument("--figures", default=None, help="with --report: where the figures go (default: OUT)")
+    args = ap.parse_args(argv)
+    if args.report:
+        path = os.path.join(args.report, "comparison.json")
+        if not os.path.isfile(path):
+            ap.error(f"--report {args.report}: no comparison.json there; pass an --out directory of an earlier run")
+        with open(path) as f:
+            doc = json.load(f)
+        print(table(doc))
+        figures(doc, args.figures or args.report)
+        return 0
+    if not args.out:
+        ap.error("--out is required (or --report)")
+    if any(g < 1 for g in args.gpus):
+        ap.error(f"--gpus {' '.join(map(str, args.gpus))}: each is a number of GPUs, 1 or more")
+    if args.num_envs < 1 or not args.seconds > 0:
+        ap.error(f"--num-envs {args.num_envs} and --seconds {args.seconds:g}: both must be positive")
+    return run(args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
