@@ -216,10 +216,9 @@ def train(task: str, name: str, seed: int, args) -> str:
 
 
 def save(out: str, doc: dict) -> None:
-    path = os.path.join(out, "fidelity.json")
-    with open(path + ".tmp", "w") as f:
-        json.dump(doc, f, indent=1)
-    os.replace(path + ".tmp", path)
+    from warpgym.cli import write_json
+
+    write_json(os.path.join(out, "fidelity.json"), doc)
 
 
 # ---------------------------------------------------------------- tables

@@ -166,10 +166,9 @@ def figures(doc: dict, out_dir: str) -> list[str]:
 
 
 def save(out: str, doc: dict) -> None:
-    path = os.path.join(out, "comparison.json")
-    with open(path + ".tmp", "w") as f:
-        json.dump(doc, f, indent=1)
-    os.replace(path + ".tmp", path)
+    from warpgym.cli import write_json
+
+    write_json(os.path.join(out, "comparison.json"), doc)
 
 
 def run(args) -> int:

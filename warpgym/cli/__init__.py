@@ -7,6 +7,7 @@ are the same commands."""
 from __future__ import annotations
 
 import importlib
+import json
 import os
 import sys
 import time
@@ -16,9 +17,16 @@ COMMANDS = {  # subcommand: (module, what it does)
     "play": ("play", "replay a checkpoint: episode returns and speeds, an MP4 or a GIF"),
     "plot": ("plot", "reward against wall-clock time and against samples for one or more runs"),
     "sim2sim": ("sim2sim", "replay a checkpoint in warpgym and in native MuJoCo, at the training step and finer"),
-    "train-with": ("train_with", "train with another learner through its adapter (rsl_rl, skrl, rl_games, sb3)"),
+    "train-with": ("train_with", "train with another learner through its adapter (rsl_rl, skrl, rl_games, sb3, rllib)"),
     "bench": ("bench", "env-steps per second of the simulation layers"),
 }
+
+
+def write_json(path: str, obj) -> None:
+    """``obj`` as JSON at ``path``, whole or not at all: a crash mid-write leaves the previous file."""
+    with open(path + ".tmp", "w") as f:
+        json.dump(obj, f, indent=1)
+    os.replace(path + ".tmp", path)
 
 
 def process_start_time() -> float:

@@ -22,7 +22,7 @@ from dataclasses import fields
 
 from agents import Config, OnPolicyRunner
 from agents.config import PRESETS
-from warpgym.cli import process_start_time
+from warpgym.cli import process_start_time, write_json
 
 # The wall-clock axis starts when the process did: the interpreter, imports and kernel compiles count.
 PROCESS_START = process_start_time()
@@ -209,12 +209,6 @@ def build_config(args, task: str, num_envs: int, device: str, saved: dict | None
         eval_env_class=LocomotionVecEnv,
         eval_env_args={**common, "num_envs": cfg.eval_envs, "seed": args.seed + 1},
     )
-
-
-def write_json(path: str, obj) -> None:
-    with open(path + ".tmp", "w") as f:
-        json.dump(obj, f, indent=1)
-    os.replace(path + ".tmp", path)
 
 
 def summarize(history: list[dict], device_name: str, cfg: Config) -> dict:
