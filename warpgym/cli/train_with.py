@@ -8,8 +8,8 @@
 
 Each learner runs with its own published hyperparameters for Isaac Gym's Ant and Humanoid
 (rsl_rl: Isaac Lab's; skrl: skrl's IsaacGymEnvs examples; rl_games: IsaacGymEnvs' AntPPO and
-HumanoidPPO; SB3: its defaults scaled to the batch; RLlib: rl_games' numbers in RLlib's PPO). Whatever the learner logs itself, the run
-directory gets warpgym's metrics.jsonl/csv (return, length and forward speed of the training
+HumanoidPPO; SB3: its defaults scaled to the batch; RLlib: rl_games' numbers in RLlib's PPO).
+Whatever the learner logs itself, the run directory gets warpgym's metrics.jsonl/csv (return, length and forward speed of the training
 episodes, samples, wall-clock time) and the two plots, so the learners compare on one figure.
 Install the learner with its extra: pip install "warpgym[rsl_rl]" (or skrl, rl_games, sb3, rllib).
 """

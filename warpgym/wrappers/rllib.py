@@ -70,7 +70,8 @@ class RllibVecEnv(VectorEnv):
             self.log.after_step(info)
         restarting = self._restarting
         done = (terminated | truncated) & ~restarting
-        # one host copy per step: observation, reward and flags packed side by side
+        # one host copy per step: observation, reward and flags packed side by side, into a new array each
+        # time, since RLlib's episodes keep views of the rows it is handed
         packed = torch.cat((torch.where(done.unsqueeze(1), info["final_obs"], obs),
                             torch.stack((reward.masked_fill(restarting, 0.0), (terminated & ~restarting).float(),
                                          (truncated & ~restarting).float()), dim=1)), dim=1).cpu().numpy()
