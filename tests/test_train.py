@@ -54,8 +54,9 @@ def test_short_cpu_run_writes_logs_checkpoint_plots_resumes_and_plays(tmp_path, 
                          "--finer", "2", "--out", out]) == 0
     with open(out) as f:
         rows = json.load(f)["rows"]
-    assert [(r["simulator"], r["substeps"]) for r in rows] == [("warpgym", 3), ("warpgym", 6),
-                                                              ("native MuJoCo", 3), ("native MuJoCo", 6)]
+    n = ANT.substeps
+    assert [(r["simulator"], r["substeps"]) for r in rows] == [("warpgym", n), ("warpgym", 2 * n),
+                                                              ("native MuJoCo", n), ("native MuJoCo", 2 * n)]
     assert rows[0]["speed_ratio"] == 1.0
     for r in rows:
         assert 0.0 <= r["no_foot_contact_share"] <= 1.0 and 0 <= r["longest_airborne_steps"] <= 30
@@ -112,11 +113,14 @@ def test_fidelity_replays_a_probe_in_four_settings_and_reports_it(tmp_path, caps
     with open(os.path.join(out, "fidelity.json")) as f:
         probes = json.load(f)["probes"]
     assert [p["candidate"] for p in probes] == ["default", "nov22"]
-    for p in probes:
+    from warpgym.tasks import ANT
+
+    for p, n in zip(probes, (ANT.substeps, 3)):  # the task's step, then nov22's 3 substeps
         assert sorted(p["rows"]) == ["finer", "native", "native_finer", "warpgym"]
-        assert [p["rows"][k]["substeps"] for k in ("warpgym", "finer", "native", "native_finer")] == [3, 12, 3, 12]
+        assert [p["rows"][k]["substeps"] for k in ("warpgym", "finer", "native", "native_finer")] == [n, 4 * n, n, 4 * n]
         assert isinstance(p["agree"], bool)
     capsys.readouterr()
     assert fidelity.main(["--report", out]) == 0
     table = capsys.readouterr().out
-    assert "| ant_flying_policy.pt | default (3 substeps) |" in table and "| ant_flying_policy.pt | nov22" in table
+    assert f"| ant_flying_policy.pt | default ({ANT.substeps} substeps) |" in table
+    assert "| ant_flying_policy.pt | nov22 (3 substeps) |" in table

@@ -1,0 +1,176 @@
+"""What does a trained gait lean on? Replay one policy in native MuJoCo under changed settings: a finer
+step, less friction, heavier bodies, more or less joint damping, and account for the energy each time.
+
+    python benchmarks/step_sensitivity.py tests/data/humanoid_5x4_seed1_policy.pt --out OUT.json
+    python benchmarks/step_sensitivity.py CKPT --settings substeps=10 "substeps=10,damping=0.8" \\
+        "damping[abdomen|hip_x|hip_y]=1.3" friction=0.8 mass=1.05
+
+Each setting is comma-separated NAME=VALUE: ``substeps`` (per control step; default: the policy's
+own), ``friction`` and ``mass`` (factors on every geom's sliding friction, every body's mass),
+``damping`` (a factor on every hinge's damping) or ``damping[a|b]`` (on the hinges whose names
+contain a or b). The policy's own settings come first as the reference. Each row: forward speed
+(frozen at a robot's fall), falls, and the mean power of the motors, joint damping, contacts and
+joint limits per robot until its fall [W], integrated over every substep (a positive constraint power would be a
+solver paying energy in). CPU only; a few seconds per setting for 4 robots and 1000 steps.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import re
+import sys
+import time
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+DEFAULT_SETTINGS = ["substeps=6", "substeps=7", "substeps=8", "substeps=10", "friction=0.8", "mass=1.05",
+                    "damping[abdomen|hip_x|hip_y]=1.3", "damping[hip_z]=1.3", "damping[ankle]=1.3",
+                    "damping[shoulder|elbow]=1.3", "substeps=10,damping=0.8"]
+SETTING = re.compile(r"^(substeps|friction|mass|damping)(\[[\w|]+\])?=([0-9.eE+-]+)$")
+
+
+def parse_setting(text: str) -> dict:
+    """'substeps=10,damping[hip_z]=1.3' -> {'substeps': 10, 'damping': [('hip_z',), 1.3]}; a clear error else."""
+    out: dict = {"label": text}
+    for part in filter(None, text.split(",")):
+        m = SETTING.match(part.strip())
+        if not m:
+            raise ValueError(f"setting {part!r} in {text!r}: expected substeps=N, friction=F, mass=F, damping=F "
+                             "or damping[name|name]=F")
+        name, joints, value = m.group(1), m.group(2), float(m.group(3))
+        if not value > 0:
+            raise ValueError(f"setting {part!r}: the value must be positive")
+        if name == "substeps":
+            out["substeps"] = int(value)
+        elif name == "damping":
+            out.setdefault("damping", []).append((tuple(joints[1:-1].split("|")) if joints else (), value))
+        else:
+            out[name] = value
+    return out
+
+
+def replay(ckpt, task, setting: dict, substeps: int, copies: int, steps: int, seed: int) -> dict:
+    import mujoco  # noqa: PLC0415
+    import torch  # noqa: PLC0415
+
+    from agents.checkpoint import policy_from_checkpoint  # noqa: PLC0415
+    from warpgym.native import NativeRobot  # noqa: PLC0415
+
+    substeps = setting.get("substeps", substeps)
+    robot = NativeRobot(task, substeps=substeps, copies=copies)
+    m = robot.model
+    m.geom_friction[:, 0] *= setting.get("friction", 1.0)
+    m.body_mass[:] *= setting.get("mass", 1.0)
+    m.body_inertia[:] *= setting.get("mass", 1.0)
+    for names, factor in setting.get("damping", []):
+        for joint, adr in zip(robot.dof_names, robot.dof_adr):
+            if not names or any(n in joint for n in names):
+                m.dof_damping[adr] *= factor
+    num_obs = task.observation_size(len(robot.dof_names), len(robot.feet))
+    policy, normalize = policy_from_checkpoint(ckpt, num_obs, len(robot.dof_names), torch.device("cpu"))
+    contact_types = (mujoco.mjtConstraint.mjCNSTR_CONTACT_FRICTIONLESS, mujoco.mjtConstraint.mjCNSTR_CONTACT_PYRAMIDAL,
+                     mujoco.mjtConstraint.mjCNSTR_CONTACT_ELLIPTIC)
+    work = {"motors": 0.0, "damping": 0.0, "contacts": 0.0, "limits": 0.0}
+    dt = m.opt.timestep
+    robot.reset(np.random.default_rng(seed))
+    start = robot.state()["root_pose"][:, :3]
+    up, speed, up_steps = np.ones(copies, bool), np.zeros(copies), 0
+    actions = np.zeros((copies, len(robot.dof_names)))
+    obs = robot.observation(actions, fresh=True)
+    jac = np.zeros((0, m.nv))
+    for step in range(1, steps + 1):
+        with torch.no_grad():
+            actions = np.clip(policy.act_deterministic(normalize(torch.as_tensor(obs, dtype=torch.float32))).numpy(), -1, 1)
+        up_steps += int(up.sum())
+        for k, d in enumerate(robot.data):
+            if not up[k]:
+                continue
+            d.qfrc_applied[:] = 0.0
+            d.qfrc_applied[robot.dof_adr] = actions[k] * robot.torque_scale
+            for _ in range(substeps):
+                before = d.qvel.copy()
+                mujoco.mj_step(m, d)
+                if task.physics.max_joint_speed is not None:  # as NativeRobot.step clamps
+                    lim = task.physics.max_joint_speed
+                    d.qvel[robot.dof_adr] = np.clip(d.qvel[robot.dof_adr], -lim, lim)
+                v = 0.5 * (before + d.qvel)  # the substep's mean velocity
+                work["motors"] += dt * d.qfrc_applied @ v
+                work["damping"] += dt * d.qfrc_passive @ v
+                if d.nefc:
+                    if jac.shape[0] != d.nefc:
+                        jac = np.zeros((d.nefc, m.nv))
+                    if mujoco.mj_isSparse(m):
+                        mujoco.mju_sparse2dense(jac, d.efc_J, d.efc_J_rownnz, d.efc_J_rowadr, d.efc_J_colind)
+                    else:
+                        jac[:] = d.efc_J.reshape(d.nefc, m.nv)
+                    power = d.efc_force[:d.nefc] * (jac @ v)
+                    kind = d.efc_type[:d.nefc]
+                    work["contacts"] += dt * power[np.isin(kind, contact_types)].sum()
+                    work["limits"] += dt * power[kind == mujoco.mjtConstraint.mjCNSTR_LIMIT_JOINT].sum()
+        obs = robot.observation(actions)
+        s = robot.state()
+        now = task.forward_speed(s["root_pose"][:, :3] - start, step)
+        speed = np.where(up, now, speed)
+        up &= s["root_pose"][:, 2] >= task.termination_height
+    seconds = up_steps * task.dt  # robot-seconds before the falls: a fallen robot is no longer stepped
+    return {"setting": setting["label"], "substeps": substeps, "forward_speed": float(speed.mean()),
+            "speeds": speed.round(2).tolist(), "falls": int((~up).sum()), "robots": copies,
+            "power_w": {k: round(v / seconds, 1) for k, v in work.items()}}
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("checkpoint", help="a checkpoint or policy file (tests/data/*.pt, a run's checkpoint.pt)")
+    ap.add_argument("--settings", nargs="+", default=DEFAULT_SETTINGS, help="the changed settings to replay")
+    ap.add_argument("--copies", type=int, default=4, help="native robots per setting")
+    ap.add_argument("--steps", type=int, default=1000, help="control steps (one episode)")
+    ap.add_argument("--seed", type=int, default=7)
+    ap.add_argument("--out", default=None, help="JSON file to write")
+    args = ap.parse_args(argv)
+    if not os.path.isfile(args.checkpoint):
+        ap.error(f"{args.checkpoint}: no such checkpoint file")
+    if args.copies < 1 or args.steps < 1:
+        ap.error(f"--copies {args.copies} and --steps {args.steps} must be positive")
+    try:
+        settings = [{"label": "own"}] + [parse_setting(t) for t in args.settings]
+    except ValueError as e:
+        ap.error(str(e))
+
+    import torch  # noqa: PLC0415
+
+    from agents.checkpoint import load  # noqa: PLC0415
+    from warpgym.tasks import get_task  # noqa: PLC0415
+
+    ckpt = load(args.checkpoint, torch.device("cpu"))
+    env_args = ckpt["config"]["env_args"]
+    task = get_task(env_args["task"])
+    if env_args.get("physics"):
+        task = task.replace(physics=env_args["physics"])
+    substeps = env_args.get("substeps") or task.substeps
+    rows = []
+    print("| setting | substeps | speed | falls | motors | damping | contacts | limits | wall |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
+    for setting in settings:
+        t0 = time.perf_counter()
+        row = replay(ckpt, task, setting, substeps, args.copies, args.steps, args.seed)
+        row["wall_s"] = round(time.perf_counter() - t0, 1)
+        rows.append(row)
+        p = row["power_w"]
+        print(f"| {row['setting']} | {row['substeps']} | {row['forward_speed']:.2f} m/s | {row['falls']}/{row['robots']} "
+              f"| {p['motors']:.0f} W | {p['damping']:.0f} W | {p['contacts']:.0f} W | {p['limits']:.0f} W "
+              f"| {row['wall_s']} s |", flush=True)
+    if args.out:
+        from warpgym.cli import write_json  # noqa: PLC0415
+
+        write_json(args.out, {"checkpoint": args.checkpoint, "task": env_args["task"], "trained_substeps": substeps,
+                              "physics": task.physics.to_dict(), "argv": sys.argv[1:] if argv is None else argv,
+                              "rows": rows})
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
