@@ -8,7 +8,9 @@ step, less friction, heavier bodies, more or less joint damping, and account for
 Each setting is comma-separated NAME=VALUE: ``substeps`` (per control step; default: the policy's
 own), ``friction`` and ``mass`` (factors on every geom's sliding friction, every body's mass),
 ``damping`` (a factor on every hinge's damping) or ``damping[a|b]`` (on the hinges whose names
-contain a or b). The policy's own settings come first as the reference. Each row: forward speed
+contain a or b), ``match_damping`` (S: each hinge's damping scaled so that the implicit integrator
+damps it per second as it does at S substeps; from the joint's effective inertia, floating base
+included, at the start pose). The policy's own settings come first as the reference. Each row: forward speed
 (frozen at a robot's fall), falls, and the mean power of the motors, joint damping, contacts and
 joint limits per robot until its fall [W], integrated over every substep (a positive constraint power would be a
 solver paying energy in). CPU only; a few seconds per setting for 4 robots and 1000 steps.
@@ -29,8 +31,9 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 DEFAULT_SETTINGS = ["substeps=6", "substeps=7", "substeps=8", "substeps=10", "friction=0.8", "mass=1.05",
                     "damping[abdomen|hip_x|hip_y]=1.3", "damping[hip_z]=1.3", "damping[ankle]=1.3",
-                    "damping[shoulder|elbow]=1.3", "substeps=10,damping=0.8"]
-SETTING = re.compile(r"^(substeps|friction|mass|damping)(\[[\w|]+\])?=([0-9.eE+-]+)$")
+                    "damping[shoulder|elbow]=1.3", "substeps=10,damping=0.8", "substeps=10,match_damping=5",
+                    "substeps=20,match_damping=5"]
+SETTING = re.compile(r"^(substeps|friction|mass|damping|match_damping)(\[[\w|]+\])?=([0-9.eE+-]+)$")
 
 
 def parse_setting(text: str) -> dict:
@@ -39,18 +42,37 @@ def parse_setting(text: str) -> dict:
     for part in filter(None, text.split(",")):
         m = SETTING.match(part.strip())
         if not m:
-            raise ValueError(f"setting {part!r} in {text!r}: expected substeps=N, friction=F, mass=F, damping=F "
-                             "or damping[name|name]=F")
+            raise ValueError(f"setting {part!r} in {text!r}: expected substeps=N, friction=F, mass=F, damping=F, "
+                             "damping[name|name]=F or match_damping=S")
         name, joints, value = m.group(1), m.group(2), float(m.group(3))
         if not value > 0:
             raise ValueError(f"setting {part!r}: the value must be positive")
-        if name == "substeps":
-            out["substeps"] = int(value)
+        if name in ("substeps", "match_damping"):
+            out[name] = int(value)
         elif name == "damping":
             out.setdefault("damping", []).append((tuple(joints[1:-1].split("|")) if joints else (), value))
         else:
             out[name] = value
     return out
+
+
+def match_damping(robot, substeps: int) -> None:
+    """Scale each hinge's damping d so that implicit Euler at this model's step h keeps the share of a
+    damped joint's speed per second that it keeps at ``task.dt / substeps``: a step of h keeps
+    1 / (1 + h d / I) of the speed, I the joint's effective inertia (1 / (M^-1)_ii, the floating base
+    free to move), so the damping per second is ln(1 + h d / I) / h, and the two are matched per joint."""
+    import mujoco  # noqa: PLC0415
+
+    m, d = robot.model, robot.data[0]
+    mujoco.mj_forward(m, d)
+    h, h_ref = m.opt.timestep, robot.task.dt / substeps
+    for adr in robot.dof_adr:
+        unit, col = np.zeros((1, m.nv)), np.zeros((1, m.nv))
+        unit[0, adr] = 1.0
+        mujoco.mj_solveM(m, d, col, unit)
+        rate_ref = np.log1p(h_ref * m.dof_damping[adr] * col[0, adr]) / h_ref  # per second, times I
+        # solve ln(1 + h d' / I) / h = rate_ref for d'
+        m.dof_damping[adr] = np.expm1(rate_ref * h) / (h * col[0, adr])
 
 
 def replay(ckpt, task, setting: dict, substeps: int, copies: int, steps: int, seed: int) -> dict:
@@ -66,6 +88,8 @@ def replay(ckpt, task, setting: dict, substeps: int, copies: int, steps: int, se
     m.geom_friction[:, 0] *= setting.get("friction", 1.0)
     m.body_mass[:] *= setting.get("mass", 1.0)
     m.body_inertia[:] *= setting.get("mass", 1.0)
+    if "match_damping" in setting:
+        match_damping(robot, setting["match_damping"])
     for names, factor in setting.get("damping", []):
         for joint, adr in zip(robot.dof_names, robot.dof_adr):
             if not names or any(n in joint for n in names):

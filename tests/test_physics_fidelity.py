@@ -141,3 +141,21 @@ def test_the_seed1_humanoid_gait_leans_on_joint_damping_and_no_constraint_pays_e
     assert damped["falls"] == 2, damped
     power = own["power_w"]
     assert power["motors"] > 1000 and power["damping"] < 0 and power["contacts"] < 0 and power["limits"] <= 0, power
+
+
+def test_matched_damping_is_the_identity_at_its_own_step_and_lighter_at_a_finer_one():
+    import sys
+
+    sys.path.insert(0, os.path.join(os.path.dirname(DATA), "..", "benchmarks"))
+    from step_sensitivity import match_damping
+    from warpgym.native import NativeRobot
+
+    same, finer = NativeRobot("Humanoid", substeps=5), NativeRobot("Humanoid", substeps=10)
+    before = finer.model.dof_damping[finer.dof_adr].copy()
+    match_damping(same, 5)
+    match_damping(finer, 5)
+    np.testing.assert_allclose(same.model.dof_damping[same.dof_adr], before, rtol=1e-9)
+    after = finer.model.dof_damping[finer.dof_adr]
+    # implicit Euler damps less per second at a coarser step: matching it takes damping away, most
+    # where a joint is light (hip rotation, ankles), least where it is heavy or barely damped (knee)
+    assert np.all(after < before) and np.all(after > 0.8 * before), after / before
