@@ -76,12 +76,14 @@ def test_an_exploiting_gait_flies_on_the_old_physics_and_not_on_the_tasks():
     assert same_speed(coarse["speed"], fine["speed"]) and coarse["height"] < 1.0, (coarse, fine)
 
 
-def trained_with(name: str) -> tuple[int, dict]:
-    """The substeps and physics a committed policy was trained with (its checkpoint's config)."""
+def trained_with(name: str):
+    """The substeps and physics a committed policy was trained with (its checkpoint's config); a
+    setting added since then has its default."""
     from agents.checkpoint import load
+    from warpgym.sim.physics import Physics
 
     env_args = load(os.path.join(DATA, name), torch.device("cpu"))["config"]["env_args"]
-    return env_args["substeps"], env_args["physics"]
+    return env_args["substeps"], Physics.from_dict(env_args["physics"])
 
 
 @pytest.mark.slow
@@ -98,7 +100,7 @@ def test_a_gait_trained_on_the_default_physics_keeps_its_speed_at_a_finer_step(t
     from warpgym.tasks import get_task
 
     task = get_task(task_name)
-    trained_on_default = [n for n in policies if trained_with(n) == (task.substeps, task.physics.to_dict())]
+    trained_on_default = [n for n in policies if trained_with(n) == (task.substeps, task.physics)]
     assert len(trained_on_default) == 1, (
         f"no committed policy was trained with the {task_name}'s default ({task.substeps} substeps, {task.physics}): "
         "train one with benchmarks/fidelity.py and commit it to tests/data")
@@ -159,3 +161,27 @@ def test_matched_damping_is_the_identity_at_its_own_step_and_lighter_at_a_finer_
     # implicit Euler damps less per second at a coarser step: matching it takes damping away, most
     # where a joint is light (hip rotation, ankles), least where it is heavy or barely damped (knee)
     assert np.all(after < before) and np.all(after > 0.8 * before), after / before
+
+
+def test_exact_damping_is_the_same_in_both_simulators_and_fades_as_the_step_shrinks():
+    """Physics(exact_damping=True) scales each hinge's damping by (e^x - 1) / x, x = h d / I: warpgym
+    (from its solver's model) and native MuJoCo (from the MJCF) scale alike, and the scale tends to 1
+    at a finer step."""
+    from warpgym.native import NativeRobot
+    from warpgym.sim import Sim
+    from warpgym.tasks import get_task
+
+    task = get_task("Humanoid")
+    physics = task.physics.replace(exact_damping=True)
+    sim = Sim("humanoid", num_envs=2, device="cpu", substeps=task.substeps, physics=physics)
+    coarse = NativeRobot(task, substeps=task.substeps, physics=physics)
+    fine = NativeRobot(task, substeps=4 * task.substeps, physics=physics)
+    plain = NativeRobot(task, substeps=task.substeps)
+    d0 = plain.model.dof_damping[plain.dof_adr]
+    damped = d0 > 0
+    coarse_scale = coarse.model.dof_damping[coarse.dof_adr][damped] / d0[damped]
+    fine_scale = fine.model.dof_damping[fine.dof_adr][damped] / d0[damped]
+    np.testing.assert_allclose(sim.solver.mjw_model.dof_damping.numpy()[1, 6:], coarse.model.dof_damping[coarse.dof_adr],
+                               rtol=1e-5)
+    assert np.all(coarse_scale > 1.0) and coarse_scale.max() > 1.5, coarse_scale  # the hip rotation: about 1.8
+    assert np.all(fine_scale > 1.0) and np.all(fine_scale - 1 < 0.3 * (coarse_scale - 1)), (coarse_scale, fine_scale)

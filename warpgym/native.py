@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from warpgym.sim.physics import Physics
+from warpgym.sim.physics import Physics, exact_damping_scale
 from warpgym.sim.robots import hinge_joint_names, mjcf_path, robot_spec
 from warpgym.tasks import LocomotionTask, get_task
 
@@ -97,6 +97,9 @@ def load_native_model(robot: str, timestep: float, physics: Physics | None = Non
     model.opt.ls_iterations = physics.ls_iterations
     if physics.contact_timeconst is not None:
         model.geom_solref[:, 0] = physics.contact_timeconst
+    if physics.exact_damping:
+        dofs, scale = exact_damping_scale(mujoco, model, timestep)
+        model.dof_damping[dofs] *= scale
     return model
 
 

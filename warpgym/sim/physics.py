@@ -10,6 +10,8 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass, fields
 
+import numpy as np
+
 INTEGRATORS = ("euler", "implicitfast")
 
 
@@ -24,6 +26,9 @@ class Physics:
         articulation joint velocities; None: no clamp.
     contact_timeconst: MuJoCo ``solref`` time constant of every contact [s] (stiffer when smaller);
         None keeps the MJCF's (0.02 s unless a geom sets it).
+    exact_damping: scale each hinge's damping for the substep so that the implicit integrator slows
+        a damped joint per step as the continuous model does (``exact_damping_scale``); False keeps
+        the MJCF's damping, which implicit Euler applies more weakly the coarser the step.
     """
 
     integrator: str = "implicitfast"
@@ -32,6 +37,7 @@ class Physics:
     armature: float | None = None
     max_joint_speed: float | None = None
     contact_timeconst: float | None = None
+    exact_damping: bool = False
 
     def __post_init__(self):
         if self.integrator not in INTEGRATORS:
@@ -44,6 +50,8 @@ class Physics:
             v = getattr(self, name)
             if v is not None and not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise ValueError(f"{name}={v!r} must be a positive number (e.g. {example}) or None")
+        if not isinstance(self.exact_damping, bool):
+            raise ValueError(f"exact_damping={self.exact_damping!r} must be true or false")
 
     @classmethod
     def from_dict(cls, values: dict | None) -> Physics:
@@ -68,9 +76,41 @@ def parse_setting(text: str) -> tuple[str, object]:
     name, raw = (s.strip() for s in text.split("=", 1))
     if raw.lower() == "none":
         return name, None
+    if raw.lower() in ("true", "false"):
+        return name, raw.lower() == "true"
     for convert in (int, float):
         try:
             return name, convert(raw)
         except ValueError:
             pass
     return name, raw
+
+
+def exact_damping_scale(mujoco, model, timestep: float) -> tuple[np.ndarray, np.ndarray]:
+    """The hinge dofs of a MuJoCo ``model`` and the factor on each one's damping that makes implicit
+    Euler exact for it at ``timestep``.
+
+    A step h of implicit Euler keeps 1 / (1 + h d / I) of a damped joint's speed, the continuous
+    model exp(-h d / I) (I: the joint's effective inertia, 1 / (M^-1)_ii with every other joint and
+    the floating base free, at the start pose: hinges at 0 clamped into their ranges). With d scaled
+    by (e^x - 1) / x, x = h d / I, the two agree, so the damping a policy meets does not depend on
+    the step; at the Humanoid's 1/180 s the factors are 1.06-1.84 (docs/tasks.md, "Physics settings").
+    Takes the ``mujoco`` module so that this file imports neither it nor Warp."""
+    hinges = np.flatnonzero(model.jnt_type == mujoco.mjtJoint.mjJNT_HINGE)
+    dofs = model.jnt_dofadr[hinges]
+    data = mujoco.MjData(model)
+    qpos = model.qpos0.copy()
+    for j in hinges:
+        lo, hi = model.jnt_range[j] if model.jnt_limited[j] else (-np.inf, np.inf)
+        qpos[model.jnt_qposadr[j]] = np.clip(0.0, lo, hi)
+    data.qpos[:] = qpos
+    mujoco.mj_forward(model, data)
+    unit, column = np.zeros((1, model.nv)), np.zeros((1, model.nv))
+    scale = np.ones(len(dofs))
+    for k, dof in enumerate(dofs):
+        unit[:] = 0.0
+        unit[0, dof] = 1.0
+        mujoco.mj_solveM(model, data, column, unit)
+        x = timestep * model.dof_damping[dof] * column[0, dof]
+        scale[k] = np.expm1(x) / x if x > 0 else 1.0
+    return dofs, scale

@@ -20,7 +20,7 @@ from kernels.solver_load import track_solver_load
 from warpgym.compile.preload import Preload, compile_ahead
 from warpgym.sim import newton_internals
 from warpgym.sim.device import resolve_device
-from warpgym.sim.physics import Physics
+from warpgym.sim.physics import Physics, exact_damping_scale
 from warpgym.sim.robots import RobotSpec, hinge_joint_names, mjcf_path, motor_gears, robot_spec
 from warpgym.sim.streams import StreamOrder
 from warpgym.sim.tensor_api import TensorAPI
@@ -161,6 +161,13 @@ class Sim(TensorAPI):
                 solref = solver.mjw_model.geom_solref.numpy()
                 solref[..., 0] = phys.contact_timeconst
                 solver.mjw_model.geom_solref.assign(solref)
+            if phys.exact_damping:  # from the solver's own CPU model, at the substep
+                import mujoco  # noqa: PLC0415
+
+                dofs, scale = exact_damping_scale(mujoco, solver.mj_model, self.dt / self.substeps)
+                damping = solver.mjw_model.dof_damping.numpy()
+                damping[..., dofs] *= scale
+                solver.mjw_model.dof_damping.assign(damping)
             opt = solver.mjw_model.opt  # some kernels are specialised to these options
             opt.warn_overflow = int(opt.warn_overflow) & quiet
             return solver
