@@ -13,13 +13,13 @@ damps it per second as it does at S substeps; from the joint's effective inertia
 included, at the start pose). The policy's own settings come first as the reference. Each row: forward speed
 (frozen at a robot's fall), falls, and the mean power of the motors, joint damping, contacts and
 joint limits per robot until its fall [W], integrated over every substep (a positive constraint power would be a
-solver paying energy in). CPU only; a few seconds per setting for 4 robots and 1000 steps.
+solver paying energy in). Before the rows, each hinge's x = h d / I at the policy's step (how
+far implicit Euler's damping falls short). CPU only; a few seconds per setting for 4 robots and 1000 steps.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import re
 import sys
@@ -57,29 +57,62 @@ def parse_setting(text: str) -> dict:
 
 
 def match_damping(robot, substeps: int) -> None:
-    """Scale each hinge's damping d so that implicit Euler at this model's step h keeps the share of a
-    damped joint's speed per second that it keeps at ``task.dt / substeps``: a step of h keeps
-    1 / (1 + h d / I) of the speed, I the joint's effective inertia (1 / (M^-1)_ii, the floating base
-    free to move), so the damping per second is ln(1 + h d / I) / h, and the two are matched per joint."""
+    """Scale each hinge's damping d so that implicit Euler at this model's step h damps a joint per
+    second as it does at ``task.dt / substeps``: a step of h keeps 1 / (1 + h d / I) of the speed
+    (I from ``hinge_inverse_inertia``), so the damping per second is ln(1 + h d / I) / h."""
     import mujoco  # noqa: PLC0415
 
-    m, d = robot.model, robot.data[0]
-    mujoco.mj_forward(m, d)
+    from warpgym.sim.physics import hinge_inverse_inertia  # noqa: PLC0415
+
+    m = robot.model
+    dofs, inverse = hinge_inverse_inertia(mujoco, m)
     h, h_ref = m.opt.timestep, robot.task.dt / substeps
-    for adr in robot.dof_adr:
-        unit, col = np.zeros((1, m.nv)), np.zeros((1, m.nv))
-        unit[0, adr] = 1.0
-        mujoco.mj_solveM(m, d, col, unit)
-        rate_ref = np.log1p(h_ref * m.dof_damping[adr] * col[0, adr]) / h_ref  # per second, times I
-        # solve ln(1 + h d' / I) / h = rate_ref for d'
-        m.dof_damping[adr] = np.expm1(rate_ref * h) / (h * col[0, adr])
+    rate = np.log1p(h_ref * m.dof_damping[dofs] * inverse) / h_ref  # per second, times I
+    m.dof_damping[dofs] = np.expm1(rate * h) / (h * inverse)  # ln(1 + h d' / I) / h = rate
+
+
+class PowerMeter:
+    """``NativeRobot.on_substep``: the work of the motors, joint damping, contacts and joint limits,
+    each force times the substep's mean velocity, and the robot-seconds stepped."""
+
+    def __init__(self, mujoco, model):
+        self.mj, self.m = mujoco, model
+        self.work = {"motors": 0.0, "damping": 0.0, "contacts": 0.0, "limits": 0.0}
+        self.seconds = 0.0
+        c = mujoco.mjtConstraint
+        self.contact_types = (c.mjCNSTR_CONTACT_FRICTIONLESS, c.mjCNSTR_CONTACT_PYRAMIDAL, c.mjCNSTR_CONTACT_ELLIPTIC)
+        self.jac = np.zeros((0, model.nv))
+
+    def __call__(self, copy: int, d, before: np.ndarray) -> None:
+        m, dt, w = self.m, self.m.opt.timestep, self.work
+        v = 0.5 * (before + d.qvel)
+        self.seconds += dt
+        w["motors"] += dt * d.qfrc_applied @ v
+        w["damping"] += dt * d.qfrc_passive @ v
+        if d.nefc:
+            if self.jac.shape[0] != d.nefc:
+                self.jac = np.zeros((d.nefc, m.nv))
+            if self.mj.mj_isSparse(m):
+                self.mj.mju_sparse2dense(self.jac, d.efc_J, d.efc_J_rownnz, d.efc_J_rowadr, d.efc_J_colind)
+            else:
+                self.jac[:] = d.efc_J.reshape(d.nefc, m.nv)
+            power = d.efc_force[:d.nefc] * (self.jac @ v)
+            kind = d.efc_type[:d.nefc]
+            w["contacts"] += dt * power[np.isin(kind, self.contact_types)].sum()
+            w["limits"] += dt * power[kind == self.mj.mjtConstraint.mjCNSTR_LIMIT_JOINT].sum()
+
+    def watts(self) -> dict:
+        return {k: round(v / self.seconds, 1) for k, v in self.work.items()}
 
 
 def replay(ckpt, task, setting: dict, substeps: int, copies: int, steps: int, seed: int) -> dict:
+    """One episode per robot with ``setting`` applied (``warpgym.cli.sim2sim.play_native``: a robot is
+    no longer stepped after its fall), with the power of each force until the falls."""
     import mujoco  # noqa: PLC0415
     import torch  # noqa: PLC0415
 
     from agents.checkpoint import policy_from_checkpoint  # noqa: PLC0415
+    from warpgym.cli.sim2sim import play_native  # noqa: PLC0415
     from warpgym.native import NativeRobot  # noqa: PLC0415
 
     substeps = setting.get("substeps", substeps)
@@ -96,54 +129,26 @@ def replay(ckpt, task, setting: dict, substeps: int, copies: int, steps: int, se
                 m.dof_damping[adr] *= factor
     num_obs = task.observation_size(len(robot.dof_names), len(robot.feet))
     policy, normalize = policy_from_checkpoint(ckpt, num_obs, len(robot.dof_names), torch.device("cpu"))
-    contact_types = (mujoco.mjtConstraint.mjCNSTR_CONTACT_FRICTIONLESS, mujoco.mjtConstraint.mjCNSTR_CONTACT_PYRAMIDAL,
-                     mujoco.mjtConstraint.mjCNSTR_CONTACT_ELLIPTIC)
-    work = {"motors": 0.0, "damping": 0.0, "contacts": 0.0, "limits": 0.0}
-    dt = m.opt.timestep
-    robot.reset(np.random.default_rng(seed))
-    start = robot.state()["root_pose"][:, :3]
-    up, speed, up_steps = np.ones(copies, bool), np.zeros(copies), 0
-    actions = np.zeros((copies, len(robot.dof_names)))
-    obs = robot.observation(actions, fresh=True)
-    jac = np.zeros((0, m.nv))
-    for step in range(1, steps + 1):
-        with torch.no_grad():
-            actions = np.clip(policy.act_deterministic(normalize(torch.as_tensor(obs, dtype=torch.float32))).numpy(), -1, 1)
-        up_steps += int(up.sum())
-        for k, d in enumerate(robot.data):
-            if not up[k]:
-                continue
-            d.qfrc_applied[:] = 0.0
-            d.qfrc_applied[robot.dof_adr] = actions[k] * robot.torque_scale
-            for _ in range(substeps):
-                before = d.qvel.copy()
-                mujoco.mj_step(m, d)
-                if task.physics.max_joint_speed is not None:  # as NativeRobot.step clamps
-                    lim = task.physics.max_joint_speed
-                    d.qvel[robot.dof_adr] = np.clip(d.qvel[robot.dof_adr], -lim, lim)
-                v = 0.5 * (before + d.qvel)  # the substep's mean velocity
-                work["motors"] += dt * d.qfrc_applied @ v
-                work["damping"] += dt * d.qfrc_passive @ v
-                if d.nefc:
-                    if jac.shape[0] != d.nefc:
-                        jac = np.zeros((d.nefc, m.nv))
-                    if mujoco.mj_isSparse(m):
-                        mujoco.mju_sparse2dense(jac, d.efc_J, d.efc_J_rownnz, d.efc_J_rowadr, d.efc_J_colind)
-                    else:
-                        jac[:] = d.efc_J.reshape(d.nefc, m.nv)
-                    power = d.efc_force[:d.nefc] * (jac @ v)
-                    kind = d.efc_type[:d.nefc]
-                    work["contacts"] += dt * power[np.isin(kind, contact_types)].sum()
-                    work["limits"] += dt * power[kind == mujoco.mjtConstraint.mjCNSTR_LIMIT_JOINT].sum()
-        obs = robot.observation(actions)
-        s = robot.state()
-        now = task.forward_speed(s["root_pose"][:, :3] - start, step)
-        speed = np.where(up, now, speed)
-        up &= s["root_pose"][:, 2] >= task.termination_height
-    seconds = up_steps * task.dt  # robot-seconds before the falls: a fallen robot is no longer stepped
-    return {"setting": setting["label"], "substeps": substeps, "forward_speed": float(speed.mean()),
-            "speeds": speed.round(2).tolist(), "falls": int((~up).sum()), "robots": copies,
-            "power_w": {k: round(v / seconds, 1) for k, v in work.items()}}
+    robot.on_substep = meter = PowerMeter(mujoco, m)
+    row = play_native(robot, lambda obs: policy.act_deterministic(normalize(obs)), steps, seed)
+    return {"setting": setting["label"], "substeps": substeps, "forward_speed": row["forward_speed"],
+            "falls": row["falls"], "robots": copies, "power_w": meter.watts()}
+
+
+def joint_table(task, substeps: int) -> list[dict]:
+    """Each damped hinge at the policy's step: damping d, effective inertia I, x = h d / I (how far
+    implicit Euler's damping falls short: it damps ln(1 + x) / x of the continuous rate)."""
+    import mujoco  # noqa: PLC0415
+
+    from warpgym.native import NativeRobot  # noqa: PLC0415
+    from warpgym.sim.physics import hinge_inverse_inertia  # noqa: PLC0415
+
+    robot = NativeRobot(task, substeps=substeps)
+    m = robot.model
+    dofs, inverse = hinge_inverse_inertia(mujoco, m)
+    names = {int(a): n for n, a in zip(robot.dof_names, robot.dof_adr)}
+    return [{"joint": names[int(dof)], "damping": float(m.dof_damping[dof]), "inertia": round(1 / inv, 4),
+             "x": round(m.opt.timestep * m.dof_damping[dof] * inv, 3)} for dof, inv in zip(dofs, inverse)]
 
 
 def main(argv=None) -> int:
@@ -175,6 +180,11 @@ def main(argv=None) -> int:
     if env_args.get("physics"):
         task = task.replace(physics=env_args["physics"])
     substeps = env_args.get("substeps") or task.substeps
+    joints = joint_table(task, substeps)
+    print("| joint | damping | effective inertia | x = h d / I |\n|---|---:|---:|---:|")
+    for j in joints:
+        print(f"| {j['joint']} | {j['damping']:g} | {j['inertia']:.4f} kg m^2 | {j['x']:.3f} |")
+    print()
     rows = []
     print("| setting | substeps | speed | falls | motors | damping | contacts | limits | wall |")
     print("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
@@ -192,7 +202,7 @@ def main(argv=None) -> int:
 
         write_json(args.out, {"checkpoint": args.checkpoint, "task": env_args["task"], "trained_substeps": substeps,
                               "physics": task.physics.to_dict(), "argv": sys.argv[1:] if argv is None else argv,
-                              "rows": rows})
+                              "joints": joints, "rows": rows})
     return 0
 
 

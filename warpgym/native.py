@@ -177,6 +177,9 @@ class NativeRobot:
         self._foot_geom = np.isin(m.geom_bodyid, self.feet)
         # (K,) bool: some foot had a contact with the ground in some substep of the last step()
         self.feet_touched = np.zeros(copies, bool)
+        # called after every substep of step() as on_substep(copy, data, qvel before the substep), for
+        # measurements that need each substep (benchmarks/step_sensitivity.py: the power of each force)
+        self.on_substep = None
 
     # ------------------------------------------------------------------ state
     def set_state(self, root_pose, root_vel, dof_pos, dof_vel) -> None:
@@ -235,10 +238,13 @@ class NativeRobot:
             d.qfrc_applied[self.dof_adr] = actions[k] * self.torque_scale
             touched = False
             for _ in range(self.substeps):
+                before = d.qvel.copy() if self.on_substep is not None else None
                 mj.mj_step(self.model, d)
                 if self.physics.max_joint_speed is not None:
                     v = self.physics.max_joint_speed
                     d.qvel[self.dof_adr] = np.clip(d.qvel[self.dof_adr], -v, v)
+                if self.on_substep is not None:
+                    self.on_substep(k, d, before)
                 # every substep, not just the last: a bounding gait's feet may touch down mid-step
                 touched = touched or self._foot_on_ground(d)
             self.feet_touched[k] = touched

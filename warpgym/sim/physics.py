@@ -86,31 +86,37 @@ def parse_setting(text: str) -> tuple[str, object]:
     return name, raw
 
 
+def hinge_inverse_inertia(mujoco, model) -> tuple[np.ndarray, np.ndarray]:
+    """The hinge dofs of a MuJoCo ``model`` and, for each, (M^-1)_ii at the start pose (hinges at 0
+    clamped into their ranges): one over the joint's effective inertia I with every other joint and
+    the floating base free to move. Takes the ``mujoco`` module so that this file imports neither it
+    nor Warp."""
+    hinges = np.flatnonzero(model.jnt_type == mujoco.mjtJoint.mjJNT_HINGE)
+    dofs = model.jnt_dofadr[hinges]
+    data = mujoco.MjData(model)
+    data.qpos[:] = model.qpos0
+    for j in hinges:
+        lo, hi = model.jnt_range[j] if model.jnt_limited[j] else (-np.inf, np.inf)
+        data.qpos[model.jnt_qposadr[j]] = np.clip(0.0, lo, hi)
+    mujoco.mj_forward(model, data)
+    unit, column = np.zeros((1, model.nv)), np.zeros((1, model.nv))
+    inverse = np.empty(len(dofs))
+    for k, dof in enumerate(dofs):
+        unit[:] = 0.0
+        unit[0, dof] = 1.0
+        mujoco.mj_solveM(model, data, column, unit)
+        inverse[k] = column[0, dof]
+    return dofs, inverse
+
+
 def exact_damping_scale(mujoco, model, timestep: float) -> tuple[np.ndarray, np.ndarray]:
     """The hinge dofs of a MuJoCo ``model`` and the factor on each one's damping that makes implicit
     Euler exact for it at ``timestep``.
 
     A step h of implicit Euler keeps 1 / (1 + h d / I) of a damped joint's speed, the continuous
-    model exp(-h d / I) (I: the joint's effective inertia, 1 / (M^-1)_ii with every other joint and
-    the floating base free, at the start pose: hinges at 0 clamped into their ranges). With d scaled
-    by (e^x - 1) / x, x = h d / I, the two agree, so the damping a policy meets does not depend on
-    the step; at the Humanoid's 1/180 s the factors are 1.06-1.84 (docs/tasks.md, "Physics settings").
-    Takes the ``mujoco`` module so that this file imports neither it nor Warp."""
-    hinges = np.flatnonzero(model.jnt_type == mujoco.mjtJoint.mjJNT_HINGE)
-    dofs = model.jnt_dofadr[hinges]
-    data = mujoco.MjData(model)
-    qpos = model.qpos0.copy()
-    for j in hinges:
-        lo, hi = model.jnt_range[j] if model.jnt_limited[j] else (-np.inf, np.inf)
-        qpos[model.jnt_qposadr[j]] = np.clip(0.0, lo, hi)
-    data.qpos[:] = qpos
-    mujoco.mj_forward(model, data)
-    unit, column = np.zeros((1, model.nv)), np.zeros((1, model.nv))
-    scale = np.ones(len(dofs))
-    for k, dof in enumerate(dofs):
-        unit[:] = 0.0
-        unit[0, dof] = 1.0
-        mujoco.mj_solveM(model, data, column, unit)
-        x = timestep * model.dof_damping[dof] * column[0, dof]
-        scale[k] = np.expm1(x) / x if x > 0 else 1.0
-    return dofs, scale
+    model exp(-h d / I) (I: the effective inertia of ``hinge_inverse_inertia``). With d scaled by
+    (e^x - 1) / x, x = h d / I, the two agree, so the damping a policy meets does not depend on the
+    step; at the Humanoid's 1/180 s the factors are 1.06-1.84 (docs/tasks.md, "Physics settings")."""
+    dofs, inverse = hinge_inverse_inertia(mujoco, model)
+    x = timestep * model.dof_damping[dofs] * inverse
+    return dofs, np.where(x > 0, np.expm1(x) / np.where(x > 0, x, 1.0), 1.0)
