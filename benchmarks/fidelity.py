@@ -69,6 +69,9 @@ CANDIDATES: dict[str, dict] = {
     # seed 1's gait at 5 substeps leans on that underplay (docs/tasks.md)
     "humanoid-3x8-exact-damping": {"substeps": 3, "physics": {"solver_iterations": 8, "ls_iterations": 8,
                                                               "armature": None, "exact_damping": True}},
+    # the same at 1/240 s, should 1/180 s still leave the gait a step to lean on
+    "humanoid-4x4-exact-damping": {"substeps": 4, "physics": {"solver_iterations": 4, "ls_iterations": 4,
+                                                              "armature": None, "exact_damping": True}},
     # the Ant's armature at 8 iterations or 4 substeps: for a ratio that falls with training (0.91 at 10 minutes)
     "ant-3x8": {"substeps": 3, "physics": {"solver_iterations": 8, "ls_iterations": 8, "armature": 0.1}},
     "ant-4x4": {"substeps": 4, "physics": {"solver_iterations": 4, "ls_iterations": 4, "armature": 0.1}},
