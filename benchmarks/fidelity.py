@@ -72,6 +72,12 @@ CANDIDATES: dict[str, dict] = {
     # the same at 1/240 s, should 1/180 s still leave the gait a step to lean on
     "humanoid-4x4-exact-damping": {"substeps": 4, "physics": {"solver_iterations": 4, "ls_iterations": 4,
                                                               "armature": None, "exact_damping": True}},
+    # MuJoCo's "implicit" integrator (implicitfast plus the velocity derivative of the Coriolis and centrifugal
+    # forces): at 1/180 s implicitfast pays a 10-minute seed-1 sprint 1.5 kW of its own (step_sensitivity.py)
+    "humanoid-3x8-implicit": {"substeps": 3, "physics": {"integrator": "implicit", "solver_iterations": 8,
+                                                         "ls_iterations": 8, "armature": None}},
+    "humanoid-2x8-implicit": {"substeps": 2, "physics": {"integrator": "implicit", "solver_iterations": 8,
+                                                         "ls_iterations": 8, "armature": None}},
     # the Ant's armature at 8 iterations or 4 substeps: for a ratio that falls with training (0.91 at 10 minutes)
     "ant-3x8": {"substeps": 3, "physics": {"solver_iterations": 8, "ls_iterations": 8, "armature": 0.1}},
     "ant-4x4": {"substeps": 4, "physics": {"solver_iterations": 4, "ls_iterations": 4, "armature": 0.1}},

@@ -10,7 +10,9 @@ own), ``friction`` and ``mass`` (factors on every geom's sliding friction, every
 ``damping`` (a factor on every hinge's damping) or ``damping[a|b]`` (on the hinges whose names
 contain a or b), ``match_damping`` (S: each hinge's damping scaled so that the implicit integrator
 damps it per second as it does at S substeps; from the joint's effective inertia, floating base
-included, at the start pose). The policy's own settings come first as the reference. Each row: forward speed
+included, at the start pose), ``timeconst`` (every contact's solref time constant [s]),
+``iterations`` (the solver's and line search's caps) and ``integrator`` (euler, implicitfast, implicit
+or rk4: MuJoCo's own, so a step's error can be told from the model's). The policy's own settings come first as the reference. Each row: forward speed
 (frozen at a robot's fall), falls, and the mean power of the motors, joint damping, contacts and
 joint limits per robot until its fall [W], integrated over every substep (a positive constraint power would be a
 solver paying energy in). Before the rows, each hinge's x = h d / I at the policy's step (how
@@ -33,13 +35,19 @@ DEFAULT_SETTINGS = ["substeps=6", "substeps=7", "substeps=8", "substeps=10", "fr
                     "damping[abdomen|hip_x|hip_y]=1.3", "damping[hip_z]=1.3", "damping[ankle]=1.3",
                     "damping[shoulder|elbow]=1.3", "substeps=10,damping=0.8", "substeps=10,match_damping=5",
                     "substeps=20,match_damping=5"]
-SETTING = re.compile(r"^(substeps|friction|mass|damping|match_damping)(\[[\w|]+\])?=([0-9.eE+-]+)$")
+SETTING = re.compile(r"^(substeps|friction|mass|damping|match_damping|timeconst|iterations)(\[[\w|]+\])?=([0-9.eE+-]+)$")
+NATIVE_INTEGRATORS = ("euler", "implicitfast", "implicit", "rk4")
 
 
 def parse_setting(text: str) -> dict:
     """'substeps=10,damping[hip_z]=1.3' -> {'substeps': 10, 'damping': [('hip_z',), 1.3]}; a clear error else."""
     out: dict = {"label": text}
     for part in filter(None, text.split(",")):
+        if part.strip().startswith("integrator="):
+            out["integrator"] = part.strip().split("=", 1)[1]
+            if out["integrator"] not in NATIVE_INTEGRATORS:
+                raise ValueError(f"setting {part!r}: choose an integrator from {list(NATIVE_INTEGRATORS)}")
+            continue
         m = SETTING.match(part.strip())
         if not m:
             raise ValueError(f"setting {part!r} in {text!r}: expected substeps=N, friction=F, mass=F, damping=F, "
@@ -47,7 +55,7 @@ def parse_setting(text: str) -> dict:
         name, joints, value = m.group(1), m.group(2), float(m.group(3))
         if not value > 0:
             raise ValueError(f"setting {part!r}: the value must be positive")
-        if name in ("substeps", "match_damping"):
+        if name in ("substeps", "match_damping", "iterations"):
             out[name] = int(value)
         elif name == "damping":
             out.setdefault("damping", []).append((tuple(joints[1:-1].split("|")) if joints else (), value))
@@ -77,16 +85,30 @@ class PowerMeter:
 
     def __init__(self, mujoco, model):
         self.mj, self.m = mujoco, model
-        self.work = {"motors": 0.0, "damping": 0.0, "contacts": 0.0, "limits": 0.0}
+        self.work = {"motors": 0.0, "damping": 0.0, "contacts": 0.0, "limits": 0.0, "integrator": 0.0}
         self.seconds = 0.0
         c = mujoco.mjtConstraint
         self.contact_types = (c.mjCNSTR_CONTACT_FRICTIONLESS, c.mjCNSTR_CONTACT_PYRAMIDAL, c.mjCNSTR_CONTACT_ELLIPTIC)
         self.jac = np.zeros((0, model.nv))
+        self.scratch, self.energy = mujoco.MjData(model), {}
+
+    def mechanical_energy(self, d) -> float:
+        """Potential plus kinetic energy of ``d``'s state, computed on a scratch copy so that the
+        replay's own data (and what its observations read) is left as the step left it."""
+        s, mj = self.scratch, self.mj
+        s.qpos[:], s.qvel[:] = d.qpos, d.qvel
+        mj.mj_kinematics(self.m, s)
+        mj.mj_comPos(self.m, s)
+        mj.mj_makeM(self.m, s)
+        mj.mj_energyPos(self.m, s)
+        mj.mj_energyVel(self.m, s)
+        return float(s.energy[0] + s.energy[1])
 
     def __call__(self, copy: int, d, before: np.ndarray) -> None:
         m, dt, w = self.m, self.m.opt.timestep, self.work
         v = 0.5 * (before + d.qvel)
         self.seconds += dt
+        paid = dt * (d.qfrc_applied @ v + d.qfrc_passive @ v)
         w["motors"] += dt * d.qfrc_applied @ v
         w["damping"] += dt * d.qfrc_passive @ v
         if d.nefc:
@@ -100,6 +122,13 @@ class PowerMeter:
             kind = d.efc_type[:d.nefc]
             w["contacts"] += dt * power[np.isin(kind, self.contact_types)].sum()
             w["limits"] += dt * power[kind == self.mj.mjtConstraint.mjCNSTR_LIMIT_JOINT].sum()
+            paid += dt * power.sum()
+        # what the state gained beyond the forces' work: the step's own error (0 in the continuous model);
+        # a copy's first substep only sets its reference
+        energy = self.mechanical_energy(d)
+        if copy in self.energy:
+            w["integrator"] += energy - self.energy[copy] - paid
+        self.energy[copy] = energy
 
     def watts(self) -> dict:
         return {k: round(v / self.seconds, 1) for k, v in self.work.items()}
@@ -123,6 +152,12 @@ def replay(ckpt, task, setting: dict, substeps: int, copies: int, steps: int, se
     m.body_inertia[:] *= setting.get("mass", 1.0)
     if "match_damping" in setting:
         match_damping(robot, setting["match_damping"])
+    if "timeconst" in setting:
+        m.geom_solref[:, 0] = setting["timeconst"]
+    if "iterations" in setting:
+        m.opt.iterations = m.opt.ls_iterations = setting["iterations"]
+    if "integrator" in setting:
+        m.opt.integrator = getattr(mujoco.mjtIntegrator, f"mjINT_{setting['integrator'].upper()}")
     for names, factor in setting.get("damping", []):
         for joint, adr in zip(robot.dof_names, robot.dof_adr):
             if not names or any(n in joint for n in names):
@@ -186,8 +221,8 @@ def main(argv=None) -> int:
         print(f"| {j['joint']} | {j['damping']:g} | {j['inertia']:.4f} kg m^2 | {j['x']:.3f} |")
     print()
     rows = []
-    print("| setting | substeps | speed | falls | motors | damping | contacts | limits | wall |")
-    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
+    print("| setting | substeps | speed | falls | motors | damping | contacts | limits | integrator | wall |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     for setting in settings:
         t0 = time.perf_counter()
         row = replay(ckpt, task, setting, substeps, args.copies, args.steps, args.seed)
@@ -196,6 +231,7 @@ def main(argv=None) -> int:
         p = row["power_w"]
         print(f"| {row['setting']} | {row['substeps']} | {row['forward_speed']:.2f} m/s | {row['falls']}/{row['robots']} "
               f"| {p['motors']:.0f} W | {p['damping']:.0f} W | {p['contacts']:.0f} W | {p['limits']:.0f} W "
+              f"| {p['integrator']:.0f} W "
               f"| {row['wall_s']} s |", flush=True)
     if args.out:
         from warpgym.cli import write_json  # noqa: PLC0415

@@ -25,11 +25,13 @@ def warpgym_state(sim) -> dict:
     return {k: getattr(sim, k).numpy().astype(np.float64) for k in ("root_pose", "root_vel", "dof_pos", "dof_vel")}
 
 
-@pytest.mark.parametrize("task", ["Ant", "Humanoid"])
-def test_native_mujoco_observes_and_steps_like_warpgym(task):
+@pytest.mark.parametrize("task, integrator", [("Ant", "implicitfast"), ("Humanoid", "implicitfast"),
+                                             ("Humanoid", "implicit")])
+def test_native_mujoco_observes_and_steps_like_warpgym(task, integrator):
     from warpgym.envs import LocomotionVecEnv
 
-    env = LocomotionVecEnv(task, num_envs=3, device="cpu", seed=0, physics=CONVERGED)
+    env = LocomotionVecEnv(task, num_envs=3, device="cpu", seed=0, physics={**CONVERGED, "integrator": integrator})
+    assert int(env.sim.solver.mjw_model.opt.integrator) == {"implicitfast": 3, "implicit": 2}[integrator]
     env.reset(seed=11)
     zeros = torch.zeros(env.num_envs, env.num_actions)
     for _ in range(SETTLE[task]):

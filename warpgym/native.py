@@ -28,7 +28,7 @@ from warpgym.tasks import LocomotionTask, get_task
 
 # Newton's ground plane as MuJoCo Warp receives it (ShapeConfig defaults): friction, condim, margin.
 GROUND_FRICTION = (1.0, 0.005, 0.0001)
-INTEGRATORS = {"euler": 0, "implicitfast": 3}  # mjtIntegrator values
+INTEGRATORS = {"euler": 0, "implicit": 2, "implicitfast": 3}  # mjtIntegrator values
 
 
 def _mujoco():

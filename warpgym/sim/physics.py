@@ -12,7 +12,7 @@ from dataclasses import asdict, dataclass, fields
 
 import numpy as np
 
-INTEGRATORS = ("euler", "implicitfast")
+INTEGRATORS = ("euler", "implicitfast", "implicit")
 
 
 @dataclass(frozen=True)
