@@ -11,7 +11,8 @@ own), ``friction`` and ``mass`` (factors on every geom's sliding friction, every
 contain a or b), ``match_damping`` (S: each hinge's damping scaled so that the implicit integrator
 damps it per second as it does at S substeps; from the joint's effective inertia, floating base
 included, at the start pose), ``timeconst`` (every contact's solref time constant [s]),
-``iterations`` (the solver's and line search's caps) and ``integrator`` (euler, implicitfast, implicit
+``iterations`` (the solver's and line search's caps), ``joint_speed`` (a clamp on every hinge's
+speed after each substep, Physics.max_joint_speed [rad/s]) and ``integrator`` (euler, implicitfast, implicit
 or rk4: MuJoCo's own, so a step's error can be told from the model's). The policy's own settings come first as the reference. Each row: forward speed
 (frozen at a robot's fall), falls, and the mean power of the motors, joint damping, contacts and
 joint limits per robot until its fall [W], integrated over every substep (a positive constraint power would be a
@@ -35,7 +36,7 @@ DEFAULT_SETTINGS = ["substeps=6", "substeps=7", "substeps=8", "substeps=10", "fr
                     "damping[abdomen|hip_x|hip_y]=1.3", "damping[hip_z]=1.3", "damping[ankle]=1.3",
                     "damping[shoulder|elbow]=1.3", "substeps=10,damping=0.8", "substeps=10,match_damping=5",
                     "substeps=20,match_damping=5"]
-SETTING = re.compile(r"^(substeps|friction|mass|damping|match_damping|timeconst|iterations)(\[[\w|]+\])?=([0-9.eE+-]+)$")
+SETTING = re.compile(r"^(substeps|friction|mass|damping|match_damping|timeconst|iterations|joint_speed)(\[[\w|]+\])?=([0-9.eE+-]+)$")
 NATIVE_INTEGRATORS = ("euler", "implicitfast", "implicit", "rk4")
 
 
@@ -145,6 +146,8 @@ def replay(ckpt, task, setting: dict, substeps: int, copies: int, steps: int, se
     from warpgym.native import NativeRobot  # noqa: PLC0415
 
     substeps = setting.get("substeps", substeps)
+    if "joint_speed" in setting:
+        task = task.replace(physics=task.physics.replace(max_joint_speed=setting["joint_speed"]))
     robot = NativeRobot(task, substeps=substeps, copies=copies)
     m = robot.model
     m.geom_friction[:, 0] *= setting.get("friction", 1.0)
