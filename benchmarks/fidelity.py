@@ -18,7 +18,9 @@ four settings.
 
 Writes OUT/fidelity.json after every run and prints two markdown tables. Policies: forward speed at the
 training step, the other settings' speeds as shares of it, torso height, the share of steps with no foot
-on the ground and the longest such flight (native MuJoCo, which checks every substep), falls, and
+on the ground and the longest such flight (native MuJoCo, which checks every substep), falls, the
+energy the step pays in (native MuJoCo at both steps: the mechanical energy gained beyond the work of
+every force, per robot and as a share of the motors'; warpgym.native.PowerMeter), and
 whether the policy holds: >= 0.90 at the finer step in both simulators and >= 0.95 in native MuJoCo at
 the training step. Runs: steady samples/s, when the training episodes first reached the task's target
 speed (Ant 3 m/s, Humanoid 2 m/s), diverged resets, the last evaluation. Probes: the four speeds, and
@@ -82,6 +84,10 @@ CANDIDATES: dict[str, dict] = {
     # kilowatts in: a motor's top speed, as PhysX clamps articulation joint speeds (25 rad/s: a sprinter's knee)
     "humanoid-3x8-speed25": {"substeps": 3, "physics": {"solver_iterations": 8, "ls_iterations": 8, "armature": None,
                                                         "max_joint_speed": 25.0}},
+    # a DC motor's back-EMF instead of an ideal torque source (Physics.motor_speed): torque falls with speed, to 0 at
+    # 25 rad/s at the full command; momentum-conserving where the clamp above is not (it paid a 35 m/s gait 13 kW)
+    "humanoid-3x8-motor25": {"substeps": 3, "physics": {"solver_iterations": 8, "ls_iterations": 8, "armature": None,
+                                                        "motor_speed": 25.0, "exact_damping": True}},
     # the Ant's armature at 8 iterations or 4 substeps: for a ratio that falls with training (0.91 at 10 minutes)
     "ant-3x8": {"substeps": 3, "physics": {"solver_iterations": 8, "ls_iterations": 8, "armature": 0.1}},
     "ant-4x4": {"substeps": 4, "physics": {"solver_iterations": 4, "ls_iterations": 4, "armature": 0.1}},
@@ -112,7 +118,8 @@ def _native(job: dict) -> dict:
     torch.set_num_threads(1)
     t0 = time.perf_counter()
     ckpt = load(job["checkpoint"], torch.device("cpu"))
-    row = sim2sim.replay_native(ckpt, job["env_args"], job["substeps"], job["copies"], job["steps"], job["seed"])
+    row = sim2sim.replay_native(ckpt, job["env_args"], job["substeps"], job["copies"], job["steps"], job["seed"],
+                                energy=True)
     return {**row, "wall_s": round(time.perf_counter() - t0, 1)}
 
 
@@ -245,10 +252,21 @@ def save(out: str, doc: dict) -> None:
 
 
 # ---------------------------------------------------------------- tables
+def paid_in(row: dict) -> str:
+    """The energy the integrator added per robot, and its share of the motors' (replays made before the
+    account existed: -)."""
+    power = row.get("power_w")
+    if not power:
+        return "-"
+    share = f" ({100 * power['integrator'] / power['motors']:.0f} %)" if power["motors"] > 0 else ""
+    return f"{power['integrator']:.0f} W{share}"
+
+
 def tables(doc: dict) -> str:
     lines = ["| task | candidate | seed | policy | speed at the step | 4x finer | native | native 4x finer | "
-             "torso height | no foot on ground (native) | longest flight (native) | falls (warpgym) | holds |",
-             "|---|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---|"]
+             "torso height | no foot on ground (native) | longest flight (native) | falls (warpgym) | "
+             "paid in by the step (native, at the step / 4x finer) | holds |",
+             "|---|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"]
     for run in doc.get("runs", []):
         for p in run["policies"]:
             r = p["rows"]
@@ -258,7 +276,7 @@ def tables(doc: dict) -> str:
                 f"{r['native']['speed_ratio']:.2f} | {r['native_finer']['speed_ratio']:.2f} | "
                 f"{r['warpgym']['torso_height']:.2f} m | {100 * r['native']['no_foot_contact_share']:.0f} % | "
                 f"{r['native']['longest_airborne_steps']:.0f} steps | {r['warpgym']['falls']}/{r['warpgym']['robots']} | "
-                f"{'yes' if p['holds'] else '**no**'} |")
+                f"{paid_in(r['native'])} / {paid_in(r['native_finer'])} | {'yes' if p['holds'] else '**no**'} |")
     lines += ["", "| task | candidate | seed | device | samples/s | first iteration | training episodes at target speed | "
               "diverged resets | last evaluation |", "|---|---|---:|---|---:|---:|---:|---:|---:|"]
     for run in doc.get("runs", []):

@@ -1,25 +1,30 @@
-"""What does a trained gait lean on? Replay one policy in native MuJoCo under changed settings: a finer
-step, less friction, heavier bodies, more or less joint damping, and account for the energy each time.
+"""What does a trained gait lean on? Replay policies in native MuJoCo under changed settings (a finer
+step, another integrator, less friction, heavier bodies, more or less joint damping) and account for
+the energy each time.
 
     python benchmarks/step_sensitivity.py tests/data/humanoid_5x4_seed1_policy.pt --out OUT.json
     python benchmarks/step_sensitivity.py CKPT --settings substeps=10 "substeps=10,damping=0.8" \\
         "damping[abdomen|hip_x|hip_y]=1.3" friction=0.8 mass=1.05
+    python benchmarks/step_sensitivity.py CKPT1 CKPT2 --settings finer=4 integrator=implicit --no-joints
 
-Each setting is comma-separated NAME=VALUE: ``substeps`` (per control step; default: the policy's
-own), ``friction`` and ``mass`` (factors on every geom's sliding friction, every body's mass),
-``damping`` (a factor on every hinge's damping) or ``damping[a|b]`` (on the hinges whose names
-contain a or b), ``match_damping`` (S: each hinge's damping scaled so that the implicit integrator
-damps it per second as it does at S substeps; from the joint's effective inertia, floating base
-included, at the start pose), ``timeconst`` (every contact's solref time constant [s]),
-``iterations`` (the solver's and line search's caps), ``joint_speed`` (a clamp on every hinge's
-speed after each substep, Physics.max_joint_speed [rad/s]) and ``integrator`` (euler, implicitfast, implicit
-or rk4: MuJoCo's own, so a step's error can be told from the model's). The policy's own settings come first as the reference. Each row: forward speed
-(frozen at a robot's fall), falls, and the mean power of the motors, joint damping, contacts and
-joint limits per robot until its fall [W], integrated over every substep (a positive constraint power would be a
-solver paying energy in). Before the rows, each hinge's x = h d / I at the policy's step (how
-far implicit Euler's damping falls short). CPU only; a few seconds per setting for 4 robots and 1000 steps.
+Each setting is comma-separated NAME=VALUE:
+  substeps      per control step (default: the policy's own); finer=K: K times the policy's own
+  integrator    euler, implicitfast, implicit or rk4 (MuJoCo's own), to tell a step's error from the model's
+  friction, mass  factors on every geom's sliding friction, every body's mass and inertia
+  damping       a factor on every hinge's damping; damping[a|b]: on the hinges whose names contain a or b
+  match_damping S: each hinge's damping scaled so that implicit Euler damps it per second as at S
+                substeps (from the joint's effective inertia, floating base included, at the start pose)
+  timeconst     every contact's solref time constant [s]
+  iterations    the solver's and line search's iteration caps
+  joint_speed   a clamp on every hinge's speed after each substep (Physics.max_joint_speed) [rad/s]
+The policy's own settings come first as the reference. Each row: forward speed (frozen at a robot's
+fall), falls, and the mean power per robot until its fall [W] of the motors, joint damping, contacts
+and joint limits, each force times the substep's mean velocity, integrated over every substep; and
+the integrator's: what the mechanical energy gained beyond all of those, the step's own error (0 in
+the continuous model; positive: the step pays energy in). Before the rows, each hinge's x = h d / I at
+the policy's step (how far implicit Euler's damping falls short). CPU only; a few seconds per setting
+for 4 robots and 1000 steps.
 """
-
 from __future__ import annotations
 
 import argparse
@@ -36,7 +41,7 @@ DEFAULT_SETTINGS = ["substeps=6", "substeps=7", "substeps=8", "substeps=10", "fr
                     "damping[abdomen|hip_x|hip_y]=1.3", "damping[hip_z]=1.3", "damping[ankle]=1.3",
                     "damping[shoulder|elbow]=1.3", "substeps=10,damping=0.8", "substeps=10,match_damping=5",
                     "substeps=20,match_damping=5"]
-SETTING = re.compile(r"^(substeps|friction|mass|damping|match_damping|timeconst|iterations|joint_speed)(\[[\w|]+\])?=([0-9.eE+-]+)$")
+SETTING = re.compile(r"^(substeps|friction|mass|damping|match_damping|timeconst|iterations|joint_speed|finer)(\[[\w|]+\])?=([0-9.eE+-]+)$")
 NATIVE_INTEGRATORS = ("euler", "implicitfast", "implicit", "rk4")
 
 
@@ -56,7 +61,7 @@ def parse_setting(text: str) -> dict:
         name, joints, value = m.group(1), m.group(2), float(m.group(3))
         if not value > 0:
             raise ValueError(f"setting {part!r}: the value must be positive")
-        if name in ("substeps", "match_damping", "iterations"):
+        if name in ("substeps", "match_damping", "iterations", "finer"):
             out[name] = int(value)
         elif name == "damping":
             out.setdefault("damping", []).append((tuple(joints[1:-1].split("|")) if joints else (), value))
@@ -80,61 +85,6 @@ def match_damping(robot, substeps: int) -> None:
     m.dof_damping[dofs] = np.expm1(rate * h) / (h * inverse)  # ln(1 + h d' / I) / h = rate
 
 
-class PowerMeter:
-    """``NativeRobot.on_substep``: the work of the motors, joint damping, contacts and joint limits,
-    each force times the substep's mean velocity, and the robot-seconds stepped."""
-
-    def __init__(self, mujoco, model):
-        self.mj, self.m = mujoco, model
-        self.work = {"motors": 0.0, "damping": 0.0, "contacts": 0.0, "limits": 0.0, "integrator": 0.0}
-        self.seconds = 0.0
-        c = mujoco.mjtConstraint
-        self.contact_types = (c.mjCNSTR_CONTACT_FRICTIONLESS, c.mjCNSTR_CONTACT_PYRAMIDAL, c.mjCNSTR_CONTACT_ELLIPTIC)
-        self.jac = np.zeros((0, model.nv))
-        self.scratch, self.energy = mujoco.MjData(model), {}
-
-    def mechanical_energy(self, d) -> float:
-        """Potential plus kinetic energy of ``d``'s state, computed on a scratch copy so that the
-        replay's own data (and what its observations read) is left as the step left it."""
-        s, mj = self.scratch, self.mj
-        s.qpos[:], s.qvel[:] = d.qpos, d.qvel
-        mj.mj_kinematics(self.m, s)
-        mj.mj_comPos(self.m, s)
-        mj.mj_makeM(self.m, s)
-        mj.mj_energyPos(self.m, s)
-        mj.mj_energyVel(self.m, s)
-        return float(s.energy[0] + s.energy[1])
-
-    def __call__(self, copy: int, d, before: np.ndarray) -> None:
-        m, dt, w = self.m, self.m.opt.timestep, self.work
-        v = 0.5 * (before + d.qvel)
-        self.seconds += dt
-        paid = dt * (d.qfrc_applied @ v + d.qfrc_passive @ v)
-        w["motors"] += dt * d.qfrc_applied @ v
-        w["damping"] += dt * d.qfrc_passive @ v
-        if d.nefc:
-            if self.jac.shape[0] != d.nefc:
-                self.jac = np.zeros((d.nefc, m.nv))
-            if self.mj.mj_isSparse(m):
-                self.mj.mju_sparse2dense(self.jac, d.efc_J, d.efc_J_rownnz, d.efc_J_rowadr, d.efc_J_colind)
-            else:
-                self.jac[:] = d.efc_J.reshape(d.nefc, m.nv)
-            power = d.efc_force[:d.nefc] * (self.jac @ v)
-            kind = d.efc_type[:d.nefc]
-            w["contacts"] += dt * power[np.isin(kind, self.contact_types)].sum()
-            w["limits"] += dt * power[kind == self.mj.mjtConstraint.mjCNSTR_LIMIT_JOINT].sum()
-            paid += dt * power.sum()
-        # what the state gained beyond the forces' work: the step's own error (0 in the continuous model);
-        # a copy's first substep only sets its reference
-        energy = self.mechanical_energy(d)
-        if copy in self.energy:
-            w["integrator"] += energy - self.energy[copy] - paid
-        self.energy[copy] = energy
-
-    def watts(self) -> dict:
-        return {k: round(v / self.seconds, 1) for k, v in self.work.items()}
-
-
 def replay(ckpt, task, setting: dict, substeps: int, copies: int, steps: int, seed: int) -> dict:
     """One episode per robot with ``setting`` applied (``warpgym.cli.sim2sim.play_native``: a robot is
     no longer stepped after its fall), with the power of each force until the falls."""
@@ -143,9 +93,9 @@ def replay(ckpt, task, setting: dict, substeps: int, copies: int, steps: int, se
 
     from agents.checkpoint import policy_from_checkpoint  # noqa: PLC0415
     from warpgym.cli.sim2sim import play_native  # noqa: PLC0415
-    from warpgym.native import NativeRobot  # noqa: PLC0415
+    from warpgym.native import NativeRobot, PowerMeter  # noqa: PLC0415
 
-    substeps = setting.get("substeps", substeps)
+    substeps = setting.get("substeps", setting.get("finer", 1) * substeps)
     if "joint_speed" in setting:
         task = task.replace(physics=task.physics.replace(max_joint_speed=setting["joint_speed"]))
     robot = NativeRobot(task, substeps=substeps, copies=copies)
@@ -167,7 +117,7 @@ def replay(ckpt, task, setting: dict, substeps: int, copies: int, steps: int, se
                 m.dof_damping[adr] *= factor
     num_obs = task.observation_size(len(robot.dof_names), len(robot.feet))
     policy, normalize = policy_from_checkpoint(ckpt, num_obs, len(robot.dof_names), torch.device("cpu"))
-    robot.on_substep = meter = PowerMeter(mujoco, m)
+    robot.on_substep = meter = PowerMeter(m)
     row = play_native(robot, lambda obs: policy.act_deterministic(normalize(obs)), steps, seed)
     return {"setting": setting["label"], "substeps": substeps, "forward_speed": row["forward_speed"],
             "falls": row["falls"], "robots": copies, "power_w": meter.watts()}
@@ -189,40 +139,26 @@ def joint_table(task, substeps: int) -> list[dict]:
              "x": round(m.opt.timestep * m.dof_damping[dof] * inv, 3)} for dof, inv in zip(dofs, inverse)]
 
 
-def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("checkpoint", help="a checkpoint or policy file (tests/data/*.pt, a run's checkpoint.pt)")
-    ap.add_argument("--settings", nargs="+", default=DEFAULT_SETTINGS, help="the changed settings to replay")
-    ap.add_argument("--copies", type=int, default=4, help="native robots per setting")
-    ap.add_argument("--steps", type=int, default=1000, help="control steps (one episode)")
-    ap.add_argument("--seed", type=int, default=7)
-    ap.add_argument("--out", default=None, help="JSON file to write")
-    args = ap.parse_args(argv)
-    if not os.path.isfile(args.checkpoint):
-        ap.error(f"{args.checkpoint}: no such checkpoint file")
-    if args.copies < 1 or args.steps < 1:
-        ap.error(f"--copies {args.copies} and --steps {args.steps} must be positive")
-    try:
-        settings = [{"label": "own"}] + [parse_setting(t) for t in args.settings]
-    except ValueError as e:
-        ap.error(str(e))
-
+def sensitivity(path: str, settings: list[dict], args) -> dict:
+    """One checkpoint: its joint table and a row per setting, printed as they come."""
     import torch  # noqa: PLC0415
 
     from agents.checkpoint import load  # noqa: PLC0415
     from warpgym.tasks import get_task  # noqa: PLC0415
 
-    ckpt = load(args.checkpoint, torch.device("cpu"))
+    ckpt = load(path, torch.device("cpu"))
     env_args = ckpt["config"]["env_args"]
     task = get_task(env_args["task"])
     if env_args.get("physics"):
         task = task.replace(physics=env_args["physics"])
     substeps = env_args.get("substeps") or task.substeps
+    print(f"## {path}: {env_args['task']}, {substeps} substeps, {task.physics}\n")
     joints = joint_table(task, substeps)
-    print("| joint | damping | effective inertia | x = h d / I |\n|---|---:|---:|---:|")
-    for j in joints:
-        print(f"| {j['joint']} | {j['damping']:g} | {j['inertia']:.4f} kg m^2 | {j['x']:.3f} |")
-    print()
+    if args.joints:
+        print("| joint | damping | effective inertia | x = h d / I |\n|---|---:|---:|---:|")
+        for j in joints:
+            print(f"| {j['joint']} | {j['damping']:g} | {j['inertia']:.4f} kg m^2 | {j['x']:.3f} |")
+        print()
     rows = []
     print("| setting | substeps | speed | falls | motors | damping | contacts | limits | integrator | wall |")
     print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
@@ -234,14 +170,37 @@ def main(argv=None) -> int:
         p = row["power_w"]
         print(f"| {row['setting']} | {row['substeps']} | {row['forward_speed']:.2f} m/s | {row['falls']}/{row['robots']} "
               f"| {p['motors']:.0f} W | {p['damping']:.0f} W | {p['contacts']:.0f} W | {p['limits']:.0f} W "
-              f"| {p['integrator']:.0f} W "
-              f"| {row['wall_s']} s |", flush=True)
+              f"| {p['integrator']:.0f} W | {row['wall_s']} s |", flush=True)
+    print()
+    return {"checkpoint": path, "task": env_args["task"], "trained_substeps": substeps,
+            "physics": task.physics.to_dict(), "joints": joints, "rows": rows}
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("checkpoints", nargs="+", metavar="CKPT",
+                    help="checkpoint or policy files (tests/data/*.pt, a run's checkpoint.pt)")
+    ap.add_argument("--settings", nargs="+", default=DEFAULT_SETTINGS, help="the changed settings to replay")
+    ap.add_argument("--copies", type=int, default=4, help="native robots per setting")
+    ap.add_argument("--steps", type=int, default=1000, help="control steps (one episode)")
+    ap.add_argument("--seed", type=int, default=7)
+    ap.add_argument("--no-joints", dest="joints", action="store_false", help="leave out each policy's joint table")
+    ap.add_argument("--out", default=None, help="JSON file to write")
+    args = ap.parse_args(argv)
+    for path in args.checkpoints:
+        if not os.path.isfile(path):
+            ap.error(f"{path}: no such checkpoint file")
+    if args.copies < 1 or args.steps < 1:
+        ap.error(f"--copies {args.copies} and --steps {args.steps} must be positive")
+    try:
+        settings = [{"label": "own"}] + [parse_setting(t) for t in args.settings]
+    except ValueError as e:
+        ap.error(str(e))
+    policies = [sensitivity(path, settings, args) for path in args.checkpoints]
     if args.out:
         from warpgym.cli import write_json  # noqa: PLC0415
 
-        write_json(args.out, {"checkpoint": args.checkpoint, "task": env_args["task"], "trained_substeps": substeps,
-                              "physics": task.physics.to_dict(), "argv": sys.argv[1:] if argv is None else argv,
-                              "joints": joints, "rows": rows})
+        write_json(args.out, {"argv": sys.argv[1:] if argv is None else argv, "policies": policies})
     return 0
 
 

@@ -118,7 +118,9 @@ def test_step_sensitivity_names_a_bad_setting():
 
     assert parse_setting("substeps=10,damping[hip_z|ankle]=0.8") == {
         "label": "substeps=10,damping[hip_z|ankle]=0.8", "substeps": 10, "damping": [(("hip_z", "ankle"), 0.8)]}
-    for bad in ("stiffness=2", "damping=-1", "substeps=ten"):
+    assert parse_setting("finer=4,integrator=implicit") == {"label": "finer=4,integrator=implicit", "finer": 4,
+                                                            "integrator": "implicit"}
+    for bad in ("stiffness=2", "damping=-1", "substeps=ten", "integrator=verlet"):
         with pytest.raises(ValueError, match="setting"):
             parse_setting(bad)
 
@@ -143,6 +145,33 @@ def test_the_seed1_humanoid_gait_leans_on_joint_damping_and_no_constraint_pays_e
     assert damped["falls"] == 2, damped
     power = own["power_w"]
     assert power["motors"] > 1000 and power["damping"] < 0 and power["contacts"] < 0 and power["limits"] <= 0, power
+
+
+def test_the_humanoids_step_pays_its_seed1_gait_energy_and_the_ants_pays_none():
+    """docs/tasks.md: the integrator column of step_sensitivity.py, the mechanical energy gained beyond
+    the work of every force. The 5x4 seed-1 sprint takes energy from implicitfast's explicit treatment of
+    the velocity-product forces at its own step, a quarter as much at 4x finer; the Ant's default gait
+    takes none, which also checks the bookkeeping (a missed force would show up there)."""
+    import sys
+
+    sys.path.insert(0, os.path.join(os.path.dirname(DATA), "..", "benchmarks"))
+    from step_sensitivity import parse_setting, replay as native_replay
+    from agents.checkpoint import load
+    from warpgym.tasks import get_task
+
+    def power(name, setting):
+        ckpt = load(os.path.join(DATA, name), torch.device("cpu"))
+        env_args = ckpt["config"]["env_args"]
+        task = get_task(env_args["task"]).replace(physics=env_args["physics"])
+        substeps = env_args["substeps"]
+        setting = parse_setting(setting) if setting else {"label": "own"}
+        return native_replay(ckpt, task, setting, substeps, 2, 300, 7)["power_w"]
+
+    own, finer = power("humanoid_5x4_seed1_policy.pt", None), power("humanoid_5x4_seed1_policy.pt", "finer=4")
+    assert own["integrator"] > 0.05 * own["motors"], own
+    assert 0 <= finer["integrator"] < 0.3 * own["integrator"], (own, finer)
+    ant = power("ant_4x4_policy.pt", None)
+    assert abs(ant["integrator"]) < 0.01 * ant["motors"], ant
 
 
 def test_matched_damping_is_the_identity_at_its_own_step_and_lighter_at_a_finer_one():
@@ -185,3 +214,29 @@ def test_exact_damping_is_the_same_in_both_simulators_and_fades_as_the_step_shri
                                rtol=1e-5)
     assert np.all(coarse_scale > 1.0) and coarse_scale.max() > 1.5, coarse_scale  # the hip rotation: about 1.8
     assert np.all(fine_scale > 1.0) and np.all(fine_scale - 1 < 0.3 * (coarse_scale - 1)), (coarse_scale, fine_scale)
+
+
+def test_motor_back_emf_is_joint_damping_of_gear_over_no_load_speed_in_both_simulators():
+    """Physics(motor_speed=w0) adds gear / w0 to the damping of every motor's joint (a DC motor at the
+    full command stalls at w0), in warpgym and native MuJoCo alike, before exact_damping scales it."""
+    from warpgym.native import NativeRobot
+    from warpgym.sim import Sim
+    from warpgym.sim.physics import exact_damping_scale
+    import mujoco
+
+    from warpgym.tasks import get_task
+
+    task = get_task("Humanoid")
+    motors = task.physics.replace(motor_speed=25.0)
+    plain = NativeRobot(task, substeps=task.substeps)
+    native = NativeRobot(task, substeps=task.substeps, physics=motors)
+    d0 = plain.model.dof_damping[plain.dof_adr]
+    added = native.model.dof_damping[native.dof_adr] - d0
+    np.testing.assert_allclose(added, plain.torque_scale / 25.0, rtol=1e-12)  # power_scale is 1
+    assert added.max() == pytest.approx(135.0 / 25.0)  # the hip flexion's motor: gear 135
+    sim = Sim("humanoid", num_envs=2, device="cpu", substeps=task.substeps, physics=motors.replace(exact_damping=True))
+    both = NativeRobot(task, substeps=task.substeps, physics=motors.replace(exact_damping=True))
+    _, scale = exact_damping_scale(mujoco, native.model, native.model.opt.timestep)
+    np.testing.assert_allclose(both.model.dof_damping[both.dof_adr], (d0 + added) * scale, rtol=1e-9)
+    np.testing.assert_allclose(sim.solver.mjw_model.dof_damping.numpy()[1, 6:], both.model.dof_damping[both.dof_adr],
+                               rtol=1e-5)

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from warpgym.sim.physics import Physics, exact_damping_scale
+from warpgym.sim.physics import Physics, exact_damping_scale, motor_damping
 from warpgym.sim.robots import hinge_joint_names, mjcf_path, robot_spec
 from warpgym.tasks import LocomotionTask, get_task
 
@@ -97,6 +97,10 @@ def load_native_model(robot: str, timestep: float, physics: Physics | None = Non
     model.opt.ls_iterations = physics.ls_iterations
     if physics.contact_timeconst is not None:
         model.geom_solref[:, 0] = physics.contact_timeconst
+    if physics.motor_speed is not None:  # on the joint each motor drives, from MuJoCo's actuator table
+        motors = model.actuator_trntype == mujoco.mjtTrn.mjTRN_JOINT
+        dofs = model.jnt_dofadr[model.actuator_trnid[motors, 0]]
+        model.dof_damping[dofs] += motor_damping(model.actuator_gear[motors, 0], physics.motor_speed)
     if physics.exact_damping:
         dofs, scale = exact_damping_scale(mujoco, model, timestep)
         model.dof_damping[dofs] *= scale
@@ -290,6 +294,64 @@ class NativeRobot:
             dof_force = np.zeros((self.copies, len(self.dof_names))) if fresh else self.dof_forces()
         return locomotion_observation(self.task, s, self.dof_lower, self.dof_upper, dof_force, feet,
                                       np.zeros_like(actions) if fresh else actions)
+
+
+class PowerMeter:
+    """An energy account of a replay, as ``NativeRobot.on_substep``: the work of the motors, joint
+    damping, contacts and joint limits (each force times the substep's mean velocity), what the
+    mechanical energy gained beyond them (the integrator's: the step's own error, 0 in the continuous
+    model), and the robot-seconds stepped. ``watts()``: each as mean power per robot."""
+
+    def __init__(self, model):
+        mujoco = _mujoco()
+        self.mj, self.m = mujoco, model
+        self.work = {"motors": 0.0, "damping": 0.0, "contacts": 0.0, "limits": 0.0, "integrator": 0.0}
+        self.seconds = 0.0
+        c = mujoco.mjtConstraint
+        self.contact_types = (c.mjCNSTR_CONTACT_FRICTIONLESS, c.mjCNSTR_CONTACT_PYRAMIDAL, c.mjCNSTR_CONTACT_ELLIPTIC)
+        self.jac = np.zeros((0, model.nv))
+        self.scratch, self.energy = mujoco.MjData(model), {}
+
+    def mechanical_energy(self, d) -> float:
+        """Potential plus kinetic energy of ``d``'s state, computed on a scratch copy so that the
+        replay's own data (and what its observations read) is left as the step left it."""
+        s, mj = self.scratch, self.mj
+        s.qpos[:], s.qvel[:] = d.qpos, d.qvel
+        mj.mj_kinematics(self.m, s)
+        mj.mj_comPos(self.m, s)
+        mj.mj_makeM(self.m, s)
+        mj.mj_energyPos(self.m, s)
+        mj.mj_energyVel(self.m, s)
+        return float(s.energy[0] + s.energy[1])
+
+    def __call__(self, copy: int, d, before: np.ndarray) -> None:
+        m, dt, w = self.m, self.m.opt.timestep, self.work
+        v = 0.5 * (before + d.qvel)
+        self.seconds += dt
+        paid = dt * (d.qfrc_applied @ v + d.qfrc_passive @ v)
+        w["motors"] += dt * d.qfrc_applied @ v
+        w["damping"] += dt * d.qfrc_passive @ v
+        if d.nefc:
+            if self.jac.shape[0] != d.nefc:
+                self.jac = np.zeros((d.nefc, m.nv))
+            if self.mj.mj_isSparse(m):
+                self.mj.mju_sparse2dense(self.jac, d.efc_J, d.efc_J_rownnz, d.efc_J_rowadr, d.efc_J_colind)
+            else:
+                self.jac[:] = d.efc_J.reshape(d.nefc, m.nv)
+            power = d.efc_force[:d.nefc] * (self.jac @ v)
+            kind = d.efc_type[:d.nefc]
+            w["contacts"] += dt * power[np.isin(kind, self.contact_types)].sum()
+            w["limits"] += dt * power[kind == self.mj.mjtConstraint.mjCNSTR_LIMIT_JOINT].sum()
+            paid += dt * power.sum()
+        # what the state gained beyond the forces' work: the step's own error (0 in the continuous model);
+        # a copy's first substep only sets its reference
+        energy = self.mechanical_energy(d)
+        if copy in self.energy:
+            w["integrator"] += energy - self.energy[copy] - paid
+        self.energy[copy] = energy
+
+    def watts(self) -> dict:
+        return {k: round(v / self.seconds, 1) for k, v in self.work.items()}
 
 
 def locomotion_observation(task: LocomotionTask, s: dict, dof_lower, dof_upper, dof_force, foot_wrench,

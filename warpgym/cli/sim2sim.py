@@ -113,11 +113,14 @@ def play_warpgym(env, act, steps: int, seed: int) -> dict:
     return meter.result(fell)
 
 
-def replay_native(ckpt, env_args: dict, substeps: int, copies: int, steps: int, seed: int) -> dict:
+def replay_native(ckpt, env_args: dict, substeps: int, copies: int, steps: int, seed: int,
+                  energy: bool = False) -> dict:
+    """``play_native`` of a checkpoint's policy; ``energy`` adds the replay's energy account
+    (``power_w``: ``warpgym.native.PowerMeter``, mean watts per robot until its fall)."""
     import torch  # noqa: PLC0415
 
     from agents.checkpoint import policy_from_checkpoint  # noqa: PLC0415
-    from warpgym.native import NativeRobot  # noqa: PLC0415
+    from warpgym.native import NativeRobot, PowerMeter  # noqa: PLC0415
     from warpgym.tasks import get_task  # noqa: PLC0415
 
     task = get_task(env_args["task"])
@@ -126,7 +129,9 @@ def replay_native(ckpt, env_args: dict, substeps: int, copies: int, steps: int, 
     robot = NativeRobot(task, substeps=substeps, copies=copies)
     num_obs = task.observation_size(len(robot.dof_names), len(robot.feet))
     policy, normalize = policy_from_checkpoint(ckpt, num_obs, len(robot.dof_names), torch.device("cpu"))
-    return play_native(robot, lambda obs: policy.act_deterministic(normalize(obs)), steps, seed)
+    meter = robot.on_substep = PowerMeter(robot.model) if energy else None
+    row = play_native(robot, lambda obs: policy.act_deterministic(normalize(obs)), steps, seed)
+    return {**row, "power_w": meter.watts()} if meter else row
 
 
 def play_native(robot, act, steps: int, seed: int) -> dict:

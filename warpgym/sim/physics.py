@@ -26,6 +26,9 @@ class Physics:
         articulation joint velocities; None: no clamp.
     contact_timeconst: MuJoCo ``solref`` time constant of every contact [s] (stiffer when smaller);
         None keeps the MJCF's (0.02 s unless a geom sets it).
+    motor_speed: the no-load speed of every motor [rad/s]: a DC motor's back-EMF, which takes gear / motor_speed
+        of torque per rad/s away from its command (joint damping; at the full command the motor's torque
+        falls to 0 at this speed; gear at power_scale 1). None: ideal torque sources, as the MJCF's motors.
     exact_damping: scale each hinge's damping for the substep so that the implicit integrator slows
         a damped joint per step as the continuous model does (``exact_damping_scale``); False keeps
         the MJCF's damping, which implicit Euler applies more weakly the coarser the step.
@@ -37,6 +40,7 @@ class Physics:
     armature: float | None = None
     max_joint_speed: float | None = None
     contact_timeconst: float | None = None
+    motor_speed: float | None = None
     exact_damping: bool = False
 
     def __post_init__(self):
@@ -46,7 +50,8 @@ class Physics:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < 1:
                 raise ValueError(f"{name}={v!r} must be a positive integer, e.g. 8")
-        for name, example in (("armature", "0.05"), ("max_joint_speed", "40"), ("contact_timeconst", "0.02")):
+        for name, example in (("armature", "0.05"), ("max_joint_speed", "40"), ("contact_timeconst", "0.02"),
+                              ("motor_speed", "25")):
             v = getattr(self, name)
             if v is not None and not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise ValueError(f"{name}={v!r} must be a positive number (e.g. {example}) or None")
@@ -120,3 +125,11 @@ def exact_damping_scale(mujoco, model, timestep: float) -> tuple[np.ndarray, np.
     dofs, inverse = hinge_inverse_inertia(mujoco, model)
     x = timestep * model.dof_damping[dofs] * inverse
     return dofs, np.where(x > 0, np.expm1(x) / np.where(x > 0, x, 1.0), 1.0)
+
+
+def motor_damping(gears: np.ndarray, motor_speed: float | None) -> np.ndarray:
+    """Each motor's back-EMF as joint damping [N m s/rad]: gear / motor_speed (0 without a motor
+    model), so a joint driven at the full command stops accelerating at ``motor_speed``."""
+    gears = np.asarray(gears, np.float64)
+    return gears / motor_speed if motor_speed is not None else np.zeros_like(gears)
+

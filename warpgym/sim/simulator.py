@@ -20,7 +20,7 @@ from kernels.solver_load import track_solver_load
 from warpgym.compile.preload import Preload, compile_ahead
 from warpgym.sim import newton_internals
 from warpgym.sim.device import resolve_device
-from warpgym.sim.physics import Physics, exact_damping_scale
+from warpgym.sim.physics import Physics, exact_damping_scale, motor_damping
 from warpgym.sim.robots import RobotSpec, hinge_joint_names, mjcf_path, motor_gears, robot_spec
 from warpgym.sim.streams import StreamOrder
 from warpgym.sim.tensor_api import TensorAPI
@@ -147,6 +147,9 @@ class Sim(TensorAPI):
         quiet = ~int(OF.ITERATIONS | OF.LS_ITERATIONS | self._drop_bits)
         phys = self.physics
 
+        gears_by_joint = motor_gears(path)
+        hinge_gears = [gears_by_joint.get(name, 0.0) for name in hinge_joint_names(path)]
+
         def make_solver(model):
             solver = newton.solvers.SolverMuJoCo(
                 model,
@@ -161,12 +164,18 @@ class Sim(TensorAPI):
                 solref = solver.mjw_model.geom_solref.numpy()
                 solref[..., 0] = phys.contact_timeconst
                 solver.mjw_model.geom_solref.assign(solref)
-            if phys.exact_damping:  # from the solver's own CPU model, at the substep
+            if phys.motor_speed is not None or phys.exact_damping:
                 import mujoco  # noqa: PLC0415
 
-                dofs, scale = exact_damping_scale(mujoco, solver.mj_model, self.dt / self.substeps)
                 damping = solver.mjw_model.dof_damping.numpy()
-                damping[..., dofs] *= scale
+                cpu = solver.mj_model  # the solver's CPU model, kept in step: exact_damping reads it
+                extra = np.zeros(cpu.nv)
+                extra[k_api.ROOT_DOFS :] = motor_damping(hinge_gears, phys.motor_speed)
+                cpu.dof_damping[:] += extra
+                damping += extra
+                if phys.exact_damping:  # of the damping in all, at the substep
+                    dofs, scale = exact_damping_scale(mujoco, cpu, self.dt / self.substeps)
+                    damping[..., dofs] *= scale
                 solver.mjw_model.dof_damping.assign(damping)
             opt = solver.mjw_model.opt  # some kernels are specialised to these options
             opt.warn_overflow = int(opt.warn_overflow) & quiet
@@ -215,7 +224,6 @@ class Sim(TensorAPI):
 
         lower = model.joint_limit_lower.numpy()[k_api.ROOT_DOFS : self.dofs_per_env]
         upper = model.joint_limit_upper.numpy()[k_api.ROOT_DOFS : self.dofs_per_env]
-        gears_by_joint = motor_gears(path)
         self.dof_lower_np = lower.astype(np.float32)
         self.dof_upper_np = upper.astype(np.float32)
         self.default_dof_pos_np = np.clip(0.0, lower, upper).astype(np.float32)
