@@ -13,6 +13,8 @@ silent peer through the job's store and ends this process with a message instead
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import os
 import sys
 import threading
@@ -116,7 +118,7 @@ class PeerWatch:
     ``stop()`` marks this process as finished on purpose, so that its peers stop watching it."""
 
     def __init__(self, store: dist.Store, rank: int, size: int, interval: float = 1.0, timeout: float = 30.0,
-                 hint: str = "", on_lost=None):
+                 hint: str | Callable[[], str] = "", on_lost=None):
         self.store, self.rank, self.size = store, rank, size
         self.interval, self.timeout, self.hint = interval, timeout, hint
         self.on_lost = on_lost or self._exit
@@ -164,10 +166,15 @@ class PeerWatch:
             except (RuntimeError, ValueError, TimeoutError, OSError):
                 pass
 
+    def message(self, why: str) -> str:
+        """What ``_exit`` says. A callable ``hint`` is asked now, not when the watch started: the run
+        may have written its first checkpoint since (a hint fixed at the start said there was none)."""
+        hint = self.hint() if callable(self.hint) else self.hint
+        return f"warpgym worker {self.rank}: {why}; stopping this worker instead of waiting on a collective forever. {hint}"
+
     def _exit(self, why: str) -> None:
-        # os._exit: the main thread may be blocked inside a collective that will never complete.
-        # Checkpoints are written atomically, so nothing already saved is lost.
-        sys.stderr.write(f"\nwarpgym worker {self.rank}: {why}; stopping this worker instead of waiting on "
-                         f"a collective forever. {self.hint}\n")
+        # os._exit: the main thread may be blocked inside a collective that will never complete (NCCL
+        # blocks where gloo raises). Checkpoints are written atomically, so nothing already saved is lost.
+        sys.stderr.write(f"\n{self.message(why)}\n")
         sys.stderr.flush()
         os._exit(EXIT_PEER_LOST)

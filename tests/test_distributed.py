@@ -103,6 +103,20 @@ def test_a_silent_peer_is_noticed_and_a_finished_one_is_not():
     w[0].stop(finished=True)
 
 
+def test_a_lost_peer_names_the_checkpoint_written_after_the_watch_started(tmp_path):
+    """On GPUs a worker whose peer died sits in an NCCL collective until its PeerWatch ends it; the
+    resume hint it prints is asked for then, not when training started (when there was no checkpoint)."""
+    from warpgym.cli.train import resume_hint
+
+    watch = PeerWatch(dist.HashStore(), 0, 2, interval=30.0, timeout=60.0, hint=lambda: resume_hint(str(tmp_path)))
+    try:
+        assert "No checkpoint" in watch.message("worker 1 has not been heard from for 20 s")
+        (tmp_path / "checkpoint.pt").write_bytes(b"saved by iteration 3")
+        assert f"--resume {tmp_path}" in watch.message("worker 1 has not been heard from for 20 s")
+    finally:
+        watch.stop(finished=True)
+
+
 def worker_pids(agent_pid: int) -> dict[int, int]:
     """RANK -> pid of the worker processes a torchrun agent started (read from /proc)."""
     found = {}

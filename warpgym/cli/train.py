@@ -420,8 +420,8 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
     args.run_dir = run_dir
     if rank == 0:
         os.makedirs(run_dir, exist_ok=True)
-    if watch is not None:
-        watch.hint = resume_hint(run_dir)
+    if watch is not None:  # asked when a peer is lost, by which time a checkpoint may exist
+        watch.hint = lambda: resume_hint(run_dir)
     device_name = torch.cuda.get_device_name(torch.device(device)) if kind == "cuda" else "cpu"
     if not args.resume and rank == 0:
         write_json(os.path.join(run_dir, "config.json"),
