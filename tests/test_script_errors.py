@@ -40,6 +40,9 @@ CASES = [
     ("fidelity.py", ["--report", MISSING], None, f"--report {MISSING}: no fidelity.json"),
     ("exits.py", ["--report", MISSING], None, f"--report {MISSING}: no such file"),
     ("exits.py", ["--out", MISSING, "--gpus", "0"], None, "--gpus 0"),
+    ("envs_per_gpu.py", ["--out", MISSING, "--envs", "1000"], None,
+     "1000 envs: a rollout of 16000 samples (x horizon_len 16) does not split into mini-batches of 32768"),
+    ("envs_per_gpu.py", ["--out", MISSING, "--target-envs", "0"], None, "--target-envs 0: envs per GPU must be positive"),
 ]
 
 

@@ -1,0 +1,281 @@
+"""How many envs per GPU learn fastest? Throughput and memory across sizes, then wall-clock time to
+target speeds at the sizes worth training.
+
+    python benchmarks/envs_per_gpu.py --out OUT --task Ant
+    python benchmarks/envs_per_gpu.py --out OUT --task Humanoid --target-seeds 0
+    python benchmarks/envs_per_gpu.py --out OUT --task Ant --envs 16 32 --target-envs 16 32 --batch-size 64 \\
+        --throughput-seconds 20 --target-seconds 30 --device cpu                  # a smoke run on a CPU
+
+For one task, on one GPU with a warm kernel cache (the first run of the script fills it):
+  throughput  for each --envs size: the task env's env-steps/s (`warpgym bench`, median of 3 timings)
+              and a --throughput-seconds training run's steady samples/s (the median of its
+              iterations) and peak GPU memory (nvidia-smi, every 0.5 s, the training process alone);
+  learning    for each --target-envs size and --target-seeds seed: a --target-seconds training run,
+              and when its training episodes first reached each of the task's target speeds (Ant 3
+              and 8 m/s, Humanoid 2 and 6 m/s; agents.logger.first_reaching over metrics.jsonl).
+The mini-batch keeps its size (the task's batch_size), so a larger rollout makes more mini-batch
+steps per pass and every sample is learned from as at 4096 envs; --scale-batch scales batch_size
+with the envs instead (as many steps per pass as at 4096, each on a larger batch).
+
+Writes OUT/envs_per_gpu_<task>.json after every run (a crash loses nothing measured), the two tables
+as OUT/envs_per_gpu_<task>.md (envs per GPU first; time to target: the median over seeds, and how
+many seeds got there) and the figure OUT/envs_per_gpu_<task>.png (env-steps/s and samples/s, and
+time to each target, against envs). Run directories: OUT/runs/ (no checkpoints are kept).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shutil
+import statistics
+import subprocess
+import sys
+import threading
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, ROOT)
+
+TARGETS = {"Ant": (3.0, 8.0), "Humanoid": (2.0, 6.0)}  # m/s of the training episodes (issue 31)
+BASE_ENVS = 4096  # the size the tasks' batch_size was chosen for
+
+
+class PeakMemory:
+    """The most GPU memory [MiB] a process held, polled from nvidia-smi (None without one)."""
+
+    def __init__(self, pid: int, interval: float = 0.5):
+        self.pid, self.interval, self.peak = pid, interval, None
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        if shutil.which("nvidia-smi"):
+            self._thread.start()
+
+    def _run(self) -> None:
+        while not self._stop.wait(self.interval):
+            try:
+                out = subprocess.run(["nvidia-smi", "--query-compute-apps=pid,used_memory", "--format=csv,noheader,nounits"],
+                                     capture_output=True, text=True, timeout=10).stdout
+            except (OSError, subprocess.SubprocessError):
+                continue
+            for line in out.splitlines():
+                pid, _, mib = line.partition(",")
+                if pid.strip() == str(self.pid) and mib.strip().isdigit():
+                    self.peak = max(self.peak or 0, int(mib))
+
+    def stop(self) -> int | None:
+        self._stop.set()
+        if self._thread.is_alive():
+            self._thread.join()
+        return self.peak
+
+
+BATCH: dict[str, int] = {}  # --batch-size: the mini-batch at 4096 envs, instead of the task's preset
+
+
+def batch_size(task: str, num_envs: int, scale: bool) -> int:
+    from agents.config import PRESETS  # noqa: PLC0415
+
+    base = BATCH.get(task, PRESETS[task]["batch_size"])
+    return max(1, base * num_envs // BASE_ENVS) if scale else base
+
+
+def train(task: str, num_envs: int, seconds: float, seed: int, run_dir: str, args) -> dict:
+    """One training run in its own process; its summary, metrics and peak GPU memory."""
+    from agents.logger import read_metrics  # noqa: PLC0415
+
+    cmd = [sys.executable, "scripts/train.py", "--task", task, "--num-envs", str(num_envs), "--seed", str(seed),
+           "--time-limit", str(seconds), "--run-dir", run_dir, "--no-eval", "--no-plots",
+           "--batch-size", str(batch_size(task, num_envs, args.scale_batch)),
+           *(["--device", args.device] if args.device else [])]
+    os.makedirs(run_dir, exist_ok=True)
+    log = os.path.join(run_dir, "train.log")
+    with open(log, "w") as f:
+        proc = subprocess.Popen(cmd, cwd=ROOT, stdout=f, stderr=subprocess.STDOUT)
+        memory = PeakMemory(proc.pid)
+        code = proc.wait()
+    peak = memory.stop()
+    if code != 0:
+        with open(log) as f:
+            raise SystemExit(f"{' '.join(cmd)} failed ({code}):\n{f.read()[-3000:]}")
+    with open(os.path.join(run_dir, "summary.json")) as f:
+        summary = json.load(f)
+    return {"summary": summary, "rows": read_metrics(run_dir), "peak_mib": peak}
+
+
+def env_steps(task: str, num_envs: int, args) -> float | None:
+    """The task env's env-steps/s from `warpgym bench` (median of 3 timings of 100 steps)."""
+    out = os.path.join(args.out, "runs", f"bench-{task}-{num_envs}.json")
+    cmd = [sys.executable, "-m", "warpgym", "bench", "--robots", task.lower(), "--num-envs", str(num_envs),
+           "--steps", str(args.bench_steps), "--repeats", "3", "--out", out,
+           *(["--device", args.device] if args.device else [])]
+    done = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
+    if done.returncode != 0:
+        raise SystemExit(f"{' '.join(cmd)} failed ({done.returncode}):\n{(done.stdout + done.stderr)[-3000:]}")
+    with open(out) as f:
+        return json.load(f)["results"][0]["env_steps_per_s"]
+
+
+def save(path: str, doc: dict) -> None:
+    with open(path + ".tmp", "w") as f:
+        json.dump(doc, f, indent=1)
+    os.replace(path + ".tmp", path)
+
+
+def tables(doc: dict) -> str:
+    targets = doc["targets"]
+    lines = ["| envs per GPU | env-steps/s (task env) | training samples/s | training / env | peak GPU memory | "
+             "mini-batch | iterations |", "|---:|---:|---:|---:|---:|---:|---:|"]
+    for r in doc["throughput"]:
+        ratio = r["samples_per_s"] / r["env_steps_per_s"] if r["samples_per_s"] and r["env_steps_per_s"] else None
+        ratio_text = "-" if ratio is None else f"{ratio:.2f}"
+        memory = "-" if r["peak_mib"] is None else f"{r['peak_mib'] / 1024:.1f} GiB"
+        lines.append(f"| {r['num_envs']} | {fmt_m(r['env_steps_per_s'])} | {fmt_m(r['samples_per_s'])} | "
+                     f"{ratio_text} | {memory} | {r['batch_size']} | {r['iterations']} |")
+    lines += ["", "| envs per GPU | seeds | " + " | ".join(f"to {t:g} m/s (median; seeds there)" for t in targets)
+              + " | samples/s |", "|---:|---:|" + "---:|" * len(targets) + "---:|"]
+    for n, cell in learning_by_size(doc).items():
+        lines.append(f"| {n} | {cell['seeds']} | " + " | ".join(
+            f"{time_text(cell[t]['median_s'])} ({cell[t]['reached']}/{cell['seeds']})" for t in targets)
+            + f" | {fmt_m(cell['samples_per_s'])} |")
+    return "\n".join(lines)
+
+
+def time_text(seconds: float | None) -> str:
+    return "not reached" if seconds is None else f"{seconds:.0f} s"
+
+
+def fmt_m(v: float | None) -> str:
+    return "-" if v is None else f"{v / 1e6:.2f} M"
+
+
+def learning_by_size(doc: dict) -> dict:
+    """Per --target-envs size: the median time to each target over the seeds that reached it (None if
+    fewer than half did), how many did, and the runs' median samples/s."""
+    out = {}
+    for n in sorted({r["num_envs"] for r in doc["learning"]}):
+        runs = [r for r in doc["learning"] if r["num_envs"] == n]
+        cell = {"seeds": len(runs), "samples_per_s": statistics.median(r["samples_per_s"] for r in runs)}
+        for t in doc["targets"]:
+            times = [r["to_target"][str(t)]["time_s"] for r in runs if r["to_target"].get(str(t))]
+            cell[t] = {"reached": len(times),
+                       "median_s": statistics.median(times) if len(times) * 2 > len(runs) else None}
+        out[n] = cell
+    return out
+
+
+def figure(doc: dict, path: str) -> None:
+    import matplotlib  # noqa: PLC0415
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt  # noqa: PLC0415
+
+    fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4))
+    rows = doc["throughput"]
+    if rows:
+        n = [r["num_envs"] for r in rows]
+        a.plot(n, [(r["env_steps_per_s"] or 0) / 1e6 for r in rows], "o-", label="task env, env-steps/s")
+        a.plot(n, [(r["samples_per_s"] or 0) / 1e6 for r in rows], "s-", label="training, samples/s")
+    a.set(xscale="log", xlabel="envs per GPU", ylabel="millions per second", title=f"{doc['task']}: throughput")
+    a.set_xticks([r["num_envs"] for r in rows], [str(r["num_envs"]) for r in rows])
+    a.legend()
+    cells = learning_by_size(doc)
+    for t in doc["targets"]:
+        pts = [(n, c[t]["median_s"]) for n, c in cells.items() if c[t]["median_s"] is not None]
+        if pts:
+            b.plot(*zip(*pts), "o-", label=f"training episodes at {t:g} m/s")
+    b.set(xscale="log", xlabel="envs per GPU", ylabel="seconds (median over seeds)", title=f"{doc['task']}: time to target")
+    b.set_xticks(list(cells), [str(n) for n in cells])
+    if b.lines:
+        b.legend()
+    fig.suptitle(doc["device"])
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--out", required=True, help="output directory")
+    ap.add_argument("--task", default="Ant", choices=sorted(TARGETS))
+    ap.add_argument("--envs", type=int, nargs="*", default=[2048, 4096, 8192, 16384, 32768],
+                    help="sizes for the throughput table (none: skip it)")
+    ap.add_argument("--throughput-seconds", type=float, default=45.0, help="training time per throughput run")
+    ap.add_argument("--bench-steps", type=int, default=100, help="env steps per `warpgym bench` timing")
+    ap.add_argument("--target-envs", type=int, nargs="*", default=[4096, 8192, 16384],
+                    help="sizes for the time-to-target table (none: skip it)")
+    ap.add_argument("--target-seeds", type=int, nargs="+", default=None,
+                    help="seeds per size (default: 0 1 2 for the Ant, 0 for the Humanoid)")
+    ap.add_argument("--target-seconds", type=float, default=None,
+                    help="training time per learning run (default: Ant 180, Humanoid 240)")
+    ap.add_argument("--scale-batch", action="store_true", help="scale batch_size with the envs (see above)")
+    ap.add_argument("--batch-size", type=int, default=None,
+                    help="mini-batch samples (default: the task's preset, 32768; small for a CPU smoke run)")
+    ap.add_argument("--device", default=None)
+    args = ap.parse_args(argv)
+    seeds = args.target_seeds if args.target_seeds is not None else ([0, 1, 2] if args.task == "Ant" else [0])
+    seconds = args.target_seconds or (180.0 if args.task == "Ant" else 240.0)
+    for flag, sizes in (("--envs", args.envs), ("--target-envs", args.target_envs)):
+        bad = [n for n in sizes if n < 1]
+        if bad:
+            ap.error(f"{flag} {bad[0]}: envs per GPU must be positive")
+    for flag, v in (("--throughput-seconds", args.throughput_seconds), ("--target-seconds", seconds),
+                    ("--bench-steps", args.bench_steps)):
+        if not v > 0:
+            ap.error(f"{flag} {v}: must be positive")
+    from agents.config import PRESETS  # noqa: PLC0415
+
+    if args.batch_size is not None:
+        if args.batch_size < 1:
+            ap.error(f"--batch-size {args.batch_size}: must be positive")
+        BATCH[args.task] = args.batch_size
+    cfg = PRESETS[args.task]
+    for n in sorted(set(args.envs) | set(args.target_envs)):
+        samples, size = n * cfg["horizon_len"], batch_size(args.task, n, args.scale_batch)
+        if size > samples or samples % size:
+            ap.error(f"{n} envs: a rollout of {samples} samples (x horizon_len {cfg['horizon_len']}) does not split into "
+                     f"mini-batches of {size}; pick envs per GPU that are multiples of "
+                     f"{max(1, size // cfg['horizon_len'])}")
+
+    import torch  # noqa: PLC0415
+
+    from agents.logger import first_reaching  # noqa: PLC0415
+    from warpgym.sim.device import resolve_device  # noqa: PLC0415
+
+    device = resolve_device(args.device)
+    name = torch.cuda.get_device_name(torch.device(device)) if device.startswith("cuda") else "cpu"
+    os.makedirs(os.path.join(args.out, "runs"), exist_ok=True)
+    path = os.path.join(args.out, f"envs_per_gpu_{args.task}.json")
+    doc = {"task": args.task, "device": name, "targets": list(TARGETS[args.task]), "scale_batch": args.scale_batch,
+           "argv": sys.argv[1:] if argv is None else argv, "throughput": [], "learning": []}
+    for n in args.envs:
+        steps = env_steps(args.task, n, args)
+        run = train(args.task, n, args.throughput_seconds, 0, os.path.join(args.out, "runs", f"{args.task}-{n}-tp"), args)
+        s = run["summary"]
+        doc["throughput"].append({"num_envs": n, "env_steps_per_s": steps, "samples_per_s": s.get("steady_samples_per_s_median"),
+                                  "peak_mib": run["peak_mib"], "batch_size": batch_size(args.task, n, args.scale_batch),
+                                  "iterations": s.get("iterations"), "phase_s": s.get("steady_phase_s_median")})
+        save(path, doc)
+        print(f"{args.task} x {n}: {fmt_m(steps)} env-steps/s, {fmt_m(s.get('steady_samples_per_s_median'))} samples/s, "
+              f"peak {run['peak_mib']} MiB", flush=True)
+    for n in args.target_envs:
+        for seed in seeds:
+            run = train(args.task, n, seconds, seed, os.path.join(args.out, "runs", f"{args.task}-{n}-s{seed}"), args)
+            hits = {str(t): first_reaching(run["rows"], "speed", t) for t in TARGETS[args.task]}
+            doc["learning"].append({"num_envs": n, "seed": seed, "seconds": seconds, "to_target": hits,
+                                    "samples_per_s": run["summary"].get("steady_samples_per_s_median"),
+                                    "final": run["summary"].get("final")})
+            save(path, doc)
+            print(f"{args.task} x {n} seed {seed}: " + ", ".join(
+                f"{t} m/s at {'-' if h is None else round(h['time_s'], 1)} s" for t, h in hits.items()), flush=True)
+    text = tables(doc)
+    with open(os.path.join(args.out, f"envs_per_gpu_{args.task}.md"), "w") as f:
+        f.write(f"{args.task}, {name}\n\n{text}\n")
+    figure(doc, os.path.join(args.out, f"envs_per_gpu_{args.task}.png"))
+    print(text)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

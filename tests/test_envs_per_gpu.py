@@ -1,0 +1,33 @@
+"""benchmarks/envs_per_gpu.py: its mini-batch shaping and how it reads time to target over seeds."""
+
+import os
+import sys
+
+import pytest
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "benchmarks"))
+import envs_per_gpu as epg  # noqa: E402
+
+
+def run(n, seed, three=None, eight=None):
+    hit = {"3.0": None if three is None else {"time_s": three, "samples": 1}, "8.0": None if eight is None else
+           {"time_s": eight, "samples": 1}}
+    return {"num_envs": n, "seed": seed, "to_target": hit, "samples_per_s": 1e6 * n / 4096}
+
+
+def test_time_to_target_is_the_median_of_the_seeds_that_got_there_when_most_did():
+    doc = {"task": "Ant", "targets": [3.0, 8.0], "throughput": [], "learning": [
+        run(4096, 0, 40.0, 120.0), run(4096, 1, 50.0, None), run(4096, 2, 70.0, 150.0),
+        run(8192, 0, 30.0, None), run(8192, 1, 35.0, None), run(8192, 2, 90.0, 100.0)]}
+    cells = epg.learning_by_size(doc)
+    assert cells[4096][3.0] == {"reached": 3, "median_s": 50.0}
+    assert cells[4096][8.0] == {"reached": 2, "median_s": 135.0}  # two of three seeds: the median of those two
+    assert cells[8192][8.0] == {"reached": 1, "median_s": None}  # one of three is not a typical run
+    table = epg.tables(doc)
+    assert "| 8192 | 3 | 35 s (3/3) | not reached (1/3) | 2.00 M |" in table
+
+
+@pytest.mark.parametrize(("envs", "scale", "expected"), [(4096, False, 32768), (16384, False, 32768),
+                                                          (16384, True, 131072), (2048, True, 16384)])
+def test_the_mini_batch_keeps_its_size_unless_scaled_with_the_envs(envs, scale, expected):
+    assert epg.batch_size("Ant", envs, scale) == expected
