@@ -328,9 +328,10 @@ class PowerMeter:
         m, dt, w = self.m, self.m.opt.timestep, self.work
         v = 0.5 * (before + d.qvel)
         self.seconds += dt
-        paid = dt * (d.qfrc_applied @ v + d.qfrc_passive @ v)
-        w["motors"] += dt * d.qfrc_applied @ v
-        w["damping"] += dt * d.qfrc_passive @ v
+        motors, damping = dt * d.qfrc_applied @ v, dt * d.qfrc_passive @ v
+        w["motors"] += motors
+        w["damping"] += damping
+        paid = motors + damping
         if d.nefc:
             if self.jac.shape[0] != d.nefc:
                 self.jac = np.zeros((d.nefc, m.nv))

@@ -26,9 +26,10 @@ class Physics:
         articulation joint velocities; None: no clamp.
     contact_timeconst: MuJoCo ``solref`` time constant of every contact [s] (stiffer when smaller);
         None keeps the MJCF's (0.02 s unless a geom sets it).
-    motor_speed: the no-load speed of every motor [rad/s]: a DC motor's back-EMF, which takes gear / motor_speed
-        of torque per rad/s away from its command (joint damping; at the full command the motor's torque
-        falls to 0 at this speed; gear at power_scale 1). None: ideal torque sources, as the MJCF's motors.
+    motor_speed: the no-load speed of every motor [rad/s]: a DC motor's back-EMF, which takes
+        gear / motor_speed of torque per rad/s from its command (joint damping: at the full command the
+        torque falls to 0 at this speed; the gear at power_scale 1). None: ideal torque sources, as the
+        MJCF's motors.
     exact_damping: scale each hinge's damping for the substep so that the implicit integrator slows
         a damped joint per step as the continuous model does (``exact_damping_scale``); False keeps
         the MJCF's damping, which implicit Euler applies more weakly the coarser the step.
@@ -132,4 +133,3 @@ def motor_damping(gears: np.ndarray, motor_speed: float | None) -> np.ndarray:
     model), so a joint driven at the full command stops accelerating at ``motor_speed``."""
     gears = np.asarray(gears, np.float64)
     return gears / motor_speed if motor_speed is not None else np.zeros_like(gears)
-
