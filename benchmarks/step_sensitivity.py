@@ -25,6 +25,7 @@ the continuous model; positive: the step pays energy in). Before the rows, each 
 the policy's step (how far implicit Euler's damping falls short). CPU only; a few seconds per setting
 for 4 robots and 1000 steps.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -41,7 +42,8 @@ DEFAULT_SETTINGS = ["substeps=6", "substeps=7", "substeps=8", "substeps=10", "fr
                     "damping[abdomen|hip_x|hip_y]=1.3", "damping[hip_z]=1.3", "damping[ankle]=1.3",
                     "damping[shoulder|elbow]=1.3", "substeps=10,damping=0.8", "substeps=10,match_damping=5",
                     "substeps=20,match_damping=5"]
-SETTING = re.compile(r"^(substeps|friction|mass|damping|match_damping|timeconst|iterations|joint_speed|finer)(\[[\w|]+\])?=([0-9.eE+-]+)$")
+NAMES = "substeps|finer|friction|mass|damping|match_damping|timeconst|iterations|joint_speed"
+SETTING = re.compile(rf"^({NAMES})(\[[\w|]+\])?=([0-9.eE+-]+)$")
 NATIVE_INTEGRATORS = ("euler", "implicitfast", "implicit", "rk4")
 
 
@@ -56,8 +58,8 @@ def parse_setting(text: str) -> dict:
             continue
         m = SETTING.match(part.strip())
         if not m:
-            raise ValueError(f"setting {part!r} in {text!r}: expected substeps=N, friction=F, mass=F, damping=F, "
-                             "damping[name|name]=F or match_damping=S")
+            raise ValueError(f"setting {part!r} in {text!r}: expected NAME=VALUE with NAME one of "
+                             f"{NAMES.replace('|', ', ')}, damping[name|name]=F, or integrator=NAME")
         name, joints, value = m.group(1), m.group(2), float(m.group(3))
         if not value > 0:
             raise ValueError(f"setting {part!r}: the value must be positive")
