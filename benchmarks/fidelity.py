@@ -80,7 +80,7 @@ CANDIDATES: dict[str, dict] = {
                                                          "ls_iterations": 8, "armature": None}},
     "humanoid-2x8-implicit": {"substeps": 2, "physics": {"integrator": "implicit", "solver_iterations": 8,
                                                          "ls_iterations": 8, "armature": None}},
-    # the seed-1 gaits swing hinges at 75-105 rad/s, half a radian per 1/180 s substep, where the step's error pays
+    # the seed-1 gaits swing hinges at 72-105 rad/s, half a radian per 1/180 s substep, where the step's error pays
     # kilowatts in: a motor's top speed, as PhysX clamps articulation joint speeds (25 rad/s: a sprinter's knee)
     "humanoid-3x8-speed25": {"substeps": 3, "physics": {"solver_iterations": 8, "ls_iterations": 8, "armature": None,
                                                         "max_joint_speed": 25.0}},
