@@ -13,12 +13,11 @@ silent peer through the job's store and ends this process with a message instead
 
 from __future__ import annotations
 
-from collections.abc import Callable
-
 import os
 import sys
 import threading
 import time
+from collections.abc import Callable
 from datetime import timedelta
 
 import torch
@@ -170,7 +169,8 @@ class PeerWatch:
         """What ``_exit`` says. A callable ``hint`` is asked now, not when the watch started: the run
         may have written its first checkpoint since (a hint fixed at the start said there was none)."""
         hint = self.hint() if callable(self.hint) else self.hint
-        return f"warpgym worker {self.rank}: {why}; stopping this worker instead of waiting on a collective forever. {hint}"
+        return (f"warpgym worker {self.rank}: {why}; stopping this worker instead of waiting on a collective "
+                f"forever. {hint}")
 
     def _exit(self, why: str) -> None:
         # os._exit: the main thread may be blocked inside a collective that will never complete (NCCL

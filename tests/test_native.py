@@ -38,6 +38,7 @@ def test_native_mujoco_observes_and_steps_like_warpgym(task, integrator):
         _, _, terminated, truncated, _ = env.step(zeros)
         assert not (terminated | truncated).any()
     native = NativeRobot(env.task, copies=env.num_envs)
+    assert native.model.opt.integrator == int(env.sim.solver.mjw_model.opt.integrator)  # both step alike
     assert native.dof_names == env.sim.dof_names
     state = warpgym_state(env.sim)
     native.set_state(**state)
