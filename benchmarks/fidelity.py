@@ -88,6 +88,11 @@ CANDIDATES: dict[str, dict] = {
     # 25 rad/s at the full command; momentum-conserving where the clamp above is not (it paid a 35 m/s gait 13 kW)
     "humanoid-3x8-motor25": {"substeps": 3, "physics": {"solver_iterations": 8, "ls_iterations": 8, "armature": None,
                                                         "motor_speed": 25.0, "exact_damping": True}},
+    # should 25 rad/s still leave a sprint the step pays for: a slower motor, or the same motor at 1/240 s
+    "humanoid-3x8-motor15": {"substeps": 3, "physics": {"solver_iterations": 8, "ls_iterations": 8, "armature": None,
+                                                        "motor_speed": 15.0, "exact_damping": True}},
+    "humanoid-4x4-motor25": {"substeps": 4, "physics": {"solver_iterations": 4, "ls_iterations": 4, "armature": None,
+                                                        "motor_speed": 25.0, "exact_damping": True}},
     # the Ant's armature at 8 iterations or 4 substeps: for a ratio that falls with training (0.91 at 10 minutes)
     "ant-3x8": {"substeps": 3, "physics": {"solver_iterations": 8, "ls_iterations": 8, "armature": 0.1}},
     "ant-4x4": {"substeps": 4, "physics": {"solver_iterations": 4, "ls_iterations": 4, "armature": 0.1}},
