@@ -48,6 +48,9 @@ class Config:
     reward_scale: float = 1.0
     normalize_obs: bool = True
     tf32: bool = True  # on CUDA, let matmuls use TF32 tensor cores
+    # collect the next rollout while PPO learns from the last one, on two CUDA streams, each rollout
+    # learnt one update after the weights that collected it (agents.overlap)
+    overlap: bool = False
     obs_clip: float = 5.0
 
     seed: int = 0
@@ -93,6 +96,9 @@ class Config:
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
                 raise ValueError(f"{name}={v!r} must be a non-negative number")
+        for name in ("overlap", "normalize_obs", "tf32", "keep_checkpoints"):
+            if not isinstance(getattr(self, name), bool):
+                raise ValueError(f"{name}={getattr(self, name)!r} must be True or False")
         if self.activation not in ("elu", "relu", "tanh"):
             raise ValueError(f"activation={self.activation!r}: choose 'elu', 'relu' or 'tanh'")
         marks = tuple(self.save_at)

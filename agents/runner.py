@@ -24,6 +24,7 @@ from agents.distributed import Workers
 from agents.evaluate import evaluate
 from agents.logger import MetricsLogger
 from agents.normalizer import RunningMeanStd
+from agents.overlap import RolloutPipeline
 from agents.ppo import PPO
 from agents.profiling import PhaseTimer
 from agents.protocol import env_spec
@@ -53,6 +54,7 @@ class OnPolicyRunner:
         self.ppo = PPO(self.policy, cfg, self.device, cuda_graph=cuda_graph, workers=self.workers)
         self.storage = RolloutStorage(cfg.horizon_len, spec.num_envs, spec.num_obs, spec.num_actions, self.device)
         self.episodes = EpisodeTracker(cfg.horizon_len, spec.num_envs, self.device)
+        self.pipeline = RolloutPipeline(self.policy, self.storage, self.device) if cfg.overlap else None
         main = self.workers.is_main
         self.run_dir = run_dir if main else None
         self.logger = MetricsLogger(run_dir) if run_dir and main else None
@@ -94,6 +96,11 @@ class OnPolicyRunner:
     def elapsed(self) -> float:
         return self.elapsed_before + time.time() - self.start_time
 
+    @property
+    def acting_policy(self) -> ActorCritic:
+        """The weights rollouts are drawn with: the policy, or its behaviour copy (Config.overlap)."""
+        return self.policy if self.pipeline is None else self.pipeline.behaviour
+
     @torch.no_grad()
     def collect(self) -> None:
         """One rollout of ``horizon_len`` steps, then the observation normaliser learns from it.
@@ -107,7 +114,7 @@ class OnPolicyRunner:
             self.normalizer.update(obs, self.workers)
         timer = self.timer
         timer.start()
-        self._old_log_std = self.policy.log_std.detach().clone()  # the noise the rollout is drawn with
+        self._old_log_std = self.acting_policy.log_std.detach().clone()  # the noise the rollout is drawn with
         if self._rollout_graph is not None:
             self._rollout_graph.replay()
             timer.lap("collect: rollout graph (policy, env step, storage, GAE)")
@@ -122,10 +129,13 @@ class OnPolicyRunner:
             self._rollout(timer)
             self._rollouts_eager += 1
         self.clock.mark("collect")
+        self._learn_normalizer()
+
+    def _learn_normalizer(self) -> None:
         if self.cfg.normalize_obs:
             self.normalizer.update(self.storage.raw_obs.flatten(0, 1), self.workers)
         self.clock.mark("normalizer")
-        timer.lap("normaliser update")
+        self.timer.lap("normaliser update")
 
     def _capture_rollout(self) -> torch.cuda.CUDAGraph | None:
         graph = torch.cuda.CUDAGraph()
@@ -142,7 +152,7 @@ class OnPolicyRunner:
     def _rollout(self, timer: PhaseTimer) -> None:
         """The rollout's device work. The normaliser is frozen during it; truncated episodes are
         bootstrapped from the value of their final observation in one batched pass at the end."""
-        cfg, s, env, policy = self.cfg, self.storage, self.env, self.policy
+        cfg, s, env, policy = self.cfg, self.storage, self.env, self.acting_policy
         s.raw_obs[0].copy_(self.last_raw_obs)
         for t in range(cfg.horizon_len):
             obs = self.normalize(s.raw_obs[t])
@@ -175,7 +185,41 @@ class OnPolicyRunner:
         timer.lap("bootstrap, GAE")
 
     def update(self) -> dict:
-        return self.ppo.update(self.storage, self._old_log_std, self.num_minibatches)
+        if self.pipeline is None:
+            return self.ppo.update(self.storage, self._old_log_std, self.num_minibatches)
+        return self.ppo.update(self.pipeline.trained, self.pipeline.trained_log_std, self.num_minibatches)
+
+    def iterate(self) -> dict:
+        """Collect a rollout and update the policy: one after the other, or with ``Config.overlap``
+        rollout k collected by the weights of update k-1 while PPO learns from rollout k-1."""
+        pipe = self.pipeline
+        if pipe is None:
+            self.collect()
+            return self.update()
+        if not pipe.pending:  # at start or resume: a first rollout, for the update to learn from
+            pipe.sync(self.policy)
+            self.collect()
+            pipe.hand_over(self.storage, self._old_log_std)
+            self.samples += self._per_iter
+        pipe.sync(self.policy)
+        side_by_side = pipe.stream is not None and self._rollout_graph is not None and not self.timer.enabled
+        if side_by_side:
+            main = torch.cuda.current_stream(self.device)
+            self._old_log_std = pipe.behaviour.log_std.detach().clone()
+            pipe.stream.wait_stream(main)  # the behaviour weights and the normaliser are written
+            with torch.cuda.stream(pipe.stream):
+                self._rollout_graph.replay()
+            stats = self.update()
+            self.clock.mark("update")
+            main.wait_stream(pipe.stream)
+            self.clock.mark("collect")  # the part of the rollout the update did not hide
+            with torch.no_grad():
+                self._learn_normalizer()
+        else:
+            self.collect()
+            stats = self.update()
+        pipe.hand_over(self.storage, self._old_log_std)
+        return stats
 
     # ------------------------------------------------------------------ loop
     def learn(self, max_iterations: int | None = None, total_steps: int | None = None,
@@ -197,8 +241,7 @@ class OnPolicyRunner:
             while not stop and (last_iter is None or self.iteration < last_iter):
                 finished = False
                 self.clock.mark("idle")  # the GPU waited this long for the host to queue the iteration
-                self.collect()
-                stats = self.update()
+                stats = self.iterate()
                 self.clock.mark("update")
                 self.timer.lap("PPO update")
                 self.iteration += 1
@@ -368,6 +411,8 @@ class OnPolicyRunner:
             self.iteration, self.samples = ckpt["iteration"], ckpt["samples"]
             self.elapsed_before = ckpt["elapsed_s"]
             self._marks_after = self.elapsed_before
+            if self.pipeline is not None:  # its rollout was not saved: the next iteration collects one first
+                self.pipeline.pending = False
             self.start_time = time.time()
             set_rng_state(ckpt["rng"], self.device)
             if not self.workers.is_main:

@@ -33,7 +33,6 @@ import statistics
 import subprocess
 import sys
 import threading
-import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
@@ -81,14 +80,15 @@ def batch_size(task: str, num_envs: int, scale: bool) -> int:
     return max(1, base * num_envs // BASE_ENVS) if scale else base
 
 
-def train(task: str, num_envs: int, seconds: float, seed: int, run_dir: str, args) -> dict:
-    """One training run in its own process; its summary, metrics and peak GPU memory."""
+def train(task: str, num_envs: int, seconds: float, seed: int, run_dir: str, args, extra=()) -> dict:
+    """One training run in its own process (``extra``: more `warpgym train` flags); its summary,
+    metrics and peak GPU memory."""
     from agents.logger import read_metrics  # noqa: PLC0415
 
     cmd = [sys.executable, "scripts/train.py", "--task", task, "--num-envs", str(num_envs), "--seed", str(seed),
            "--time-limit", str(seconds), "--run-dir", run_dir, "--no-eval", "--no-plots",
            "--batch-size", str(batch_size(task, num_envs, args.scale_batch)),
-           *(["--device", args.device] if args.device else [])]
+           *(["--device", args.device] if args.device else []), *extra]
     os.makedirs(run_dir, exist_ok=True)
     log = os.path.join(run_dir, "train.log")
     with open(log, "w") as f:
@@ -150,12 +150,12 @@ def fmt_m(v: float | None) -> str:
     return "-" if v is None else f"{v / 1e6:.2f} M"
 
 
-def learning_by_size(doc: dict) -> dict:
-    """Per --target-envs size: the median time to each target over the seeds that reached it (None if
-    fewer than half did), how many did, and the runs' median samples/s."""
+def learning_by_size(doc: dict, key: str = "num_envs") -> dict:
+    """Per --target-envs size (or other ``key`` of the runs): the median time to each target over the
+    seeds that reached it (None if fewer than half did), how many did, and the runs' median samples/s."""
     out = {}
-    for n in sorted({r["num_envs"] for r in doc["learning"]}):
-        runs = [r for r in doc["learning"] if r["num_envs"] == n]
+    for n in sorted({r[key] for r in doc["learning"]}):
+        runs = [r for r in doc["learning"] if r[key] == n]
         cell = {"seeds": len(runs), "samples_per_s": statistics.median(r["samples_per_s"] for r in runs)}
         for t in doc["targets"]:
             times = [r["to_target"][str(t)]["time_s"] for r in runs if r["to_target"].get(str(t))]

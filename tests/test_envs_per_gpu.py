@@ -31,3 +31,23 @@ def test_time_to_target_is_the_median_of_the_seeds_that_got_there_when_most_did(
                                                           (16384, True, 131072), (2048, True, 16384)])
 def test_the_mini_batch_keeps_its_size_unless_scaled_with_the_envs(envs, scale, expected):
     assert epg.batch_size("Ant", envs, scale) == expected
+
+
+def test_the_overlap_benchmark_reads_ratios_phases_and_time_to_target_per_mode():
+    import overlap
+
+    def run(mode, seed, three, eight):
+        hit = {"3.0": three and {"time_s": three, "samples": 1}, "8.0": eight and {"time_s": eight, "samples": 1}}
+        return {"mode": mode, "seed": seed, "to_target": hit, "samples_per_s": 1.2e6}
+
+    doc = {"task": "Ant", "device": "GPU", "num_envs": 4096, "targets": [3.0, 8.0], "env_steps_per_s": 1.6e6,
+           "throughput": [{"mode": "sequential", "samples_per_s": 1.2e6,
+                           "phase_s": {"iteration_s": 0.05, "phase/collect_s": 0.04, "phase/update_s": 0.01}},
+                          {"mode": "overlap", "samples_per_s": 1.44e6, "phase_s": None}],
+           "learning": [run("sequential", 0, 40.0, 120.0), run("sequential", 1, 60.0, None),
+                        run("sequential", 2, 50.0, None), run("overlap", 0, 30.0, 100.0)]}
+    table = overlap.tables(doc)
+    assert "| sequential | 1.20 M | 0.75 | 50.0 ms | 40.0 ms | 10.0 ms | - |" in table
+    assert "| overlap | 1.44 M | 0.90 | - | - | - | - |" in table
+    assert "| sequential | 3 | 50 s (3/3) | not reached (1/3) | 1.20 M |" in table
+    assert "| overlap | 1 | 30 s (1/1) | 100 s (1/1) | 1.20 M |" in table

@@ -12,17 +12,15 @@ reward_vs_time.png and reward_vs_samples.png.
 
 from __future__ import annotations
 
-import argparse
 import json
-import math
 import os
 import sys
 import time
 from dataclasses import fields
 
 from agents import Config, OnPolicyRunner
-from agents.config import PRESETS
-from warpgym.cli import process_start_time, write_json
+from warpgym.cli import process_start_time, train_args, write_json
+from warpgym.cli.train_args import TASK_NAMES, with_flag_names
 
 # The wall-clock axis starts when the process did: the interpreter, imports and kernel compiles count.
 PROCESS_START = process_start_time()
@@ -31,105 +29,10 @@ PROCESS_START = process_start_time()
 # episodes go from drifting backwards to about 0.8 m/s: enough to see it learn.
 DEFAULT_ITERATIONS = {"cuda": {"Ant": 500, "Humanoid": 1000}, "cpu": {"Ant": 200, "Humanoid": 20}}
 DEFAULT_ENVS = {"cuda": 4096, "cpu": 64}
-TASK_NAMES = {t.lower(): t for t in PRESETS}
 
 
 def parse_args(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--task", default=None, help="Ant (default) or Humanoid")
-    ap.add_argument("--num-envs", type=int, default=None, help="default: 4096 on a GPU, 64 on the CPU")
-    ap.add_argument("--device", default=None, help="default: cuda:0 when present, else cpu")
-    ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--max-iterations", type=int, default=None)
-    ap.add_argument("--total-steps", type=int, default=None, help="stop after this many samples")
-    ap.add_argument("--time-limit", type=float, default=None, help="stop after this many seconds since start")
-    ap.add_argument("--run-dir", default=None, help="default: runs/<Task>-<date>-<time>")
-    ap.add_argument("--resume", default=None, metavar="RUN_DIR", help="continue the run saved in RUN_DIR")
-    ap.add_argument("--eval-gap", type=float, default=None, help="seconds between deterministic evaluations")
-    ap.add_argument("--eval-envs", type=int, default=None, help="envs per evaluation (the seed's eval env: 1)")
-    ap.add_argument("--no-eval", action="store_true")
-    ap.add_argument("--save-gap", type=int, default=None, help="iterations between checkpoints")
-    ap.add_argument("--horizon-len", type=int, default=None)
-    ap.add_argument("--batch-size", type=int, default=None)
-    ap.add_argument("--repeat-times", type=int, default=None)
-    ap.add_argument("--learning-rate", type=float, default=None)
-    ap.add_argument("--episode-length", type=int, default=None, help="steps per episode (task default: 1000)")
-    ap.add_argument("--substeps", type=int, default=None, help="physics substeps per 1/60 s step (default: the task's)")
-    ap.add_argument("--physics", action="append", default=[], metavar="NAME=VALUE",
-                    help="a physics setting (warpgym/sim/physics.py), e.g. --physics armature=0.05; repeat for more")
-    ap.add_argument("--save-at", type=float, nargs="+", default=None, metavar="SECONDS",
-                    help="also keep checkpoint-<iteration>.pt at the first iteration after each of these "
-                         "wall-clock seconds since start, e.g. --save-at 60 120 (summary.json lists them)")
-    ap.add_argument("--keep-checkpoints", action="store_true",
-                    help="keep checkpoint-<iteration>.pt at every save, not only the latest checkpoint.pt")
-    ap.add_argument("--video", action="store_true",
-                    help="record a clip of the evaluation episode into RUN_DIR/videos and TensorBoard "
-                         "(drawn by a separate process; needs warpgym[video])")
-    ap.add_argument("--video-every", type=int, default=1, metavar="N", help="record every N-th evaluation (default 1)")
-    ap.add_argument("--video-length", type=int, default=300, metavar="STEPS",
-                    help="control steps per clip (default 300: 5 s)")
-    ap.add_argument("--no-plots", action="store_true")
-    ap.add_argument("--no-cuda-graph", action="store_true",
-                    help="run everything eagerly: no CUDA graph of the rollout or of the PPO update")
-    ap.add_argument("--no-rollout-graph", action="store_true",
-                    help="launch each rollout step from Python instead of replaying one captured rollout")
-    ap.add_argument("--no-mathdx", action="store_true",
-                    help="compile Warp's tile Cholesky without libmathdx: a faster cold start (warpgym.compile.preload)")
-    ap.add_argument("--profile", action="store_true",
-                    help="time each phase of an iteration (synchronises the GPU between phases: slower)")
-    args = ap.parse_args(argv)
-    check_values(ap, args)
-    from warpgym.sim.physics import Physics, parse_setting  # noqa: PLC0415
-
-    try:
-        args.physics = dict(parse_setting(text) for text in args.physics)
-        Physics.from_dict(args.physics)
-    except ValueError as e:
-        ap.error(f"--physics: {e}")
-    if args.video:
-        check_video_args(ap, args)
-    return args
-
-
-# flag -> a value that works, quoted in the error; every flag is checked before anything is built
-POSITIVE = {"num_envs": 4096, "max_iterations": 500, "total_steps": 100_000_000, "eval_envs": 64, "save_gap": 50,
-            "horizon_len": 16, "batch_size": 32768, "repeat_times": 4, "episode_length": 1000, "substeps": 2,
-            "time_limit": 300, "learning_rate": 3e-4}
-NON_NEGATIVE = {"eval_gap": 30, "seed": 0}
-
-
-def flag(name: str) -> str:
-    return "--" + name.replace("_", "-")
-
-
-def check_values(ap, args) -> None:
-    """Impossible numbers and unknown tasks fail here, naming the flag and a value that works."""
-    for name, example in {**POSITIVE, **NON_NEGATIVE}.items():
-        v = getattr(args, name)
-        if v is None:
-            continue
-        low_ok = v > 0 if name in POSITIVE else v >= 0
-        if not (low_ok and math.isfinite(v)):
-            need = "a positive" if name in POSITIVE else "a non-negative"
-            ap.error(f"{flag(name)} {v}: must be {need} number, e.g. {flag(name)} {example}")
-    for v in args.save_at or ():
-        if not (v >= 0 and math.isfinite(v)):
-            ap.error(f"--save-at {v}: must be non-negative seconds since start, e.g. --save-at 60 120")
-    if args.task is not None and args.task.lower() not in TASK_NAMES:
-        ap.error(f"--task {args.task!r}: choose one of {sorted(TASK_NAMES.values())}")
-    if args.resume is not None:
-        given = [f for f in ("num_envs", "horizon_len", "episode_length", "substeps") if getattr(args, f) is not None]
-        if given or args.physics:
-            names = ", ".join([flag(f) for f in given] + (["--physics"] if args.physics else []))
-            ap.error(f"{names}: a resumed run keeps the envs it was started with; drop {names} "
-                     "or start a new run with --run-dir")
-
-
-def with_flag_names(message: str) -> str:
-    """A config error as the user wrote it: ``batch_size=8`` becomes ``--batch-size 8``."""
-    for name in sorted({*POSITIVE, *NON_NEGATIVE}, key=len, reverse=True):
-        message = message.replace(f"{name}=", f"{flag(name)} ").replace(f"lower {name}", f"lower {flag(name)}")
-    return message
+    return train_args.parse_args(argv, __doc__)
 
 
 def check_resume(run_dir: str, saved: dict, task_flag: str | None) -> bool:
@@ -158,20 +61,6 @@ def check_resume(run_dir: str, saved: dict, task_flag: str | None) -> bool:
     return True
 
 
-def check_video_args(ap, args) -> None:
-    """--video fails here, before any model is built, if it cannot work."""
-    if args.no_eval:
-        ap.error("--video records the evaluation episode: drop --no-eval")
-    for flag, value in (("--video-every", args.video_every), ("--video-length", args.video_length)):
-        if value < 1:
-            ap.error(f"{flag} {value}: must be a positive integer")
-    from warpgym.media.video import why_no_video  # noqa: PLC0415
-
-    reason = why_no_video(mp4=True, gif=True)  # an MP4 per clip, a GIF of it in TensorBoard
-    if reason:
-        ap.error(f"--video: {reason}")
-
-
 def build_config(args, task: str, num_envs: int, device: str, saved: dict | None = None) -> Config:
     """The task's preset, or the saved config of the run being resumed, then the flags given."""
     if saved is not None:
@@ -183,6 +72,7 @@ def build_config(args, task: str, num_envs: int, device: str, saved: dict | None
         "horizon_len": args.horizon_len, "repeat_times": args.repeat_times, "learning_rate": args.learning_rate,
         "save_gap": args.save_gap, "eval_gap": args.eval_gap, "eval_envs": args.eval_envs,
         "batch_size": args.batch_size, "keep_checkpoints": args.keep_checkpoints or None,
+        "overlap": args.overlap or None,
         "save_at": tuple(args.save_at) if args.save_at else None,
     }.items() if v is not None}
     if saved is None and "eval_envs" not in changes and device == "cpu":

@@ -1,0 +1,113 @@
+"""Does collecting the next rollout during the PPO update pay? Sequential against `--overlap`, one GPU.
+
+    python benchmarks/overlap.py --out OUT --task Ant
+    python benchmarks/overlap.py --out OUT --task Humanoid --seeds 0 1 2 --seconds 240
+    python benchmarks/overlap.py --out OUT --task Ant --envs 16 --batch-size 64 --throughput-seconds 20 \\
+        --seconds 30 --seeds 0 --device cpu                                  # a smoke run on a CPU
+
+In one script run, for one task at --envs envs (warm kernel cache: the first run fills it):
+  ceiling     the task env's env-steps/s (`warpgym bench`, median of 3 timings): what training could reach;
+  throughput  a --throughput-seconds run per mode: steady samples/s (median of its iterations), that
+              as a ratio of the env-steps/s, and the median phase times (sequential: collect, update;
+              overlapped: update, then "collect", the part of the rollout the update did not hide);
+  learning    a --seconds run per mode and seed: when the training episodes first reached each target
+              speed (Ant 3 and 8 m/s, Humanoid 2 and 6 m/s), and the median over the seeds (none unless
+              most seeds got there; envs_per_gpu.learning_by_size).
+Writes OUT/overlap_<task>.json after every run and the tables as OUT/overlap_<task>.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, ROOT)
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+import envs_per_gpu as epg  # noqa: E402  (the runs, the bench and the JSON writes are the same)
+
+MODES = {"sequential": (), "overlap": ("--overlap",)}
+
+
+def tables(doc: dict) -> str:
+    ceiling = doc["env_steps_per_s"]
+    lines = [f"task env: {epg.fmt_m(ceiling)} env-steps/s at {doc['num_envs']} envs ({doc['device']})", "",
+             "| mode | samples/s | of env-steps/s | iteration | collect | update | idle |",
+             "|---|---:|---:|---:|---:|---:|---:|"]
+    for row in doc["throughput"]:
+        phase = row["phase_s"] or {}
+        ms = {k: f"{1e3 * phase[k]:.1f} ms" if k in phase else "-" for k in
+              ("iteration_s", "phase/collect_s", "phase/update_s", "phase/idle_s")}
+        ratio = f"{row['samples_per_s'] / ceiling:.2f}" if row["samples_per_s"] and ceiling else "-"
+        lines.append(f"| {row['mode']} | {epg.fmt_m(row['samples_per_s'])} | {ratio} | {ms['iteration_s']} | "
+                     f"{ms['phase/collect_s']} | {ms['phase/update_s']} | {ms['phase/idle_s']} |")
+    targets = doc["targets"]
+    lines += ["", "| mode | seeds | " + " | ".join(f"time to {t} m/s (median; seeds there)" for t in targets)
+              + " | samples/s |", "|---|---:|" + "---:|" * (len(targets) + 1)]
+    for mode, cell in epg.learning_by_size(doc, key="mode").items():
+        lines.append(f"| {mode} | {cell['seeds']} | " + " | ".join(
+            f"{epg.time_text(cell[t]['median_s'])} ({cell[t]['reached']}/{cell['seeds']})" for t in targets)
+            + f" | {epg.fmt_m(cell['samples_per_s'])} |")
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--out", required=True, help="output directory")
+    ap.add_argument("--task", default="Ant", choices=sorted(epg.TARGETS))
+    ap.add_argument("--envs", type=int, default=epg.BASE_ENVS)
+    ap.add_argument("--throughput-seconds", type=float, default=60.0)
+    ap.add_argument("--seconds", type=float, default=None, help="training time per learning run (Ant 180, Humanoid 240)")
+    ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
+    ap.add_argument("--bench-steps", type=int, default=100)
+    ap.add_argument("--batch-size", type=int, default=None, help="the mini-batch (default: the task's)")
+    ap.add_argument("--device", default=None)
+    args = ap.parse_args(argv)
+    args.scale_batch = False
+    seconds = args.seconds or (180.0 if args.task == "Ant" else 240.0)
+    for flag, v in (("--envs", args.envs), ("--throughput-seconds", args.throughput_seconds), ("--seconds", seconds),
+                    ("--bench-steps", args.bench_steps), ("--batch-size", args.batch_size or 1)):
+        if not v > 0:
+            ap.error(f"{flag} {v}: must be positive")
+    if args.batch_size is not None:
+        epg.BATCH[args.task] = args.batch_size
+    import torch  # noqa: PLC0415
+
+    from agents.logger import first_reaching  # noqa: PLC0415
+    from warpgym.sim.device import resolve_device  # noqa: PLC0415
+
+    device = resolve_device(args.device)
+    name = torch.cuda.get_device_name(torch.device(device)) if device.startswith("cuda") else "cpu"
+    os.makedirs(os.path.join(args.out, "runs"), exist_ok=True)
+    path = os.path.join(args.out, f"overlap_{args.task}.json")
+    doc = {"task": args.task, "device": name, "num_envs": args.envs, "targets": list(epg.TARGETS[args.task]),
+           "argv": sys.argv[1:] if argv is None else argv, "env_steps_per_s": None, "throughput": [], "learning": []}
+    doc["env_steps_per_s"] = epg.env_steps(args.task, args.envs, args)
+    epg.save(path, doc)
+    for mode, flags in MODES.items():
+        run = epg.train(args.task, args.envs, args.throughput_seconds, 0,
+                        os.path.join(args.out, "runs", f"{args.task}-{mode}-tp"), args, flags)
+        s = run["summary"]
+        doc["throughput"].append({"mode": mode, "samples_per_s": s.get("steady_samples_per_s_median"),
+                                  "phase_s": s.get("steady_phase_s_median"), "peak_mib": run["peak_mib"]})
+        epg.save(path, doc)
+    for seed in args.seeds:
+        for mode, flags in MODES.items():  # the modes alternate, so a drifting machine touches both alike
+            run = epg.train(args.task, args.envs, seconds, seed,
+                            os.path.join(args.out, "runs", f"{args.task}-{mode}-s{seed}"), args, flags)
+            hits = {str(t): first_reaching(run["rows"], "speed", t) for t in epg.TARGETS[args.task]}
+            doc["learning"].append({"mode": mode, "seed": seed, "seconds": seconds, "to_target": hits,
+                                    "samples_per_s": run["summary"].get("steady_samples_per_s_median"),
+                                    "final": run["summary"].get("final")})
+            epg.save(path, doc)
+    text = tables(doc)
+    with open(os.path.join(args.out, f"overlap_{args.task}.md"), "w") as f:
+        f.write(text + "\n")
+    print(text)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
