@@ -15,6 +15,7 @@ halves run one after the other, with the same lag: the numbers learnt are the sa
 from __future__ import annotations
 
 import copy
+from types import SimpleNamespace
 
 import torch
 
@@ -30,8 +31,8 @@ class RolloutPipeline:
 
     def __init__(self, policy: ActorCritic, storage: RolloutStorage, device: torch.device):
         self.behaviour = copy.deepcopy(policy).requires_grad_(False)
-        t, n = storage.horizon, storage.num_envs
-        self.trained = RolloutStorage(t, n, storage.obs.shape[-1], storage.actions.shape[-1], device)
+        # only what PPO reads: raw and final observations would double the rollout's largest buffers
+        self.trained = SimpleNamespace(**{f: torch.empty_like(getattr(storage, f)) for f in TRAINED_FIELDS})
         self.trained_log_std = torch.zeros_like(policy.log_std.detach())  # the noise it was drawn with
         self.stream = torch.cuda.Stream(device) if device.type == "cuda" else None
         self.pending = False  # a collected rollout that PPO has not learnt from yet

@@ -87,8 +87,9 @@ def test_a_resumed_overlapped_run_collects_afresh_and_keeps_its_counters(tmp_pat
     assert (b.iteration, b.samples) == (a.iteration, a.samples)
     b.learn(max_iterations=5)
     assert b.iteration == 5
-    for name, p in b.pipeline.behaviour.named_parameters():  # the behaviour copy follows the loaded weights
-        assert torch.isfinite(p).all(), name
+    from agents.logger import read_metrics
+
+    assert [r["iteration"] for r in read_metrics(str(tmp_path))] == [1, 2, 3, 4, 5]
 
 
 def test_overlap_must_be_a_boolean():
@@ -111,7 +112,7 @@ def test_warpgym_train_overlap_trains_the_ant_and_a_resume_keeps_it(tmp_path):
     rows = read_metrics(run)
     # 64 samples per rollout, and one more rollout in the first iteration, to learn from
     assert [r["samples"] for r in rows] == [128, 192, 256]
-    assert all(r["policy/kl"] == r["policy/kl"] for r in rows)  # finite: PPO ran on every rollout
+    assert all(r["policy/kl"] > 0 for r in rows)  # every iteration moved the policy: PPO ran on every rollout
     assert train.main(["--resume", run, "--max-iterations", "5", "--no-plots"]) == 0
     # the resume collects afresh before its first update (the rollout in flight was not saved)
     assert [r["samples"] for r in read_metrics(run)][-2:] == [256 + 128, 256 + 192]
