@@ -8,12 +8,13 @@ warpgym on the CPU at the task's step and at 4x the substeps:
   task's physics it runs at the same speed at both steps;
 - the 10-minute policy of today's default (4 substeps of 4 iterations, armature 0.1) keeps its speed.
 
-Humanoid: two policies trained on an H100 at 4096 envs, one at the step of each default. The 200-second
-policy of the old default (2 substeps of 8 iterations) runs faster at its own step than at a 4x finer one;
-the 10-minute policy of today's default (3 substeps of 8, seed 0) keeps its speed. Seed 1 of the same
-default does not (docs/tasks.md): tests/data/humanoid_5x4_seed1_policy.pt is a policy of that kind, kept
-for the work on it. The default tests pick the committed policy trained with the task's physics, so they
-fail when a default changes without one.
+Humanoid: policies trained on an H100 at 4096 envs. The 200-second policy of the 2-substep default (until
+2026-11-24) runs faster at its own step than at a 4x finer one; the 10-minute policy of the 3-substep
+default that followed (seed 0) kept its speed, its seed 1 did not, nor did seed 1 at 5 substeps
+(tests/data/humanoid_5x4_seed1_policy.pt, a sprint that draws a quarter of its speed from the step).
+Today's default (3 substeps, 25 rad/s motors, armature 0.1) holds both seeds' 10-minute policies. The
+default tests pick the committed policies trained
+with the task's physics, so they fail when a default changes without them.
 
 docs/tasks.md ("Physics settings") has the same replays at full length on the GPU and in native MuJoCo.
 """
@@ -27,13 +28,16 @@ import torch
 DATA = os.path.join(os.path.dirname(os.path.abspath(__file__)), "data")
 STEPS, ROBOTS = 600, 8
 OLD_ANT_PHYSICS = {"armature": None, "solver_iterations": 4, "ls_iterations": 4}  # the defaults until 2026-11-23
-OLD_HUMANOID_PHYSICS = {"armature": None, "solver_iterations": 8, "ls_iterations": 8}  # at 2 substeps, until 2026-11-24
-HUMANOID_POLICIES = ("humanoid_2x8_policy.pt", "humanoid_3x8_policy.pt")
+OLD_HUMANOID_PHYSICS = {"armature": None, "motor_speed": None, "solver_iterations": 8,
+                        "ls_iterations": 8}  # at 2 substeps, until 2026-11-24 morning
+HUMANOID_POLICIES = ("humanoid_2x8_policy.pt", "humanoid_3x8_policy.pt", "humanoid_motor_seed0_policy.pt",
+                     "humanoid_motor_seed1_policy.pt")
 ANT_POLICIES = ("ant_4x4_policy.pt",)  # ant_armature_policy.pt: 3 substeps, the default until 2026-11-24
 
 
-def replay(name: str, substeps: int, physics: dict | None = None, task: str = "Ant") -> dict:
-    """Mean forward speed and torso height of ROBOTS robots over STEPS steps of the policy ``name``."""
+def replay(name: str, substeps: int, physics=None, task: str = "Ant") -> dict:
+    """Mean forward speed and torso height of ROBOTS robots over STEPS steps of the policy ``name``, on
+    ``physics`` (a Physics or a dict of its fields; None: the task's)."""
     from agents.checkpoint import load, policy_from_checkpoint
     from warpgym.envs import LocomotionVecEnv
 
@@ -101,13 +105,31 @@ def test_a_gait_trained_on_the_default_physics_keeps_its_speed_at_a_finer_step(t
 
     task = get_task(task_name)
     trained_on_default = [n for n in policies if trained_with(n) == (task.substeps, task.physics)]
-    assert len(trained_on_default) == 1, (
+    assert trained_on_default, (
         f"no committed policy was trained with the {task_name}'s default ({task.substeps} substeps, {task.physics}): "
         "train one with benchmarks/fidelity.py and commit it to tests/data")
-    coarse = replay(trained_on_default[0], task.substeps, task=task_name)
-    fine = replay(trained_on_default[0], 4 * task.substeps, task=task_name)
-    assert coarse["speed"] > 5.0, coarse  # a real gait, not a robot standing still
-    assert fine["speed"] >= 0.9 * coarse["speed"], (coarse, fine)
+    for name in trained_on_default:
+        coarse = replay(name, task.substeps, task=task_name)
+        fine = replay(name, 4 * task.substeps, task=task_name)
+        assert coarse["speed"] > 5.0, (name, coarse)  # a real gait, not a robot standing still
+        assert fine["speed"] >= 0.9 * coarse["speed"], (name, coarse, fine)
+
+
+def test_a_policy_recorded_before_a_physics_setting_existed_replays_without_it():
+    """humanoid_5x4_seed1_policy.pt was saved before Physics had motor_speed: merged onto today's Humanoid
+    default it would replay on 25 rad/s motors it never saw (and not sprint); recorded() gives it the
+    setting's own default, off, as play, sim2sim, step_sensitivity and --resume do."""
+    from agents.checkpoint import load
+    from warpgym.sim.physics import recorded
+    from warpgym.tasks import get_task
+
+    saved = load(os.path.join(DATA, "humanoid_5x4_seed1_policy.pt"), torch.device("cpu"))["config"]["env_args"]["physics"]
+    assert "motor_speed" not in saved
+    humanoid = get_task("Humanoid")
+    assert humanoid.replace(physics=saved).physics.motor_speed == humanoid.physics.motor_speed == 25.0
+    replayed = humanoid.replace(physics=recorded(saved)).physics
+    assert replayed.motor_speed is None and replayed.armature is None and replayed.solver_iterations == 4
+    assert recorded(None) == recorded({}) == {}
 
 
 def test_step_sensitivity_names_a_bad_setting():
@@ -134,11 +156,12 @@ def test_the_seed1_humanoid_gait_leans_on_joint_damping_and_no_constraint_pays_e
     sys.path.insert(0, os.path.join(os.path.dirname(DATA), "..", "benchmarks"))
     from step_sensitivity import parse_setting, replay as native_replay
     from agents.checkpoint import load
+    from warpgym.sim.physics import recorded
     from warpgym.tasks import get_task
 
     ckpt = load(os.path.join(DATA, "humanoid_5x4_seed1_policy.pt"), torch.device("cpu"))
     env_args = ckpt["config"]["env_args"]
-    task = get_task("Humanoid").replace(physics=env_args["physics"])
+    task = get_task("Humanoid").replace(physics=recorded(env_args["physics"]))
     own = native_replay(ckpt, task, {"label": "own"}, env_args["substeps"], 2, 300, 7)
     damped = native_replay(ckpt, task, parse_setting("damping[abdomen|hip_x|hip_y]=1.3"), env_args["substeps"], 2, 300, 7)
     assert own["falls"] == 0 and own["forward_speed"] > 5.0, own
@@ -157,12 +180,13 @@ def test_the_humanoids_step_pays_its_seed1_gait_energy_and_the_ants_pays_none():
     sys.path.insert(0, os.path.join(os.path.dirname(DATA), "..", "benchmarks"))
     from step_sensitivity import parse_setting, replay as native_replay
     from agents.checkpoint import load
+    from warpgym.sim.physics import recorded
     from warpgym.tasks import get_task
 
     def power(name, setting):
         ckpt = load(os.path.join(DATA, name), torch.device("cpu"))
         env_args = ckpt["config"]["env_args"]
-        task = get_task(env_args["task"]).replace(physics=env_args["physics"])
+        task = get_task(env_args["task"]).replace(physics=recorded(env_args["physics"]))
         substeps = env_args["substeps"]
         setting = parse_setting(setting) if setting else {"label": "own"}
         return native_replay(ckpt, task, setting, substeps, 2, 300, 7)["power_w"]
@@ -201,11 +225,12 @@ def test_exact_damping_is_the_same_in_both_simulators_and_fades_as_the_step_shri
     from warpgym.tasks import get_task
 
     task = get_task("Humanoid")
-    physics = task.physics.replace(exact_damping=True)
+    mjcf = task.physics.replace(motor_speed=None, armature=None)  # the MJCF's damping and rotors alone
+    physics = mjcf.replace(exact_damping=True)
     sim = Sim("humanoid", num_envs=2, device="cpu", substeps=task.substeps, physics=physics)
     coarse = NativeRobot(task, substeps=task.substeps, physics=physics)
     fine = NativeRobot(task, substeps=4 * task.substeps, physics=physics)
-    plain = NativeRobot(task, substeps=task.substeps)
+    plain = NativeRobot(task, substeps=task.substeps, physics=mjcf)
     d0 = plain.model.dof_damping[plain.dof_adr]
     damped = d0 > 0
     coarse_scale = coarse.model.dof_damping[coarse.dof_adr][damped] / d0[damped]
@@ -227,8 +252,9 @@ def test_motor_back_emf_is_joint_damping_of_gear_over_no_load_speed_in_both_simu
     from warpgym.tasks import get_task
 
     task = get_task("Humanoid")
-    motors = task.physics.replace(motor_speed=25.0)
-    plain = NativeRobot(task, substeps=task.substeps)
+    mjcf = task.physics.replace(motor_speed=None, armature=None)
+    motors = mjcf.replace(motor_speed=25.0)
+    plain = NativeRobot(task, substeps=task.substeps, physics=mjcf)
     native = NativeRobot(task, substeps=task.substeps, physics=motors)
     d0 = plain.model.dof_damping[plain.dof_adr]
     added = native.model.dof_damping[native.dof_adr] - d0

@@ -75,6 +75,7 @@ def main(argv=None) -> int:
     from agents.evaluate import evaluate  # noqa: PLC0415
     from warpgym.sim.device import resolve_device  # noqa: PLC0415
     from warpgym.envs import LocomotionVecEnv  # noqa: PLC0415
+    from warpgym.sim.physics import recorded  # noqa: PLC0415
 
     device = resolve_device(args.device)
     path, ckpt = load_for_command(args.checkpoint, torch.device(device))
@@ -84,7 +85,8 @@ def main(argv=None) -> int:
     filming = bool(args.video or args.gif)
     n = args.num_envs or (1 if filming else 64 if device.startswith("cuda") else 4)
     # the trained task as it was trained (episode length, substeps, physics), on this device
-    env = LocomotionVecEnv(**{**env_args, "num_envs": n, "device": device, "seed": args.seed})
+    env = LocomotionVecEnv(**{**env_args, "physics": recorded(env_args.get("physics")), "num_envs": n, "device": device,
+                              "seed": args.seed})
     policy, normalize = policy_from_checkpoint(ckpt, env.num_obs, env.num_actions, torch.device(device))
     steps = args.steps or env.task.episode_length
     recorder = None

@@ -81,9 +81,10 @@ def replay_warpgym(ckpt, env_args: dict, substeps: int, envs: int, steps: int, d
 
     from agents.checkpoint import policy_from_checkpoint  # noqa: PLC0415
     from warpgym.envs import LocomotionVecEnv  # noqa: PLC0415
+    from warpgym.sim.physics import recorded  # noqa: PLC0415
 
     env = LocomotionVecEnv(env_args["task"], num_envs=envs, device=device, seed=seed, substeps=substeps,
-                           physics=env_args.get("physics") or {}, max_episode_steps=steps)
+                           physics=recorded(env_args.get("physics")), max_episode_steps=steps)
     policy, normalize = policy_from_checkpoint(ckpt, env.num_obs, env.num_actions, torch.device(device))
     result = play_warpgym(env, lambda obs: policy.act_deterministic(normalize(obs)), steps, seed)
     env.close()
@@ -121,11 +122,12 @@ def replay_native(ckpt, env_args: dict, substeps: int, copies: int, steps: int, 
 
     from agents.checkpoint import policy_from_checkpoint  # noqa: PLC0415
     from warpgym.native import NativeRobot, PowerMeter  # noqa: PLC0415
+    from warpgym.sim.physics import recorded  # noqa: PLC0415
     from warpgym.tasks import get_task  # noqa: PLC0415
 
     task = get_task(env_args["task"])
     if env_args.get("physics"):
-        task = task.replace(physics=env_args["physics"])
+        task = task.replace(physics=recorded(env_args["physics"]))
     robot = NativeRobot(task, substeps=substeps, copies=copies)
     num_obs = task.observation_size(len(robot.dof_names), len(robot.feet))
     policy, normalize = policy_from_checkpoint(ckpt, num_obs, len(robot.dof_names), torch.device("cpu"))

@@ -274,6 +274,7 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
 
     import warpgym  # noqa: PLC0415,F401  (registers the envs, quiets Warp)
     from warpgym.sim.device import resolve_device  # noqa: PLC0415
+    from warpgym.sim.physics import recorded  # noqa: PLC0415
     from warpgym.envs import LocomotionVecEnv  # noqa: PLC0415
 
     saved = None
@@ -287,7 +288,7 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
         args.seed = saved["seed"]
         args.episode_length = saved["env_args"].get("max_episode_steps")
         args.substeps = saved["env_args"].get("substeps")
-        args.physics = saved["env_args"].get("physics") or {}
+        args.physics = recorded(saved["env_args"].get("physics"))
     else:
         has_checkpoint = False
         task = TASK_NAMES[(args.task or "Ant").lower()]

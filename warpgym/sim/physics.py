@@ -75,6 +75,13 @@ class Physics:
         return asdict(self)
 
 
+def recorded(values: dict | None) -> dict:
+    """The physics a run or checkpoint recorded, complete: it was written whole (``to_dict``), so a setting
+    added since then takes ``Physics``'s own default (off), not the task's default of today, which would
+    replay an old policy on physics it never saw. ``{}`` or None (nothing recorded): ``{}``, the task's."""
+    return Physics.from_dict(values).to_dict() if values else {}
+
+
 def parse_setting(text: str) -> tuple[str, object]:
     """``"armature=0.05"`` -> ("armature", 0.05); ``none`` -> None; for ``--physics`` flags."""
     if "=" not in text:
