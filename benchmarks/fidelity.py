@@ -94,6 +94,7 @@ CANDIDATES: dict[str, dict] = {
     # h d / I falls from 1.5 to 0.3 at the worst hinge, where implicit Euler's damping is within 13 % of exact
     "humanoid-3x8-motor25-plain": {"substeps": 3, "physics": {"solver_iterations": 8, "ls_iterations": 8,
                                                               "armature": None, "motor_speed": 25.0}},
+    # the Humanoid's default from 2026-11-24 evening: held both seeds at 1, 2, 5 and 10 minutes (T1, T2)
     "humanoid-3x8-motor25-armature0.1": {"substeps": 3, "physics": {"solver_iterations": 8, "ls_iterations": 8,
                                                                     "armature": 0.1, "motor_speed": 25.0}},
     # seed 1's 10-minute gait of the plain motor still takes 287 W from the explicit velocity-product forces, which grow
