@@ -157,7 +157,9 @@ def test_a_killed_worker_stops_the_job_and_the_run_resumes_on_one_process(tmp_pa
 
     saved = load(str(run / "checkpoint.pt"), torch.device("cpu"))
     start = saved["iteration"]
-    assert start >= 3 and start % 3 == 0 and saved["samples"] == start * 32  # 2 processes x 4 envs x 4 steps
+    # a save-gap checkpoint (a multiple of 3), or rank 0's own save when torchrun's SIGTERM reaches it after an
+    # iteration it finished before the peer died: either way whole iterations of both processes
+    assert start >= 3 and saved["samples"] == start * 32, (start, saved["samples"])  # 2 processes x 4 envs x 4 steps
     # the same run on one process: it goes on from the checkpoint, and rows after it are logged once
     done = subprocess.run([sys.executable, "scripts/train.py", "--resume", str(run), "--max-iterations",
                            str(start + 3)], cwd=ROOT, capture_output=True, text=True, timeout=300, env=ENV)
