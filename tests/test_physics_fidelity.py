@@ -13,8 +13,8 @@ Humanoid: policies trained on an H100 at 4096 envs. The 200-second policy of the
 default that followed (seed 0) kept its speed, its seed 1 did not, nor did seed 1 at 5 substeps
 (tests/data/humanoid_5x4_seed1_policy.pt, a sprint that draws a quarter of its speed from the step).
 Today's default (3 substeps, 25 rad/s motors, armature 0.1) holds both seeds' 10-minute policies. The
-default tests pick the committed policies trained
-with the task's physics, so they fail when a default changes without them.
+default tests pick the committed policies trained with the task's physics, so they fail when a default
+changes without them.
 
 docs/tasks.md ("Physics settings") has the same replays at full length on the GPU and in native MuJoCo.
 """
@@ -117,7 +117,7 @@ def test_a_gait_trained_on_the_default_physics_keeps_its_speed_at_a_finer_step(t
 
 def test_a_policy_recorded_before_a_physics_setting_existed_replays_without_it():
     """humanoid_5x4_seed1_policy.pt was saved before Physics had motor_speed: merged onto today's Humanoid
-    default it would replay on 25 rad/s motors it never saw (and not sprint); recorded() gives it the
+    default it would replay on 25 rad/s motors it never saw; recorded() gives it the
     setting's own default, off, as play, sim2sim, step_sensitivity and --resume do."""
     from agents.checkpoint import load
     from warpgym.sim.physics import recorded
