@@ -36,8 +36,10 @@ import threading
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-TARGETS = {"Ant": (3.0, 8.0), "Humanoid": (2.0, 6.0)}  # m/s of the training episodes (issue 31)
+from targets import TARGETS  # noqa: E402
+
 BASE_ENVS = 4096  # the size the tasks' batch_size was chosen for
 
 

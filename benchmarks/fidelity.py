@@ -40,6 +40,9 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.dirname(HERE))
+sys.path.insert(0, HERE)
+
+from targets import WALKING  # noqa: E402
 
 # Named physics settings, each complete for the fields it names (so a later change of the task's
 # defaults does not change what a name means). "default" is the task as it stands.
@@ -110,7 +113,6 @@ CANDIDATES: dict[str, dict] = {
     "soft-contact": {"substeps": 3, "physics": {"solver_iterations": 4, "ls_iterations": 4, "armature": None,
                                                 "contact_timeconst": 0.04}},
 }
-TARGET_SPEED = {"Ant": 3.0, "Humanoid": 2.0}  # m/s of the training episodes: "time to walking speed"
 HOLDS = {"finer": 0.90, "native": 0.95, "native_finer": 0.90}  # issue 22, item 1
 
 
@@ -237,7 +239,7 @@ def run_facts(run_dir: str) -> dict:
         task = json.load(f)["task"]
     rows = read_metrics(run_dir)
     evals = [r for r in rows if "eval/return" in r]
-    target = TARGET_SPEED.get(task)
+    target = WALKING.get(task)
     return {"task": task, "device": s.get("device"), "num_envs": s.get("num_envs"), "iterations": s.get("iterations"),
             "samples_per_s": s.get("steady_samples_per_s_median"), "first_iteration_s": s.get("first_iteration_time_s"),
             "target_speed": target, "first_at_target": first_reaching(rows, "speed", target) if target else None,

@@ -7,8 +7,9 @@ the same task, env count and wall-clock budget, one after another in one script 
 
 Each run writes its run directory under OUT and a row in OUT/learners.json: steady samples/s
 (``agents.logger.steady_median``: the first fifth of the iterations left out), the time and samples at which the
-training episodes first averaged 3 m/s, and the last return and speed. ``--report`` merges the
-rows of several OUT dirs into one markdown table and one pair of plots.
+training episodes first averaged the task's walking speed (Ant 3 m/s, Humanoid 2 m/s; benchmarks/targets.py),
+and the last return and speed. ``--report`` merges the rows of several OUT dirs into one markdown table and
+one pair of plots.
 """
 
 from __future__ import annotations
@@ -22,6 +23,10 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.dirname(HERE))
+sys.path.insert(0, HERE)
+
+from targets import WALKING  # noqa: E402
+
 ALL = ("warpgym", "rsl_rl", "skrl", "rl_games", "sb3")
 
 
@@ -33,7 +38,7 @@ def command(learner: str, task: str, seconds: float, num_envs: int, run_dir: str
     return [sys.executable, os.path.join(os.path.dirname(HERE), "scripts", "train_with.py"), learner, *common, "--iterations", "1000000"]
 
 
-def row_of(learner: str, run_dir: str, wall_s: float, rc: int) -> dict:
+def row_of(learner: str, task: str, run_dir: str, wall_s: float, rc: int) -> dict:
     from agents.logger import first_reaching, read_metrics, steady_median  # noqa: PLC0415
 
     row = {"learner": learner, "run_dir": run_dir, "rc": rc, "wall_s": round(wall_s, 1)}
@@ -42,10 +47,11 @@ def row_of(learner: str, run_dir: str, wall_s: float, rc: int) -> dict:
     except FileNotFoundError:
         return {**row, "error": "no metrics"}
     done = [r for r in rows if r.get("speed") is not None]
-    hit = first_reaching(rows, "speed", 3.0) or {}
+    hit = first_reaching(rows, "speed", WALKING[task]) or {}
     row.update({"iterations": len(rows), "samples": rows[-1]["samples"] if rows else 0,
                 "samples_per_s": steady_median(rows), "first_iteration_s": rows[0]["time_s"] if rows else None,
-                "time_to_3ms_s": hit.get("time_s"), "samples_to_3ms": hit.get("samples"),
+                "target_speed": WALKING[task], "time_to_target_s": hit.get("time_s"),
+                "samples_to_target": hit.get("samples"),
                 "final_return": done[-1]["return"] if done else None,
                 "final_speed": done[-1]["speed"] if done else None})
     return row
@@ -60,7 +66,7 @@ def run(args) -> int:
         with open(os.path.join(args.out, f"{learner}.log"), "w") as log:
             rc = subprocess.run(command(learner, args.task, args.seconds, args.num_envs, run_dir), stdout=log,
                                 stderr=subprocess.STDOUT, check=False).returncode
-        results.append(row_of(learner, run_dir, time.time() - t0, rc))
+        results.append(row_of(learner, args.task, run_dir, time.time() - t0, rc))
         print(json.dumps(results[-1]), flush=True)
     device = "cpu"
     try:
@@ -83,9 +89,11 @@ def report(args) -> int:
             data = json.load(f)
         meta = meta or data
         # recomputed from each run's metrics: the table follows agents.logger's definitions
-        rows += [row_of(r["learner"], os.path.join(out, r["learner"]), r["wall_s"], r["rc"]) for r in data["rows"]]
+        rows += [row_of(r["learner"], data["task"], os.path.join(out, r["learner"]), r["wall_s"], r["rc"])
+                 for r in data["rows"]]
     print(f"{meta['task']}, {meta['num_envs']} envs, {meta['seconds']:g} s per learner, {meta['device']}\n")
-    print("| learner | samples/s (median) | first iteration | training episodes reach 3 m/s | last return "
+    print(f"| learner | samples/s (median) | first iteration | training episodes reach {WALKING[meta['task']]:g} m/s "
+          "| last return "
           "| last speed |")
     print("|---|---:|---:|---:|---:|---:|")
 
@@ -93,8 +101,8 @@ def report(args) -> int:
         return "–" if v is None else format(v, spec)
 
     for r in rows:
-        reach = ("not within the run" if r.get("time_to_3ms_s") is None
-                 else f"{r['time_to_3ms_s']:.0f} s ({r['samples_to_3ms'] / 1e6:.1f} M samples)")
+        reach = ("not within the run" if r.get("time_to_target_s") is None
+                 else f"{r['time_to_target_s']:.0f} s ({r['samples_to_target'] / 1e6:.1f} M samples)")
         sps = r.get("samples_per_s")
         print(f"| {r['learner']} | {fmt(None if sps is None else sps / 1e6, '.3f')} M | "
               f"{fmt(r.get('first_iteration_s'), '.0f')} s | {reach} | {fmt(r.get('final_return'), '.0f')} | "
@@ -114,7 +122,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", help="directory for the runs and learners.json")
     ap.add_argument("--learners", default=",".join(ALL), help=f"comma-separated, from {', '.join(ALL)}")
-    ap.add_argument("--task", default="Ant")
+    ap.add_argument("--task", default="Ant", choices=sorted(WALKING))
     ap.add_argument("--num-envs", type=int, default=4096)
     ap.add_argument("--seconds", type=float, default=120.0, help="wall-clock budget per learner, from process start")
     ap.add_argument("--report", nargs="+", metavar="OUT", help="print the table of these OUT dirs instead of running")

@@ -38,7 +38,9 @@ import time
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, ROOT)
-TARGET = {"Ant": 3.0, "Humanoid": 2.0}
+sys.path.insert(0, HERE)
+
+from targets import WALKING  # noqa: E402
 PRESET = {"Ant": {"horizon_len": 16, "batch_size": 32768, "repeat_times": 4, "learning_rate": 3e-4},
           "Humanoid": {"horizon_len": 32, "batch_size": 32768, "repeat_times": 5, "learning_rate": 5e-4}}
 SEED = {"batch_size": 1024, "learning_rate": 1e-3}
@@ -118,7 +120,7 @@ def row_of(task: str, learner: str, gpus: int, run_dir: str, wall_s: float, rc: 
     except FileNotFoundError:
         return {**row, "error": "no metrics"}
     done = [r for r in rows if r.get("speed") is not None]
-    hit = first_reaching(rows, "speed", TARGET[task]) or {}
+    hit = first_reaching(rows, "speed", WALKING[task]) or {}
     row.update({"iterations": len(rows), "samples": rows[-1]["samples"] if rows else 0,
                 "samples_per_s": steady_median(rows), "first_row_s": rows[0]["time_s"] if rows else None,
                 "time_to_target_s": hit.get("time_s"), "samples_to_target": hit.get("samples"),
@@ -139,7 +141,7 @@ def table(doc: dict) -> str:
              "| GPU use | CPU use |", "|---|---|---:|---:|---:|---:|---:|---:|---:|"]
     for r in doc["rows"]:
         hit = ("not within the run" if r.get("time_to_target_s") is None else
-               f"{TARGET[r['task']]:g} m/s at {r['time_to_target_s']:.0f} s ({r['samples_to_target'] / 1e6:.1f} M)")
+               f"{WALKING[r['task']]:g} m/s at {r['time_to_target_s']:.0f} s ({r['samples_to_target'] / 1e6:.1f} M)")
         sps = r.get("samples_per_s")
         lines.append(f"| {r['task']} | {'warpgym' if r['learner'] == 'warpgym' else 'RLlib'} | {r['gpus']} | "
                      f"{fmt(None if sps is None else sps / 1e6, '.3f', ' M')} | {hit} | {fmt(r.get('final_return'), '.0f')} | "

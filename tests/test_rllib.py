@@ -29,6 +29,21 @@ def test_rllib_ppo_trains_warpgym_and_counts_the_same_episodes(tmp_path):
     assert args.learner_object.iteration == 2  # RLlib's own count of finished training iterations
 
 
+def test_the_time_limit_ends_an_rllib_run_as_a_time_limit_not_an_error(tmp_path):
+    """RLlib's env runner turns the adapter's TimeLimitReached into a bare RuntimeError; the run must still
+    end with exit 0 and "time limit", as the other learners' runs do."""
+    import json
+
+    from warpgym.cli import train_with
+
+    args = train_with.parse_args(["rllib", "--num-envs", "4", "--iterations", "1000", "--device", "cpu",
+                                  "--time-limit", "1", "--run-dir", str(tmp_path), "--no-plots"])
+    assert train_with.main(args=args) == 0
+    with open(tmp_path / "summary.json") as f:
+        summary = json.load(f)
+    assert summary["stopped_by"] == "time limit"  # before: RLlib's RuntimeError, exit 1 and a traceback
+
+
 def test_next_step_autoreset_against_warpgyms_final_obs():
     from gymnasium.vector import AutoresetMode
 

@@ -79,8 +79,22 @@ def run_rllib(env, args, horizon: int, run_dir: str) -> None:
     try:
         for _ in range(args.iterations):
             args.rllib_results.append(algo.train())
+    except RuntimeError as error:  # RLlib's env runner re-raises whatever the env raised as a bare RuntimeError
+        stop = _time_limit_in(error)
+        if stop is None:
+            raise
+        raise stop from None
     finally:
         algo.stop()
+
+
+def _time_limit_in(error: BaseException | None):
+    """The ``TimeLimitReached`` that ``error`` was raised from, if any (the run's --time-limit, not a fault)."""
+    from warpgym.wrappers.common import TimeLimitReached
+
+    while error is not None and not isinstance(error, TimeLimitReached):
+        error = error.__cause__ or error.__context__
+    return error
 
 
 def run_rllib_remote(args, horizon: int, num_envs: int, device: str, run_dir: str, sink, start: float) -> str:
