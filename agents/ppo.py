@@ -1,6 +1,14 @@
 """The PPO update: clipped surrogate, clipped value loss, entropy and action-bound terms, gradient
 clipping, mini-epochs over shuffled mini-batches, and a learning rate adapted to a KL target.
 
+With ``Config.overlap`` each rollout was drawn by the weights of one update earlier. The update then
+uses the decoupled objective of Hilton et al. (2021, "Batch size-invariance for policy optimization"):
+the clip and the KL that steers the learning rate are taken against the proximal policy (the weights at
+the start of this update), and each sample's term is weighted by proximal over behaviour probability.
+Clipped against the behaviour policy instead, the lag counts as KL of its own: on an H200 the learning
+rate fell ten-fold and the Ant took twice as long to walk (docs/benchmarks.md, "Overlapped update").
+Without a lag the proximal policy is the behaviour policy and the weight is exactly 1.
+
 The learning rate lives in a device tensor that the optimizer reads, so adapting it per mini-batch
 never waits on the host; losses are summed on the device. On CUDA one mini-batch step (forward,
 backward, clipping, Adam, KL and learning-rate update) is captured once as a CUDA graph and replayed:
@@ -12,18 +20,26 @@ from __future__ import annotations
 
 import torch
 
-from agents.actor_critic import ActorCritic, gaussian_kl
+from agents.actor_critic import ActorCritic, gaussian_kl, gaussian_log_prob
 from agents.config import Config
 from agents.distributed import Workers
 from agents.storage import RolloutStorage
 
 LR_MIN, LR_MAX = 1e-5, 1e-2
 ACTION_BOUND = 1.1  # the env clips to [-1, 1]; a mean far outside it only wastes gradient
+# A sample the behaviour policy drew with a tiny probability gets a huge weight; one update of lag keeps
+# nearly all weights within about 20 % of 1, so the bound only trims that rare tail's variance.
+MAX_BEHAVIOUR_WEIGHT = 2.0
 
 
-def surrogate_loss(log_prob, old_log_prob, advantages, clip: float) -> torch.Tensor:
+def surrogate_loss(log_prob, old_log_prob, advantages, clip: float, behaviour_log_prob=None) -> torch.Tensor:
+    """PPO's clipped surrogate of the ratio to ``old_log_prob``; with ``behaviour_log_prob`` (the policy
+    that drew the actions, when it is not the old one) each term is weighted by old over behaviour."""
     ratio = torch.exp(log_prob - old_log_prob)
-    return -torch.min(ratio * advantages, ratio.clamp(1.0 - clip, 1.0 + clip) * advantages).mean()
+    terms = torch.min(ratio * advantages, ratio.clamp(1.0 - clip, 1.0 + clip) * advantages)
+    if behaviour_log_prob is not None:
+        terms = terms * torch.exp(old_log_prob - behaviour_log_prob).clamp(max=MAX_BEHAVIOUR_WEIGHT)
+    return -terms.mean()
 
 
 def value_loss(values, old_values, returns, clip: float) -> torch.Tensor:
@@ -59,17 +75,23 @@ class PPO:
         self.use_graph = cuda_graph and is_cuda
         self._graph = None
         self._batch: dict[str, torch.Tensor] | None = None
+        self._lagged = False
 
-    def _bind(self, storage: RolloutStorage, size: int) -> None:
+    def _bind(self, storage: RolloutStorage, size: int, lagged: bool) -> None:
         """Persistent inputs of the mini-batch step; a captured graph reads them by address."""
-        self._batch = {
+        self._batch = b = {
             "obs": storage.obs.flatten(0, 1), "actions": storage.actions.flatten(0, 1),
             "log_probs": storage.log_probs.flatten(0, 1), "values": storage.values.flatten(0, 1),
             "means": storage.means.flatten(0, 1), "returns": storage.returns.flatten(0, 1),
             "adv": torch.zeros_like(storage.advantages.flatten(0, 1)),
         }
+        # the proximal policy: the behaviour policy's own buffers, unless the rollout lags an update
+        b["prox_log_probs"] = torch.empty_like(b["log_probs"]) if lagged else b["log_probs"]
+        b["prox_means"] = torch.empty_like(b["means"]) if lagged else b["means"]
+        self._lagged = lagged
         self._idx = torch.zeros(size, dtype=torch.long, device=self.device)
         self._old_log_std = torch.zeros_like(self.policy.log_std)
+        self._prox_log_std = torch.zeros_like(self.policy.log_std)
         self._sums = torch.zeros(5, device=self.device)  # surrogate, value, entropy, kl, bounds
         self._storage_id = id(storage)
         self._graph = None
@@ -78,8 +100,9 @@ class PPO:
         cfg, policy, b, idx = self.cfg, self.policy, self._batch, self._idx
         log_prob, entropy, values, mean = policy.evaluate(b["obs"][idx], b["actions"][idx])
         with torch.no_grad():
-            kl = gaussian_kl(b["means"][idx], self._old_log_std, mean, policy.log_std).mean()
-        surr = surrogate_loss(log_prob, b["log_probs"][idx], b["adv"][idx], cfg.clip_ratio)
+            kl = gaussian_kl(b["prox_means"][idx], self._prox_log_std, mean, policy.log_std).mean()
+        surr = surrogate_loss(log_prob, b["prox_log_probs"][idx], b["adv"][idx], cfg.clip_ratio,
+                              b["log_probs"][idx] if self._lagged else None)
         v_loss = value_loss(values, b["values"][idx], b["returns"][idx], cfg.value_clip)
         ent = entropy.mean()
         b_loss = bounds_loss(mean)
@@ -106,15 +129,27 @@ class PPO:
             self._step()
         self._graph = graph
 
-    def update(self, storage: RolloutStorage, old_log_std: torch.Tensor, num_minibatches: int) -> dict:
+    def update(self, storage: RolloutStorage, old_log_std: torch.Tensor, num_minibatches: int,
+               lagged: bool = False) -> dict:
+        """PPO on ``storage``, drawn with noise ``old_log_std``; ``lagged``: by weights older than the
+        policy's (Config.overlap), so the clip and the KL are taken against the policy as it is now."""
         cfg = self.cfg
         total = storage.obs.shape[0] * storage.obs.shape[1]
         size = total // num_minibatches
-        if self._batch is None or self._storage_id != id(storage) or self._idx.shape[0] != size:
-            self._bind(storage, size)
+        if (self._batch is None or self._storage_id != id(storage) or self._idx.shape[0] != size
+                or self._lagged != lagged):
+            self._bind(storage, size, lagged)
+        b = self._batch
         adv = storage.advantages.flatten(0, 1)
-        self._batch["adv"].copy_((adv - adv.mean()) / (adv.std() + 1e-8))
+        b["adv"].copy_((adv - adv.mean()) / (adv.std() + 1e-8))
         self._old_log_std.copy_(old_log_std)
+        if lagged:  # one forward pass of the actor over the rollout, outside the captured step
+            with torch.no_grad():
+                b["prox_means"].copy_(self.policy.actor(b["obs"]))
+                b["prox_log_probs"].copy_(gaussian_log_prob(b["actions"], b["prox_means"], self.policy.log_std))
+                self._prox_log_std.copy_(self.policy.log_std)
+        else:
+            self._prox_log_std.copy_(old_log_std)
         self._sums.zero_()
 
         def epoch() -> None:

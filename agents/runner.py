@@ -187,7 +187,7 @@ class OnPolicyRunner:
     def update(self) -> dict:
         if self.pipeline is None:
             return self.ppo.update(self.storage, self._old_log_std, self.num_minibatches)
-        return self.ppo.update(self.pipeline.trained, self.pipeline.trained_log_std, self.num_minibatches)
+        return self.ppo.update(self.pipeline.trained, self.pipeline.trained_log_std, self.num_minibatches, lagged=True)
 
     def iterate(self) -> dict:
         """Collect a rollout and update the policy: one after the other, or with ``Config.overlap``
