@@ -219,6 +219,8 @@ def main(argv=None) -> int:
             ap.error(f"--report {args.report}: no comparison.json there; pass an --out directory of an earlier run")
         with open(path) as f:
             doc = json.load(f)
+        for r in doc["rows"]:  # the runs lie beside comparison.json, wherever OUT was copied to
+            r["run_dir"] = os.path.join(args.report, os.path.basename(r["run_dir"]))
         print(table(doc))
         figures(doc, args.figures or args.report)
         return 0

@@ -106,3 +106,19 @@ def test_two_env_runners_and_two_learners_train_one_policy(tmp_path):
     finished = [r for r in rows if r["episodes"]]
     assert finished and all(math.isfinite(r["speed"]) and r["length"] <= 12 for r in finished)
     assert args.learner_object.learner_group.is_remote  # the learners are actors, not this process
+
+
+def test_rllibs_runner_overhead_is_timed_around_an_env_that_does_nothing():
+    """benchmarks/rllib_overhead.py: RLlib's sampling loop, not the env, is what it times."""
+    import os
+    import sys
+
+    sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "benchmarks"))
+    import rllib_overhead
+
+    env = rllib_overhead.null_vector_env(4, 3, 2, episode=5)
+    env.reset()
+    ends = sum(int(env.step(np.zeros((4, 2), np.float32))[3].sum()) for _ in range(10))
+    assert ends == 8  # every env ends an episode every 5 steps, staggered
+    row = rllib_overhead.time_runner(8, 3, 2, steps=4, repeats=2, episode=5)
+    assert row["runner_samples_per_s"] > 0 and row["runner_ms_per_step"] > row["env_alone_ms_per_step"]

@@ -26,6 +26,8 @@ CASES = [
     ("train_with.py", ["skrl", "--batch-size", "4"], None, "--batch-size is an rllib setting"),
     ("rllib_vs_warpgym.py", ["--report", MISSING], None, f"--report {MISSING}: no comparison.json there"),
     ("rllib_vs_warpgym.py", ["--out", MISSING, "--gpus", "0"], None, "--gpus 0: each is a number of GPUs"),
+    ("rllib_overhead.py", ["--envs", "0"], None, "--envs 0: must be positive"),
+    ("rllib_overhead.py", [], "ray", 'RLlib is not installed: pip install "warpgym[rllib]"'),
     ("bench.py", ["--num-envs", "0"], None, "--num-envs 0: must be positive integers"),
     ("bench.py", ["--physics", "armature=-1"], None, "--physics: armature=-1"),
     ("learner_bench.py", ["--report", MISSING], None, f"--report {MISSING}: no learners.json there"),
