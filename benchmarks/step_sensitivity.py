@@ -146,15 +146,12 @@ def sensitivity(path: str, settings: list[dict], args) -> dict:
     import torch  # noqa: PLC0415
 
     from agents.checkpoint import load  # noqa: PLC0415
-    from warpgym.sim.physics import recorded  # noqa: PLC0415
-    from warpgym.tasks import get_task  # noqa: PLC0415
+    from warpgym.tasks import trained_task  # noqa: PLC0415
 
     ckpt = load(path, torch.device("cpu"))
     env_args = ckpt["config"]["env_args"]
-    task = get_task(env_args["task"])
-    if env_args.get("physics"):
-        task = task.replace(physics=recorded(env_args["physics"]))
-    substeps = env_args.get("substeps") or task.substeps
+    task = trained_task(env_args)
+    substeps = task.substeps
     print(f"## {path}: {env_args['task']}, {substeps} substeps, {task.physics}\n")
     joints = joint_table(task, substeps)
     if args.joints:

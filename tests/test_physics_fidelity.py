@@ -84,10 +84,10 @@ def trained_with(name: str):
     """The substeps and physics a committed policy was trained with (its checkpoint's config); a
     setting added since then has its default."""
     from agents.checkpoint import load
-    from warpgym.sim.physics import Physics
+    from warpgym.tasks import trained_task
 
-    env_args = load(os.path.join(DATA, name), torch.device("cpu"))["config"]["env_args"]
-    return env_args["substeps"], Physics.from_dict(env_args["physics"])
+    task = trained_task(load(os.path.join(DATA, name), torch.device("cpu"))["config"]["env_args"])
+    return task.substeps, task.physics
 
 
 @pytest.mark.slow
@@ -118,18 +118,23 @@ def test_a_gait_trained_on_the_default_physics_keeps_its_speed_at_a_finer_step(t
 def test_a_policy_recorded_before_a_physics_setting_existed_replays_without_it():
     """humanoid_5x4_seed1_policy.pt was saved before Physics had motor_speed: merged onto today's Humanoid
     default it would replay on 25 rad/s motors it never saw; recorded() gives it the
-    setting's own default, off, as play, sim2sim, step_sensitivity and --resume do."""
+    setting's own default, off, as play, sim2sim, step_sensitivity and --resume do; trained_task() is
+    that physics on the task, with the checkpoint's substeps."""
     from agents.checkpoint import load
     from warpgym.sim.physics import recorded
-    from warpgym.tasks import get_task
+    from warpgym.tasks import get_task, trained_task
 
-    saved = load(os.path.join(DATA, "humanoid_5x4_seed1_policy.pt"), torch.device("cpu"))["config"]["env_args"]["physics"]
+    env_args = load(os.path.join(DATA, "humanoid_5x4_seed1_policy.pt"), torch.device("cpu"))["config"]["env_args"]
+    saved = env_args["physics"]
     assert "motor_speed" not in saved
     humanoid = get_task("Humanoid")
     assert humanoid.replace(physics=saved).physics.motor_speed == humanoid.physics.motor_speed == 25.0
     replayed = humanoid.replace(physics=recorded(saved)).physics
     assert replayed.motor_speed is None and replayed.armature is None and replayed.solver_iterations == 4
     assert recorded(None) == recorded({}) == {}
+    task = trained_task(env_args)
+    assert task.physics == replayed and task.substeps == 5 != humanoid.substeps
+    assert trained_task({"task": "Ant"}) == get_task("Ant")  # nothing recorded: the task as it stands
 
 
 def test_step_sensitivity_names_a_bad_setting():
@@ -156,14 +161,12 @@ def test_the_seed1_humanoid_gait_leans_on_joint_damping_and_no_constraint_pays_e
     sys.path.insert(0, os.path.join(os.path.dirname(DATA), "..", "benchmarks"))
     from step_sensitivity import parse_setting, replay as native_replay
     from agents.checkpoint import load
-    from warpgym.sim.physics import recorded
-    from warpgym.tasks import get_task
+    from warpgym.tasks import trained_task
 
     ckpt = load(os.path.join(DATA, "humanoid_5x4_seed1_policy.pt"), torch.device("cpu"))
-    env_args = ckpt["config"]["env_args"]
-    task = get_task("Humanoid").replace(physics=recorded(env_args["physics"]))
-    own = native_replay(ckpt, task, {"label": "own"}, env_args["substeps"], 2, 300, 7)
-    damped = native_replay(ckpt, task, parse_setting("damping[abdomen|hip_x|hip_y]=1.3"), env_args["substeps"], 2, 300, 7)
+    task = trained_task(ckpt["config"]["env_args"])
+    own = native_replay(ckpt, task, {"label": "own"}, task.substeps, 2, 300, 7)
+    damped = native_replay(ckpt, task, parse_setting("damping[abdomen|hip_x|hip_y]=1.3"), task.substeps, 2, 300, 7)
     assert own["falls"] == 0 and own["forward_speed"] > 5.0, own
     assert damped["falls"] == 2, damped
     power = own["power_w"]
@@ -180,14 +183,12 @@ def test_the_humanoids_step_pays_its_seed1_gait_energy_and_the_ants_pays_none():
     sys.path.insert(0, os.path.join(os.path.dirname(DATA), "..", "benchmarks"))
     from step_sensitivity import parse_setting, replay as native_replay
     from agents.checkpoint import load
-    from warpgym.sim.physics import recorded
-    from warpgym.tasks import get_task
+    from warpgym.tasks import trained_task
 
     def power(name, setting):
         ckpt = load(os.path.join(DATA, name), torch.device("cpu"))
-        env_args = ckpt["config"]["env_args"]
-        task = get_task(env_args["task"]).replace(physics=recorded(env_args["physics"]))
-        substeps = env_args["substeps"]
+        task = trained_task(ckpt["config"]["env_args"])
+        substeps = task.substeps
         setting = parse_setting(setting) if setting else {"label": "own"}
         return native_replay(ckpt, task, setting, substeps, 2, 300, 7)["power_w"]
 

@@ -122,12 +122,9 @@ def replay_native(ckpt, env_args: dict, substeps: int, copies: int, steps: int, 
 
     from agents.checkpoint import policy_from_checkpoint  # noqa: PLC0415
     from warpgym.native import NativeRobot, PowerMeter  # noqa: PLC0415
-    from warpgym.sim.physics import recorded  # noqa: PLC0415
-    from warpgym.tasks import get_task  # noqa: PLC0415
+    from warpgym.tasks import trained_task  # noqa: PLC0415
 
-    task = get_task(env_args["task"])
-    if env_args.get("physics"):
-        task = task.replace(physics=recorded(env_args["physics"]))
+    task = trained_task(env_args)
     robot = NativeRobot(task, substeps=substeps, copies=copies)
     num_obs = task.observation_size(len(robot.dof_names), len(robot.feet))
     policy, normalize = policy_from_checkpoint(ckpt, num_obs, len(robot.dof_names), torch.device("cpu"))

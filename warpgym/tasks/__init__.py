@@ -16,4 +16,13 @@ def get_task(name) -> LocomotionTask:
     return TASKS[key]
 
 
-__all__ = ["ANT", "HUMANOID", "TASKS", "LocomotionTask", "get_task"]
+def trained_task(env_args: dict) -> LocomotionTask:
+    """The task a run or checkpoint recorded in its ``env_args``: its physics as recorded (a setting added
+    since then off, ``warpgym.sim.physics.recorded``) and its substeps, not today's defaults."""
+    from warpgym.sim.physics import recorded
+
+    task = get_task(env_args["task"])
+    return task.replace(physics=recorded(env_args.get("physics")), substeps=env_args.get("substeps") or task.substeps)
+
+
+__all__ = ["ANT", "HUMANOID", "TASKS", "LocomotionTask", "get_task", "trained_task"]
