@@ -9,7 +9,8 @@ For each task and GPU count G, one run of each learner, one after another:
   stepping --num-envs robots and all-reducing every minibatch's gradients;
 - RLlib: ``warpgym train-with rllib --gpus G``: PPO on RLlib's new API stack, G env runners each stepping
   --num-envs robots in one warpgym vector env, and G learners training one policy with torch DDP. That is
-  RLlib's successor of DD-PPO (see warpgym/cli/rllib_run.py for how they map).
+  RLlib's successor of DD-PPO (see warpgym/cli/rllib_run.py for how they map). ``--rllib-env-runners R``
+  splits the same robots over R runner processes instead, so that RLlib samples on R CPU cores.
 
 Both take the same settings as far as each exposes them: the network (the task's), steps per env
 between updates, minibatch size, epochs and learning rate. ``--hparams preset`` uses warpgym's task
@@ -54,14 +55,18 @@ def settings(task: str, hparams: str, num_envs: int) -> dict:
 
 def command(learner: str, task: str, gpus: int, args, run_dir: str) -> list[str]:
     flags = [f"--{k.replace('_', '-')}={v}" for k, v in settings(task, args.hparams, args.num_envs).items()]
-    common = ["--task", task, "--num-envs", str(args.num_envs), "--time-limit", str(args.seconds), "--seed",
-              str(args.seed), "--run-dir", run_dir, "--no-plots", *flags]
+    common = ["--task", task, "--time-limit", str(args.seconds), "--seed", str(args.seed), "--run-dir", run_dir,
+              "--no-plots", *flags]
     if args.device:
         common += ["--device", args.device]
     if learner == "rllib":
+        runners = args.rllib_env_runners
+        spread = ["--env-runners", str(runners), "--num-envs", str(args.num_envs * gpus // runners)] if runners else \
+            ["--num-envs", str(args.num_envs)]  # the same robots per GPU, split over the runners
         return [sys.executable, "-m", "warpgym", "train-with", "rllib", "--gpus", str(gpus), "--iterations", "1000000",
-                *common]
-    train = ["-m", "warpgym", "train", *common, "--max-iterations", "1000000", "--no-eval"]
+                *spread, *common]
+    train = ["-m", "warpgym", "train", "--num-envs", str(args.num_envs), *common, "--max-iterations", "1000000",
+             "--no-eval"]
     if gpus == 1:
         return [sys.executable, *train]
     return [sys.executable, "-m", "torch.distributed.run", "--standalone", f"--nproc_per_node={gpus}", *train]
@@ -128,8 +133,16 @@ def row_of(task: str, learner: str, gpus: int, run_dir: str, wall_s: float, rc: 
     return row
 
 
+def learner_name(r: dict) -> str:
+    if r["learner"] == "warpgym":
+        return "warpgym"
+    return f"RLlib ({r['env_runners']} env runners)" if r.get("env_runners") else "RLlib"
+
+
 def label(r: dict) -> str:
-    return f"{'warpgym PPO' if r['learner'] == 'warpgym' else 'RLlib PPO'}, {r['gpus']} GPU{'s' if r['gpus'] > 1 else ''}"
+    runners = f", {r['env_runners']} env runners" if r.get("env_runners") else ""
+    return (f"{'warpgym PPO' if r['learner'] == 'warpgym' else 'RLlib PPO'}, {r['gpus']} GPU{'s' if r['gpus'] > 1 else ''}"
+            f"{runners}")
 
 
 def table(doc: dict) -> str:
@@ -143,7 +156,7 @@ def table(doc: dict) -> str:
         hit = ("not within the run" if r.get("time_to_target_s") is None else
                f"{WALKING[r['task']]:g} m/s at {r['time_to_target_s']:.0f} s ({r['samples_to_target'] / 1e6:.1f} M)")
         sps = r.get("samples_per_s")
-        lines.append(f"| {r['task']} | {'warpgym' if r['learner'] == 'warpgym' else 'RLlib'} | {r['gpus']} | "
+        lines.append(f"| {r['task']} | {learner_name(r)} | {r['gpus']} | "
                      f"{fmt(None if sps is None else sps / 1e6, '.3f', ' M')} | {hit} | {fmt(r.get('final_return'), '.0f')} | "
                      f"{fmt(r.get('final_speed'), '.2f', ' m/s')} | {fmt(r.get('gpu_util_pct'), '.0f', ' %')} | "
                      f"{fmt(r.get('cpu_use_pct'), '.0f', ' %')} |")
@@ -192,6 +205,8 @@ def run(args) -> int:
                     rc = subprocess.run(command(learner, task, gpus, args, run_dir), stdout=log, stderr=subprocess.STDOUT,
                                         env=env, timeout=args.seconds + 900, check=False).returncode
                 doc["rows"].append(row_of(task, learner, gpus, run_dir, time.time() - t0, rc, usage.summary()))
+                if learner == "rllib" and args.rllib_env_runners:
+                    doc["rows"][-1]["env_runners"] = args.rllib_env_runners
                 print(json.dumps(doc["rows"][-1]), flush=True)
                 save(args.out, doc)
     print(table(doc))
@@ -208,6 +223,9 @@ def main(argv=None) -> int:
     ap.add_argument("--num-envs", type=int, default=4096, help="robots per GPU (per env runner for RLlib)")
     ap.add_argument("--seconds", type=float, default=240.0, help="wall-clock budget per run, from process start")
     ap.add_argument("--hparams", choices=["preset", "seed"], default="preset")
+    ap.add_argument("--rllib-env-runners", type=int, default=None, metavar="R",
+                    help="RLlib: R env runner processes sharing the run's robots (--num-envs x GPUs), for the CPU "
+                         "cores RLlib samples with (default: one runner per GPU, in the driver on one GPU)")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--device", default=None, help="cpu to run on the CPU (a check of the script, not a figure)")
     ap.add_argument("--report", metavar="OUT", help="print the table of an earlier OUT and draw its figures again")
@@ -230,6 +248,10 @@ def main(argv=None) -> int:
         ap.error(f"--gpus {' '.join(map(str, args.gpus))}: each is a number of GPUs, 1 or more")
     if args.num_envs < 1 or not args.seconds > 0:
         ap.error(f"--num-envs {args.num_envs} and --seconds {args.seconds:g}: both must be positive")
+    runners = args.rllib_env_runners
+    if runners is not None and (runners < 1 or any(args.num_envs * g % runners for g in args.gpus)):
+        ap.error(f"--rllib-env-runners {runners}: must be 1 or more and divide the robots of every run "
+                 f"(--num-envs {args.num_envs} x --gpus {' '.join(map(str, args.gpus))})")
     return run(args)
 
 

@@ -108,6 +108,22 @@ def test_two_env_runners_and_two_learners_train_one_policy(tmp_path):
     assert args.learner_object.learner_group.is_remote  # the learners are actors, not this process
 
 
+def test_env_runners_apart_from_gpus_sample_for_one_learner_in_this_process(tmp_path):
+    """--env-runners 2 on one GPU's worth (the CPU here): two runner actors, each stepping its own robots,
+    and the learner in this process learning from both rollouts."""
+    from agents.logger import read_metrics
+    from warpgym.cli import train_with
+
+    args = train_with.parse_args(["rllib", "--env-runners", "2", "--num-envs", "4", "--iterations", "2",
+                                  "--device", "cpu", "--episode-length", "12", "--horizon-len", "8",
+                                  "--run-dir", str(tmp_path), "--no-plots"])
+    assert train_with.main(args=args) == 0
+    assert [r["samples"] for r in read_metrics(str(tmp_path))] == [64, 128]  # 2 runners x 4 envs x 8 steps
+    algo = args.learner_object
+    assert not algo.learner_group.is_remote and algo.config.train_batch_size_per_learner == 64
+    assert algo.config.num_env_runners == 2 and algo.config.num_envs_per_env_runner == 4
+
+
 def test_rllibs_runner_overhead_is_timed_around_an_env_that_does_nothing():
     """benchmarks/rllib_overhead.py: RLlib's sampling loop, not the env, is what it times."""
     import os

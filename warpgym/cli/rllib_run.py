@@ -4,7 +4,9 @@ One GPU: one env runner in this process (``num_env_runners=0``) steps the adapte
 learner on the same GPU; warpgym's ``EpisodeLog`` reads the episodes as for the other learners.
 
 Several GPUs (``--gpus G``): G env runners and G learners, each a Ray actor with half a GPU, so that
-runner i and learner i share GPU i. Every runner steps its own ``--num-envs`` robots in one warpgym
+runner i and learner i share GPU i. ``--env-runners R`` sets the runners apart from the GPUs (on one GPU
+too): R runner actors share half of the G GPUs, as RLlib users spread sampling over CPU cores, since each
+runner's loop over its episodes runs on one core (benchmarks/rllib_overhead.py). Every runner steps its own ``--num-envs`` robots in one warpgym
 vector env; the learners train one policy with torch DDP, all-reducing gradients every minibatch.
 That is RLlib's successor of DD-PPO (its old stack's decentralised PPO, where each worker sampled,
 computed gradients and all-reduced them itself): sampling and learning are now separate actors, and
@@ -25,22 +27,24 @@ def rllib_config(args, num_envs: int, horizon: int, gpu: bool, env_name: str, en
     from ray.rllib.connectors.env_to_module import MeanStdFilter
 
     humanoid = args.task == "Humanoid"
-    batch = num_envs * horizon
-    remote = args.gpus > 1
-    share = 0.5 if gpu and remote else (1 if gpu else 0)  # a runner and a learner per GPU
+    runners, learners = args.env_runners, (args.gpus if args.gpus > 1 else 0)  # 0: in this process
+    batch = max(runners, 1) * num_envs * horizon // max(learners, 1)  # every runner's rollout, split over the learners
+    # the learners take half of every GPU where runner actors share it, all of it where the runner is local
+    learner_share = (0.5 if runners else 1.0) if gpu else 0
+    runner_share = 0.5 * args.gpus / runners if gpu and runners else 0
     cpus = 1.0
-    if remote:  # the actors' CPU requests must fit the cluster, or Ray waits for CPUs forever
+    if runners or learners:  # the actors' CPU requests must fit the cluster, or Ray waits for CPUs forever
         import ray
 
-        cpus = max(0.01, min(1.0, (ray.cluster_resources().get("CPU", 1.0) - 1.0) / (2 * args.gpus)))
+        cpus = max(0.01, min(1.0, (ray.cluster_resources().get("CPU", 1.0) - 1.0) / (runners + learners)))
     config = (PPOConfig()
               .environment(env_name, env_config=env_config or {})
-              .env_runners(num_env_runners=args.gpus if remote else 0, num_envs_per_env_runner=num_envs,
+              .env_runners(num_env_runners=runners, num_envs_per_env_runner=num_envs,
                            rollout_fragment_length=horizon, gym_env_vectorize_mode="vector_entry_point",
-                           num_gpus_per_env_runner=share if remote else 0, num_cpus_per_env_runner=cpus,
+                           num_gpus_per_env_runner=runner_share, num_cpus_per_env_runner=cpus,
                            env_to_module_connector=lambda env, spaces=None, device=None: MeanStdFilter())
-              .learners(num_learners=args.gpus if remote else 0, num_gpus_per_learner=share,
-                        num_cpus_per_learner=cpus if remote else "auto")
+              .learners(num_learners=learners, num_gpus_per_learner=learner_share,
+                        num_cpus_per_learner=cpus if learners else "auto")
               .training(train_batch_size_per_learner=batch,
                         minibatch_size=args.batch_size or min(32768, max(batch // 4, 1)),
                         num_epochs=args.repeat_times or (5 if humanoid else 4),
@@ -50,7 +54,7 @@ def rllib_config(args, num_envs: int, horizon: int, gpu: bool, env_name: str, en
               .rl_module(model_config={"fcnet_hiddens": [400, 200, 100] if humanoid else [256, 128, 64],
                                        "fcnet_activation": "elu", "vf_share_layers": False})
               .debugging(seed=args.seed))
-    if remote:
+    if runners:
         config = config.callbacks(ForwardSpeed)
     return config
 
@@ -98,11 +102,12 @@ def _time_limit_in(error: BaseException | None):
 
 
 def run_rllib_remote(args, horizon: int, num_envs: int, device: str, run_dir: str, sink, start: float) -> str:
-    """``args.gpus`` env runners and learners as Ray actors; a row per RLlib iteration to ``sink``.
+    """``args.env_runners`` env runners (and ``args.gpus`` learners, past one) as Ray actors; a row per RLlib
+    iteration to ``sink``.
     Returns what stopped the run: "iterations" or "time limit"."""
     from warpgym.wrappers.rllib import register_rllib_env
 
-    _start_ray(actors=2 * args.gpus)
+    _start_ray(actors=args.env_runners + (args.gpus if args.gpus > 1 else 0))
     gpu = device.startswith("cuda")
     env_config = {"task": args.task, "device": "cuda:0" if gpu else "cpu", "seed": args.seed,
                   "max_episode_steps": args.episode_length}  # each actor sees its one GPU as cuda:0
@@ -116,7 +121,7 @@ def run_rllib_remote(args, horizon: int, num_envs: int, device: str, run_dir: st
             now = time.time()
             runners = result.get("env_runners", {})
             row = {"samples": int(result.get("num_env_steps_sampled_lifetime", 0)), "steps_s": now - last,
-                   "time_s": now - start, "samples_per_s": args.gpus * num_envs * horizon / max(now - last, 1e-9),
+                   "time_s": now - start, "samples_per_s": args.env_runners * num_envs * horizon / max(now - last, 1e-9),
                    "episodes": int(runners.get("num_episodes", 0))}
             if row["episodes"]:
                 row.update({"return": float(runners["episode_return_mean"]),

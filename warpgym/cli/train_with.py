@@ -50,6 +50,9 @@ def parse_args(argv=None):
     ap.add_argument("--no-compile", action="store_true", help="rl_games: no torch.compile of its model (its default)")
     ap.add_argument("--gpus", type=int, default=1,
                     help="rllib: env runners and learners, one of each per GPU (on the CPU: that many processes)")
+    ap.add_argument("--env-runners", type=int, default=None,
+                    help="rllib: env runner processes, each stepping --num-envs robots (default: one per GPU past one, "
+                         "else one in this process)")
     for flag, kind, what in (("--horizon-len", int, "steps per env between updates"),
                              ("--batch-size", int, "samples per minibatch"), ("--repeat-times", int, "epochs per update"),
                              ("--learning-rate", float, "Adam's step size")):
@@ -61,8 +64,7 @@ def parse_args(argv=None):
         ap.error(f"--task {args.task!r}: choose Ant or Humanoid")
     args.task = args.task.capitalize()
     rllib_only = [f for f in ("horizon_len", "batch_size", "repeat_times", "learning_rate") if getattr(args, f) is not None]
-    if args.gpus != 1:
-        rllib_only.append("gpus")
+    rllib_only += [f for f, default in (("gpus", 1), ("env_runners", None)) if getattr(args, f) != default]
     if rllib_only and args.learner != "rllib":
         ap.error(f"--{rllib_only[0].replace('_', '-')} is an rllib setting: the other learners run their published numbers")
     if args.learning_rate is not None and not args.learning_rate > 0:
@@ -71,6 +73,10 @@ def parse_args(argv=None):
         v = getattr(args, flag)
         if v is not None and v < 1:
             ap.error(f"--{flag.replace('_', '-')} {v}: must be a positive integer")
+    if args.env_runners is not None and args.env_runners < 0:
+        ap.error(f"--env-runners {args.env_runners}: must be 0 (one runner in this process) or more")
+    if args.env_runners is None:
+        args.env_runners = args.gpus if args.gpus > 1 else 0
     if args.time_limit is not None and not args.time_limit > 0:
         ap.error(f"--time-limit {args.time_limit}: must be a positive number of seconds")
     try:
@@ -259,9 +265,11 @@ def main(argv=None, args=None) -> int:
     num_envs = args.num_envs or (4096 if gpu else 64)
     args.iterations = args.iterations or (500 if gpu else 20)
     horizon = getattr(args, "horizon_len", None) or HORIZON[args.learner][args.task]
-    if getattr(args, "batch_size", None) and args.batch_size > num_envs * horizon:
-        raise SystemExit(f"error: --batch-size {args.batch_size} exceeds the {num_envs * horizon} samples of one rollout "
-                         f"({num_envs} envs x horizon {horizon}): lower --batch-size or raise --num-envs")
+    runners = max(getattr(args, "env_runners", 0), 1)  # rllib: every runner's rollout, split over the learners
+    rollout = runners * num_envs * horizon // max(getattr(args, "gpus", 1), 1)
+    if getattr(args, "batch_size", None) and args.batch_size > rollout:
+        raise SystemExit(f"error: --batch-size {args.batch_size} exceeds the {rollout} samples of one rollout per learner "
+                         f"({runners} runner(s) x {num_envs} envs x horizon {horizon}): lower --batch-size or raise --num-envs")
     run_dir = args.run_dir or os.path.join("runs", f"{args.task}-{args.learner}-{time.strftime('%Y%m%d-%H%M%S')}")
     os.makedirs(run_dir, exist_ok=True)
     torch.manual_seed(args.seed)
@@ -279,7 +287,7 @@ def main(argv=None, args=None) -> int:
                   f"{row['time_s']:6.1f} s", flush=True)
 
     stopped = "iterations"
-    if args.learner == "rllib" and args.gpus > 1:  # env runners in their own processes build their own envs
+    if args.learner == "rllib" and args.env_runners:  # env runners in their own processes build their own envs
         from warpgym.cli.rllib_run import run_rllib_remote  # noqa: PLC0415
 
         stopped = run_rllib_remote(args, horizon, num_envs, device, run_dir, sink, PROCESS_START)
