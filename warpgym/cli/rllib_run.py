@@ -6,9 +6,9 @@ learner on the same GPU; warpgym's ``EpisodeLog`` reads the episodes as for the 
 Several GPUs (``--gpus G``): G env runners and G learners, each a Ray actor with half a GPU, so that
 runner i and learner i share GPU i. ``--env-runners R`` sets the runners apart from the GPUs (on one GPU
 too): R runner actors share half of the G GPUs, as RLlib users spread sampling over CPU cores, since each
-runner's loop over its episodes runs on one core (benchmarks/rllib_overhead.py). Every runner steps its own ``--num-envs`` robots in one warpgym
-vector env; the learners train one policy with torch DDP, all-reducing gradients every minibatch.
-That is RLlib's successor of DD-PPO (its old stack's decentralised PPO, where each worker sampled,
+runner's loop over its episodes runs on one core (benchmarks/rllib_overhead.py). Every runner steps its
+own ``--num-envs`` robots in one warpgym vector env; the learners train one policy with torch DDP,
+all-reducing gradients every minibatch. That is RLlib's successor of DD-PPO (its old stack's decentralised PPO, where each worker sampled,
 computed gradients and all-reduced them itself): sampling and learning are now separate actors, and
 the runners receive the new weights after every update. The episodes are then read from RLlib's own
 metrics, with warpgym's forward speed added by ``ForwardSpeed`` below.
