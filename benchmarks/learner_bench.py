@@ -25,7 +25,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.dirname(HERE))
 sys.path.insert(0, HERE)
 
-from targets import WALKING  # noqa: E402
+from targets import WALKING, walking_row  # noqa: E402
 
 ALL = ("warpgym", "rsl_rl", "skrl", "rl_games", "sb3")
 
@@ -39,22 +39,7 @@ def command(learner: str, task: str, seconds: float, num_envs: int, run_dir: str
 
 
 def row_of(learner: str, task: str, run_dir: str, wall_s: float, rc: int) -> dict:
-    from agents.logger import first_reaching, read_metrics, steady_median  # noqa: PLC0415
-
-    row = {"learner": learner, "run_dir": run_dir, "rc": rc, "wall_s": round(wall_s, 1)}
-    try:
-        rows = read_metrics(run_dir)
-    except FileNotFoundError:
-        return {**row, "error": "no metrics"}
-    done = [r for r in rows if r.get("speed") is not None]
-    hit = first_reaching(rows, "speed", WALKING[task]) or {}
-    row.update({"iterations": len(rows), "samples": rows[-1]["samples"] if rows else 0,
-                "samples_per_s": steady_median(rows), "first_iteration_s": rows[0]["time_s"] if rows else None,
-                "target_speed": WALKING[task], "time_to_target_s": hit.get("time_s"),
-                "samples_to_target": hit.get("samples"),
-                "final_return": done[-1]["return"] if done else None,
-                "final_speed": done[-1]["speed"] if done else None})
-    return row
+    return {"learner": learner, "run_dir": run_dir, "rc": rc, "wall_s": round(wall_s, 1), **walking_row(run_dir, task)}
 
 
 def run(args) -> int:
@@ -105,7 +90,7 @@ def report(args) -> int:
                  else f"{r['time_to_target_s']:.0f} s ({r['samples_to_target'] / 1e6:.1f} M samples)")
         sps = r.get("samples_per_s")
         print(f"| {r['learner']} | {fmt(None if sps is None else sps / 1e6, '.3f')} M | "
-              f"{fmt(r.get('first_iteration_s'), '.0f')} s | {reach} | {fmt(r.get('final_return'), '.0f')} | "
+              f"{fmt(r.get('first_row_s'), '.0f')} s | {reach} | {fmt(r.get('final_return'), '.0f')} | "
               f"{fmt(r.get('final_speed'), '.2f')} m/s |")
     if args.figure:
         from agents.plotting import plot_runs  # noqa: PLC0415

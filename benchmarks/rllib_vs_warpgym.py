@@ -41,7 +41,7 @@ ROOT = os.path.dirname(HERE)
 sys.path.insert(0, ROOT)
 sys.path.insert(0, HERE)
 
-from targets import WALKING  # noqa: E402
+from targets import WALKING, walking_row  # noqa: E402
 PRESET = {"Ant": {"horizon_len": 16, "batch_size": 32768, "repeat_times": 4, "learning_rate": 3e-4},
           "Humanoid": {"horizon_len": 32, "batch_size": 32768, "repeat_times": 5, "learning_rate": 5e-4}}
 SEED = {"batch_size": 1024, "learning_rate": 1e-3}
@@ -116,33 +116,14 @@ class Usage:
 
 
 def row_of(task: str, learner: str, gpus: int, run_dir: str, wall_s: float, rc: int, usage: dict) -> dict:
-    from agents.logger import first_reaching, read_metrics, steady_median
-
-    row = {"task": task, "learner": learner, "gpus": gpus, "run_dir": run_dir, "rc": rc, "wall_s": round(wall_s, 1),
-           **usage}
-    try:
-        rows = read_metrics(run_dir)
-    except FileNotFoundError:
-        return {**row, "error": "no metrics"}
-    done = [r for r in rows if r.get("speed") is not None]
-    hit = first_reaching(rows, "speed", WALKING[task]) or {}
-    row.update({"iterations": len(rows), "samples": rows[-1]["samples"] if rows else 0,
-                "samples_per_s": steady_median(rows), "first_row_s": rows[0]["time_s"] if rows else None,
-                "time_to_target_s": hit.get("time_s"), "samples_to_target": hit.get("samples"),
-                "final_return": done[-1]["return"] if done else None, "final_speed": done[-1]["speed"] if done else None})
-    return row
-
-
-def learner_name(r: dict) -> str:
-    if r["learner"] == "warpgym":
-        return "warpgym"
-    return f"RLlib ({r['env_runners']} env runners)" if r.get("env_runners") else "RLlib"
+    return {"task": task, "learner": learner, "gpus": gpus, "run_dir": run_dir, "rc": rc, "wall_s": round(wall_s, 1),
+            **usage, **walking_row(run_dir, task)}
 
 
 def label(r: dict) -> str:
+    """"warpgym PPO, 1 GPU", "RLlib PPO, 2 GPUs", "RLlib PPO, 1 GPU, 8 env runners"."""
     runners = f", {r['env_runners']} env runners" if r.get("env_runners") else ""
-    return (f"{'warpgym PPO' if r['learner'] == 'warpgym' else 'RLlib PPO'}, {r['gpus']} GPU{'s' if r['gpus'] > 1 else ''}"
-            f"{runners}")
+    return f"{'warpgym' if r['learner'] == 'warpgym' else 'RLlib'} PPO, {r['gpus']} GPU{'s' if r['gpus'] > 1 else ''}{runners}"
 
 
 def table(doc: dict) -> str:
@@ -150,13 +131,13 @@ def table(doc: dict) -> str:
         return "-" if v is None else format(v, spec) + unit
 
     lines = [f"{doc['device']}, {doc['num_envs']} envs per GPU, {doc['seconds']:g} s per run, hparams {doc['hparams']}",
-             "", "| task | learner | GPUs | samples/s | training episodes at target speed | last return | last speed "
-             "| GPU use | CPU use |", "|---|---|---:|---:|---:|---:|---:|---:|---:|"]
+             "", "| task | learner | samples/s | training episodes at target speed | last return | last speed "
+             "| GPU use | CPU use |", "|---|---|---:|---:|---:|---:|---:|---:|"]
     for r in doc["rows"]:
         hit = ("not within the run" if r.get("time_to_target_s") is None else
                f"{WALKING[r['task']]:g} m/s at {r['time_to_target_s']:.0f} s ({r['samples_to_target'] / 1e6:.1f} M)")
         sps = r.get("samples_per_s")
-        lines.append(f"| {r['task']} | {learner_name(r)} | {r['gpus']} | "
+        lines.append(f"| {r['task']} | {label(r)} | "
                      f"{fmt(None if sps is None else sps / 1e6, '.3f', ' M')} | {hit} | {fmt(r.get('final_return'), '.0f')} | "
                      f"{fmt(r.get('final_speed'), '.2f', ' m/s')} | {fmt(r.get('gpu_util_pct'), '.0f', ' %')} | "
                      f"{fmt(r.get('cpu_use_pct'), '.0f', ' %')} |")
