@@ -12,7 +12,8 @@ For one task, on one GPU with a warm kernel cache (the first run of the script f
               iterations) and peak GPU memory (nvidia-smi, every 0.5 s, the training process alone);
   learning    for each --target-envs size and --target-seeds seed: a --target-seconds training run,
               and when its training episodes first reached each of the task's target speeds (Ant 3
-              and 8 m/s, Humanoid 2 and 6 m/s; agents.logger.first_reaching over metrics.jsonl).
+              and 8 m/s, Humanoid 2 and 6 m/s; agents.logger.first_reaching over metrics.jsonl). A run
+              ends once it has reached the last one (--keep-going: it trains the whole time).
 The mini-batch keeps its size (the task's batch_size), so a larger rollout makes more mini-batch
 steps per pass and every sample is learned from as at 4096 envs; --scale-batch scales batch_size
 with the envs instead (as many steps per pass as at 4096, each on a larger batch).
@@ -29,6 +30,7 @@ import argparse
 import json
 import os
 import shutil
+import signal
 import statistics
 import subprocess
 import sys
@@ -72,6 +74,41 @@ class PeakMemory:
         return self.peak
 
 
+class StopAtTargets:
+    """Ends a training run (SIGTERM: it finishes its iteration, saves and exits 0) once its training
+    episodes have reached every target speed, so a time-to-target run costs the time to its last
+    target, not the whole budget; the times it reports are the same either way."""
+
+    def __init__(self, proc: subprocess.Popen, run_dir: str, targets, interval: float = 1.0):
+        self.proc, self.run_dir, self.targets, self.interval = proc, run_dir, tuple(targets), interval
+        self.fired = False
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        self._thread.start()
+
+    def reached(self) -> bool:
+        from agents.logger import first_reaching, read_metrics  # noqa: PLC0415
+
+        try:
+            rows = read_metrics(self.run_dir)
+        except (FileNotFoundError, ValueError):
+            return False
+        return all(first_reaching(rows, "speed", t) is not None for t in self.targets)
+
+    def _run(self) -> None:
+        while not self._stop.wait(self.interval):
+            if self.reached():
+                if self.proc.poll() is None:
+                    self.proc.send_signal(signal.SIGTERM)
+                    self.fired = True
+                return
+
+    def stop(self) -> bool:
+        self._stop.set()
+        self._thread.join()
+        return self.fired
+
+
 BATCH: dict[str, int] = {}  # --batch-size: the mini-batch at 4096 envs, instead of the task's preset
 
 
@@ -82,9 +119,9 @@ def batch_size(task: str, num_envs: int, scale: bool) -> int:
     return max(1, base * num_envs // BASE_ENVS) if scale else base
 
 
-def train(task: str, num_envs: int, seconds: float, seed: int, run_dir: str, args, extra=()) -> dict:
+def train(task: str, num_envs: int, seconds: float, seed: int, run_dir: str, args, extra=(), stop_at=()) -> dict:
     """One training run in its own process (``extra``: more `warpgym train` flags); its summary,
-    metrics and peak GPU memory."""
+    metrics, peak GPU memory and whether it ended early because every ``stop_at`` speed was reached."""
     from agents.logger import read_metrics  # noqa: PLC0415
 
     cmd = [sys.executable, "scripts/train.py", "--task", task, "--num-envs", str(num_envs), "--seed", str(seed),
@@ -96,14 +133,16 @@ def train(task: str, num_envs: int, seconds: float, seed: int, run_dir: str, arg
     with open(log, "w") as f:
         proc = subprocess.Popen(cmd, cwd=ROOT, stdout=f, stderr=subprocess.STDOUT)
         memory = PeakMemory(proc.pid)
+        stopper = StopAtTargets(proc, run_dir, stop_at) if stop_at else None
         code = proc.wait()
     peak = memory.stop()
+    early = stopper.stop() if stopper else False
     if code != 0:
         with open(log) as f:
             raise SystemExit(f"{' '.join(cmd)} failed ({code}):\n{f.read()[-3000:]}")
     with open(os.path.join(run_dir, "summary.json")) as f:
         summary = json.load(f)
-    return {"summary": summary, "rows": read_metrics(run_dir), "peak_mib": peak}
+    return {"summary": summary, "rows": read_metrics(run_dir), "peak_mib": peak, "stopped_at_targets": early}
 
 
 def env_steps(task: str, num_envs: int, args) -> float | None:
@@ -197,6 +236,11 @@ def figure(doc: dict, path: str) -> None:
     plt.close(fig)
 
 
+def stop_at(args) -> tuple:
+    """The speeds at which a learning run may end (none with --keep-going)."""
+    return () if args.keep_going else TARGETS[args.task]
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", required=True, help="output directory")
@@ -214,6 +258,8 @@ def main(argv=None) -> int:
     ap.add_argument("--scale-batch", action="store_true", help="scale batch_size with the envs (see above)")
     ap.add_argument("--batch-size", type=int, default=None,
                     help="mini-batch samples (default: the task's preset, 32768; small for a CPU smoke run)")
+    ap.add_argument("--keep-going", action="store_true",
+                    help="train every learning run for its whole time (default: stop it once it reaches the last target)")
     ap.add_argument("--device", default=None)
     args = ap.parse_args(argv)
     seeds = args.target_seeds if args.target_seeds is not None else ([0, 1, 2] if args.task == "Ant" else [0])
@@ -263,11 +309,12 @@ def main(argv=None) -> int:
               f"peak {run['peak_mib']} MiB", flush=True)
     for n in args.target_envs:
         for seed in seeds:
-            run = train(args.task, n, seconds, seed, os.path.join(args.out, "runs", f"{args.task}-{n}-s{seed}"), args)
+            run = train(args.task, n, seconds, seed, os.path.join(args.out, "runs", f"{args.task}-{n}-s{seed}"), args,
+                        stop_at=stop_at(args))
             hits = {str(t): first_reaching(run["rows"], "speed", t) for t in TARGETS[args.task]}
             doc["learning"].append({"num_envs": n, "seed": seed, "seconds": seconds, "to_target": hits,
                                     "samples_per_s": run["summary"].get("steady_samples_per_s_median"),
-                                    "final": run["summary"].get("final")})
+                                    "final": run["summary"].get("final"), "stopped_at_targets": run["stopped_at_targets"]})
             save(path, doc)
             print(f"{args.task} x {n} seed {seed}: " + ", ".join(
                 f"{t} m/s at {'-' if h is None else round(h['time_s'], 1)} s" for t, h in hits.items()), flush=True)

@@ -12,7 +12,8 @@ In one script run, for one task at --envs envs (warm kernel cache: the first run
               overlapped: update, then "collect", the part of the rollout the update did not hide);
   learning    a --seconds run per mode and seed: when the training episodes first reached each target
               speed (Ant 3 and 8 m/s, Humanoid 2 and 6 m/s), and the median over the seeds (none unless
-              most seeds got there; envs_per_gpu.learning_by_size).
+              most seeds got there; envs_per_gpu.learning_by_size); a run ends at its last target
+              (--keep-going: it trains the whole time).
 Writes OUT/overlap_<task>.json after every run and the tables as OUT/overlap_<task>.md.
 """
 
@@ -63,6 +64,8 @@ def main(argv=None) -> int:
     ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
     ap.add_argument("--bench-steps", type=int, default=100)
     ap.add_argument("--batch-size", type=int, default=None, help="the mini-batch (default: the task's)")
+    ap.add_argument("--keep-going", action="store_true",
+                    help="train every learning run for its whole time (default: stop it once it reaches the last target)")
     ap.add_argument("--device", default=None)
     args = ap.parse_args(argv)
     args.scale_batch = False
@@ -96,11 +99,12 @@ def main(argv=None) -> int:
     for seed in args.seeds:
         for mode, flags in MODES.items():  # the modes alternate, so a drifting machine touches both alike
             run = epg.train(args.task, args.envs, seconds, seed,
-                            os.path.join(args.out, "runs", f"{args.task}-{mode}-s{seed}"), args, flags)
+                            os.path.join(args.out, "runs", f"{args.task}-{mode}-s{seed}"), args, flags,
+                            stop_at=epg.stop_at(args))
             hits = {str(t): first_reaching(run["rows"], "speed", t) for t in epg.TARGETS[args.task]}
             doc["learning"].append({"mode": mode, "seed": seed, "seconds": seconds, "to_target": hits,
                                     "samples_per_s": run["summary"].get("steady_samples_per_s_median"),
-                                    "final": run["summary"].get("final")})
+                                    "final": run["summary"].get("final"), "stopped_at_targets": run["stopped_at_targets"]})
             epg.save(path, doc)
     text = tables(doc)
     with open(os.path.join(args.out, f"overlap_{args.task}.md"), "w") as f:

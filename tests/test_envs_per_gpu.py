@@ -51,3 +51,35 @@ def test_the_overlap_benchmark_reads_ratios_phases_and_time_to_target_per_mode()
     assert "| overlap | 1.44 M | 0.90 | - | - | - | - |" in table
     assert "| sequential | 3 | 50 s (3/3) | not reached (1/3) | 1.20 M |" in table
     assert "| overlap | 1 | 30 s (1/1) | 100 s (1/1) | 1.20 M |" in table
+
+
+FAKE_RUN = r"""
+import json, signal, sys, time
+stopped = []
+signal.signal(signal.SIGTERM, lambda *a: stopped.append(1))
+with open(sys.argv[1], "w") as f:
+    for i, speed in enumerate(json.loads(sys.argv[2])):
+        if stopped:
+            sys.exit(0)
+        f.write(json.dumps({"iteration": i, "time_s": i, "samples": i, "speed": speed}) + "\n")
+        f.flush()
+        time.sleep(0.2)
+sys.exit(3)  # trained to the end: no stop came
+"""
+
+
+@pytest.mark.parametrize(("speeds", "stops"), [([0.5, 2.0, 3.5, 5.0] + [9.0] * 30, True),
+                                               ([0.5, 2.0, 3.5, 5.0, 7.9, 7.0, 6.0], False)])
+def test_a_learning_run_ends_once_it_reached_the_last_target_and_not_before(tmp_path, speeds, stops):
+    import json
+    import subprocess
+    import time
+
+    start = time.monotonic()
+    proc = subprocess.Popen([sys.executable, "-c", FAKE_RUN, str(tmp_path / "metrics.jsonl"), json.dumps(speeds)])
+    stopper = epg.StopAtTargets(proc, str(tmp_path), (3.0, 8.0), interval=0.1)
+    code = proc.wait(timeout=60)
+    assert stopper.stop() is stops
+    assert code == (0 if stops else 3)
+    if stops:  # 9 m/s is logged at 1 s; the whole run would take 6.8 s
+        assert time.monotonic() - start < 4.0
