@@ -217,7 +217,8 @@ def figure(doc: dict, path: str) -> None:
     if rows:
         n = [r["num_envs"] for r in rows]
         a.plot(n, [(r["env_steps_per_s"] or 0) / 1e6 for r in rows], "o-", label="task env, env-steps/s")
-        a.plot(n, [(r["samples_per_s"] or 0) / 1e6 for r in rows], "s-", label="training, samples/s")
+        timed = [r for r in rows if r["samples_per_s"]]
+        a.plot([r["num_envs"] for r in timed], [r["samples_per_s"] / 1e6 for r in timed], "s-", label="training, samples/s")
     a.set(xscale="log", xlabel="envs per GPU", ylabel="millions per second", title=f"{doc['task']}: throughput")
     a.set_xticks([r["num_envs"] for r in rows], [str(r["num_envs"]) for r in rows])
     a.legend()
@@ -234,6 +235,25 @@ def figure(doc: dict, path: str) -> None:
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+MIN_ITERATIONS = 20  # a steady median over fewer iterations is mostly graph captures and warm-up
+
+
+def throughput_row(n: int, steps: float | None, run: dict, args) -> dict:
+    """A --envs size's row. --throughput-seconds counts from the process's start, as every warpgym time
+    limit does, so at the largest sizes the build can leave too few iterations to time: then the row
+    has no samples/s and says why, rather than a figure of the warm-up."""
+    s = run["summary"]
+    iterations = s.get("iterations") or 0
+    row = {"num_envs": n, "env_steps_per_s": steps, "samples_per_s": s.get("steady_samples_per_s_median"),
+           "peak_mib": run["peak_mib"], "batch_size": batch_size(args.task, n, args.scale_batch),
+           "iterations": iterations, "phase_s": s.get("steady_phase_s_median")}
+    if iterations < MIN_ITERATIONS:
+        row.update(samples_per_s=None, phase_s=None,
+                   too_short=f"{iterations} iterations in {args.throughput_seconds:g} s: too few to time; "
+                             "raise --throughput-seconds")
+    return row
 
 
 def stop_at(args) -> tuple:
@@ -300,13 +320,11 @@ def main(argv=None) -> int:
     for n in args.envs:
         steps = env_steps(args.task, n, args)
         run = train(args.task, n, args.throughput_seconds, 0, os.path.join(args.out, "runs", f"{args.task}-{n}-tp"), args)
-        s = run["summary"]
-        doc["throughput"].append({"num_envs": n, "env_steps_per_s": steps, "samples_per_s": s.get("steady_samples_per_s_median"),
-                                  "peak_mib": run["peak_mib"], "batch_size": batch_size(args.task, n, args.scale_batch),
-                                  "iterations": s.get("iterations"), "phase_s": s.get("steady_phase_s_median")})
+        doc["throughput"].append(throughput_row(n, steps, run, args))
         save(path, doc)
-        print(f"{args.task} x {n}: {fmt_m(steps)} env-steps/s, {fmt_m(s.get('steady_samples_per_s_median'))} samples/s, "
-              f"peak {run['peak_mib']} MiB", flush=True)
+        row = doc["throughput"][-1]
+        print(f"{args.task} x {n}: {fmt_m(steps)} env-steps/s, {fmt_m(row['samples_per_s'])} samples/s, "
+              f"peak {run['peak_mib']} MiB" + (f" ({row['too_short']})" if row.get("too_short") else ""), flush=True)
     for n in args.target_envs:
         for seed in seeds:
             run = train(args.task, n, seconds, seed, os.path.join(args.out, "runs", f"{args.task}-{n}-s{seed}"), args,

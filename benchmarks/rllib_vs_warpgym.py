@@ -3,6 +3,7 @@
     python benchmarks/rllib_vs_warpgym.py --out OUT                                   # Ant, Humanoid x 1, 2 GPUs
     python benchmarks/rllib_vs_warpgym.py --out OUT --tasks Ant --gpus 1 --seconds 60
     python benchmarks/rllib_vs_warpgym.py --report OUT --figures docs/figures         # table and figures again
+    python benchmarks/rllib_vs_warpgym.py --report OUT OUT2                           # two runs' rows together
 
 For each task and GPU count G, one run of each learner, one after another:
 - warpgym: ``warpgym train`` (G = 1) or ``torchrun --nproc_per_node=G -m warpgym train``: G processes, each
@@ -130,7 +131,8 @@ def table(doc: dict) -> str:
     def fmt(v, spec, unit=""):
         return "-" if v is None else format(v, spec) + unit
 
-    lines = [f"{doc['device']}, {doc['num_envs']} envs per GPU, {doc['seconds']:g} s per run, hparams {doc['hparams']}",
+    runs = f", rows of {doc['script_runs']} script runs ({', '.join(doc['dates'])})" if doc.get("script_runs") else ""
+    lines = [f"{doc['device']}, {doc['num_envs']} envs per GPU, {doc['seconds']:g} s per run, hparams {doc['hparams']}{runs}",
              "", "| task | learner | samples/s | training episodes at target speed | last return | last speed "
              "| GPU use | CPU use |", "|---|---|---:|---:|---:|---:|---:|---:|"]
     for r in doc["rows"]:
@@ -159,6 +161,36 @@ def figures(doc: dict, out_dir: str) -> list[str]:
             os.replace(p, dest)
             written.append(dest)
     return written
+
+
+ALIKE = ("device", "num_envs", "seconds", "hparams", "settings")  # what makes rows of two runs comparable
+
+
+def merged_reports(outs: list[str]) -> dict:
+    """The comparison.json of each earlier OUT, rows in order, each row's run directory found beside its
+    JSON wherever OUT was copied to; a ValueError names an OUT that is missing or was run differently."""
+    doc = None
+    for out in outs:
+        path = os.path.join(out, "comparison.json")
+        if not os.path.isfile(path):
+            raise ValueError(f"--report {out}: no comparison.json there; pass an --out directory of an earlier run")
+        with open(path) as f:
+            part = json.load(f)
+        for r in part["rows"]:
+            r["run_dir"] = os.path.join(out, os.path.basename(r["run_dir"]))
+        if doc is None:
+            doc = part
+            continue
+        differ = [k for k in ALIKE if part.get(k) != doc.get(k)]
+        if differ:
+            raise ValueError(f"--report {out}: its runs differ from {outs[0]}'s in {', '.join(differ)}; "
+                             "report runs made alike together, the others apart")
+        doc["rows"] += part["rows"]
+        doc["script_runs"] = doc.get("script_runs", 1) + 1
+        doc["dates"] = sorted(set(doc.get("dates", [doc["date"]])) | {part["date"]})
+    tasks = list(dict.fromkeys(r["task"] for r in doc["rows"]))
+    doc["rows"].sort(key=lambda r: tasks.index(r["task"]))  # a task's rows together, each run's in its order
+    return doc
 
 
 def save(out: str, doc: dict) -> None:
@@ -209,19 +241,18 @@ def main(argv=None) -> int:
                          "cores RLlib samples with (default: one runner per GPU, in the driver on one GPU)")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--device", default=None, help="cpu to run on the CPU (a check of the script, not a figure)")
-    ap.add_argument("--report", metavar="OUT", help="print the table of an earlier OUT and draw its figures again")
-    ap.add_argument("--figures", default=None, help="with --report: where the figures go (default: OUT)")
+    ap.add_argument("--report", metavar="OUT", nargs="+",
+                    help="print the table of earlier OUTs (one, or several run alike, their rows together) and draw "
+                         "the figures again")
+    ap.add_argument("--figures", default=None, help="with --report: where the figures go (default: the first OUT)")
     args = ap.parse_args(argv)
     if args.report:
-        path = os.path.join(args.report, "comparison.json")
-        if not os.path.isfile(path):
-            ap.error(f"--report {args.report}: no comparison.json there; pass an --out directory of an earlier run")
-        with open(path) as f:
-            doc = json.load(f)
-        for r in doc["rows"]:  # the runs lie beside comparison.json, wherever OUT was copied to
-            r["run_dir"] = os.path.join(args.report, os.path.basename(r["run_dir"]))
+        try:
+            doc = merged_reports(args.report)
+        except ValueError as e:
+            ap.error(str(e))
         print(table(doc))
-        figures(doc, args.figures or args.report)
+        figures(doc, args.figures or args.report[0])
         return 0
     if not args.out:
         ap.error("--out is required (or --report)")

@@ -83,3 +83,16 @@ def test_a_learning_run_ends_once_it_reached_the_last_target_and_not_before(tmp_
     assert code == (0 if stops else 3)
     if stops:  # 9 m/s is logged at 1 s; the whole run would take 6.8 s
         assert time.monotonic() - start < 4.0
+
+
+def test_a_throughput_run_too_short_to_time_gives_no_samples_per_s_and_says_why():
+    from types import SimpleNamespace
+
+    args = SimpleNamespace(task="Ant", scale_batch=False, throughput_seconds=30.0)
+    run = {"summary": {"iterations": 2, "steady_samples_per_s_median": 5.6e5, "steady_phase_s_median": {}}, "peak_mib": 9}
+    row = epg.throughput_row(32768, 2.9e6, run, args)
+    assert row["samples_per_s"] is None and "2 iterations in 30 s" in row["too_short"]
+    run["summary"]["iterations"] = 60
+    assert epg.throughput_row(16384, 2.5e6, run, args)["samples_per_s"] == 5.6e5
+    doc = {"task": "Ant", "device": "GPU", "targets": [3.0, 8.0], "throughput": [row], "learning": []}
+    assert "| 32768 | 2.90 M | - | - |" in epg.tables(doc)
