@@ -4,12 +4,12 @@ target speeds at the sizes worth training.
     python benchmarks/envs_per_gpu.py --out OUT --task Ant
     python benchmarks/envs_per_gpu.py --out OUT --task Humanoid --target-seeds 0
     python benchmarks/envs_per_gpu.py --out OUT --task Ant --envs 16 32 --target-envs 16 32 --batch-size 64 \\
-        --throughput-seconds 20 --target-seconds 30 --device cpu                  # a smoke run on a CPU
+        --throughput-iterations 20 --target-seconds 30 --device cpu               # a smoke run on a CPU
 
 For one task, on one GPU with a warm kernel cache (the first run of the script fills it):
   throughput  for each --envs size: the task env's env-steps/s (`warpgym bench`, median of 3 timings)
-              and a --throughput-seconds training run's steady samples/s (the median of its
-              iterations) and peak GPU memory (nvidia-smi, every 0.5 s, the training process alone);
+              and a training run of --throughput-iterations iterations (at most --throughput-seconds from
+              its start): its steady samples/s (the median of its iterations) and peak GPU memory (nvidia-smi, every 0.5 s, the training process alone);
   learning    for each --target-envs size and --target-seeds seed: a --target-seconds training run,
               and when its training episodes first reached each of the task's target speeds (Ant 3
               and 8 m/s, Humanoid 2 and 6 m/s; agents.logger.first_reaching over metrics.jsonl). A run
@@ -241,9 +241,10 @@ MIN_ITERATIONS = 20  # a steady median over fewer iterations is mostly graph cap
 
 
 def throughput_row(n: int, steps: float | None, run: dict, args) -> dict:
-    """A --envs size's row. --throughput-seconds counts from the process's start, as every warpgym time
-    limit does, so at the largest sizes the build can leave too few iterations to time: then the row
-    has no samples/s and says why, rather than a figure of the warm-up."""
+    """A --envs size's row. A throughput run is --throughput-iterations long, so that every size is timed
+    over as many iterations whatever its build and iteration take; if --throughput-seconds (counted from
+    the process's start, as every warpgym time limit) cut it to too few, the row has no samples/s and says
+    why, rather than a figure of the warm-up."""
     s = run["summary"]
     iterations = s.get("iterations") or 0
     row = {"num_envs": n, "env_steps_per_s": steps, "samples_per_s": s.get("steady_samples_per_s_median"),
@@ -267,7 +268,9 @@ def main(argv=None) -> int:
     ap.add_argument("--task", default="Ant", choices=sorted(TARGETS))
     ap.add_argument("--envs", type=int, nargs="*", default=[2048, 4096, 8192, 16384, 32768],
                     help="sizes for the throughput table (none: skip it)")
-    ap.add_argument("--throughput-seconds", type=float, default=45.0, help="training time per throughput run")
+    ap.add_argument("--throughput-iterations", type=int, default=60, help="iterations per throughput run")
+    ap.add_argument("--throughput-seconds", type=float, default=150.0,
+                    help="the most time a throughput run may take, from its process's start")
     ap.add_argument("--bench-steps", type=int, default=100, help="env steps per `warpgym bench` timing")
     ap.add_argument("--target-envs", type=int, nargs="*", default=[4096, 8192, 16384],
                     help="sizes for the time-to-target table (none: skip it)")
@@ -289,9 +292,13 @@ def main(argv=None) -> int:
         if bad:
             ap.error(f"{flag} {bad[0]}: envs per GPU must be positive")
     for flag, v in (("--throughput-seconds", args.throughput_seconds), ("--target-seconds", seconds),
+                    ("--throughput-iterations", args.throughput_iterations),
                     ("--bench-steps", args.bench_steps)):
         if not v > 0:
             ap.error(f"{flag} {v}: must be positive")
+    if args.throughput_iterations < MIN_ITERATIONS:
+        ap.error(f"--throughput-iterations {args.throughput_iterations}: a throughput run needs at least "
+                 f"{MIN_ITERATIONS} iterations to time")
     from agents.config import PRESETS  # noqa: PLC0415
 
     if args.batch_size is not None:
@@ -319,7 +326,8 @@ def main(argv=None) -> int:
            "argv": sys.argv[1:] if argv is None else argv, "throughput": [], "learning": []}
     for n in args.envs:
         steps = env_steps(args.task, n, args)
-        run = train(args.task, n, args.throughput_seconds, 0, os.path.join(args.out, "runs", f"{args.task}-{n}-tp"), args)
+        run = train(args.task, n, args.throughput_seconds, 0, os.path.join(args.out, "runs", f"{args.task}-{n}-tp"), args,
+                    ("--max-iterations", str(args.throughput_iterations)))
         doc["throughput"].append(throughput_row(n, steps, run, args))
         save(path, doc)
         row = doc["throughput"][-1]

@@ -85,7 +85,7 @@ def test_a_learning_run_ends_once_it_reached_the_last_target_and_not_before(tmp_
         assert time.monotonic() - start < 4.0
 
 
-def test_a_throughput_run_too_short_to_time_gives_no_samples_per_s_and_says_why():
+def test_a_throughput_run_cut_too_short_to_time_gives_no_samples_per_s_and_says_why():
     from types import SimpleNamespace
 
     args = SimpleNamespace(task="Ant", scale_batch=False, throughput_seconds=30.0)

@@ -48,6 +48,8 @@ CASES = [
     ("envs_per_gpu.py", ["--out", MISSING, "--envs", "1000"], None,
      "1000 envs: a rollout of 16000 samples (x horizon_len 16) does not split into mini-batches of 32768"),
     ("envs_per_gpu.py", ["--out", MISSING, "--target-envs", "0"], None, "--target-envs 0: envs per GPU must be positive"),
+    ("envs_per_gpu.py", ["--out", MISSING, "--throughput-iterations", "5"], None,
+     "--throughput-iterations 5: a throughput run needs at least 20 iterations"),
 ]
 
 
