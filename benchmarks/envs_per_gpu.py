@@ -257,6 +257,17 @@ def throughput_row(n: int, steps: float | None, run: dict, args) -> dict:
     return row
 
 
+def learning_row(run: dict, task: str, seed: int, seconds: float, **key) -> dict:
+    """A learning run's row: when its training episodes first reached each target speed, and its rate.
+    ``key``: what tells the run apart (num_envs here, mode in overlap.py)."""
+    from agents.logger import first_reaching  # noqa: PLC0415
+
+    return {**key, "seed": seed, "seconds": seconds,
+            "to_target": {str(t): first_reaching(run["rows"], "speed", t) for t in TARGETS[task]},
+            "samples_per_s": run["summary"].get("steady_samples_per_s_median"),
+            "final": run["summary"].get("final"), "stopped_at_targets": run["stopped_at_targets"]}
+
+
 def stop_at(args) -> tuple:
     """The speeds at which a learning run may end (none with --keep-going)."""
     return () if args.keep_going else TARGETS[args.task]
@@ -315,7 +326,6 @@ def main(argv=None) -> int:
 
     import torch  # noqa: PLC0415
 
-    from agents.logger import first_reaching  # noqa: PLC0415
     from warpgym.sim.device import resolve_device  # noqa: PLC0415
 
     device = resolve_device(args.device)
@@ -337,13 +347,11 @@ def main(argv=None) -> int:
         for seed in seeds:
             run = train(args.task, n, seconds, seed, os.path.join(args.out, "runs", f"{args.task}-{n}-s{seed}"), args,
                         stop_at=stop_at(args))
-            hits = {str(t): first_reaching(run["rows"], "speed", t) for t in TARGETS[args.task]}
-            doc["learning"].append({"num_envs": n, "seed": seed, "seconds": seconds, "to_target": hits,
-                                    "samples_per_s": run["summary"].get("steady_samples_per_s_median"),
-                                    "final": run["summary"].get("final"), "stopped_at_targets": run["stopped_at_targets"]})
+            doc["learning"].append(learning_row(run, args.task, seed, seconds, num_envs=n))
             save(path, doc)
             print(f"{args.task} x {n} seed {seed}: " + ", ".join(
-                f"{t} m/s at {'-' if h is None else round(h['time_s'], 1)} s" for t, h in hits.items()), flush=True)
+                f"{t} m/s at {'-' if h is None else round(h['time_s'], 1)} s"
+                for t, h in doc["learning"][-1]["to_target"].items()), flush=True)
     text = tables(doc)
     with open(os.path.join(args.out, f"envs_per_gpu_{args.task}.md"), "w") as f:
         f.write(f"{args.task}, {name}\n\n{text}\n")

