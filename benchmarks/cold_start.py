@@ -52,7 +52,7 @@ def train(out: str, name: str, task: str, cache: str, seconds: float, extra: lis
     if code == 0 and os.path.isfile(path):
         with open(path) as f:
             s = json.load(f)
-        row.update({k: s.get(k) for k in ("device", "first_iteration_time_s", "first_train_speed_2ms",
+        row.update({k: s.get(k) for k in ("device", "num_envs", "first_iteration_time_s", "first_train_speed_2ms",
                                           "first_train_speed_3ms", "first_eval_speed_3ms",
                                           "steady_samples_per_s_median", "startup")})
     print(f"{name}: exit {code}, first iteration {row.get('first_iteration_time_s')} s, "
@@ -114,9 +114,9 @@ def fmt(v, unit=" s") -> str:
 
 
 def report(result: dict) -> str:
-    lines = ["| run | kernel cache at start | modules compiled | first iteration "
+    lines = ["| run | envs | kernel cache at start | modules compiled | first iteration "
              "| training episodes at walking speed (Ant 3 m/s, Humanoid 2 m/s) |",
-             "|---|---|---:|---:|---:|"]
+             "|---|---:|---|---:|---:|---:|"]
     start_cache = {"ant_cold_1": "empty", "ant_cold_2": "empty", "humanoid_cold": "empty",
                    "humanoid_after_ant": "the Ant's", "ant_warm_1": "warm", "ant_warm_2": "warm",
                    "ant_copied_cache": "the Ant's, copied to another folder", "ant_warm_profiled": "warm (cProfile)"}
@@ -124,7 +124,8 @@ def report(result: dict) -> str:
         compiled = len((r.get("startup") or {}).get("compiled", [])) if r.get("startup") else None
         reached = (r.get(f"first_train_speed_{WALKING[r['task']]:g}ms") or {}).get("time_s")
         reached = fmt(reached) if reached is not None else f"not within {result['seconds']:g} s"
-        lines.append(f"| {r['name']} | {start_cache.get(r['name'], '?')} | {'-' if compiled is None else compiled} "
+        envs = r.get("num_envs") or "-"  # train.py's default; runs before 2026-11-25 did not record it
+        lines.append(f"| {r['name']} | {envs} | {start_cache.get(r['name'], '?')} | {'-' if compiled is None else compiled} "
                      f"| {fmt(r.get('first_iteration_time_s'))} | {reached} |")
     c = result.get("ant_cache", {})
     lines.append(f"\nThe Ant's cache: {c.get('modules')} modules, {c.get('mib')} MiB.")

@@ -326,7 +326,7 @@ def main(argv=None) -> int:
     ap.add_argument("--seconds", type=float, default=300.0, help="training wall-clock time per run")
     ap.add_argument("--save-at", type=float, nargs="*", default=[60.0, 120.0],
                     help="keep the policies of these seconds since start too (default 60 120)")
-    ap.add_argument("--num-envs", type=int, default=None, help="training envs (train.py's default: 4096 on a GPU)")
+    ap.add_argument("--num-envs", type=int, default=None, help="training envs (train.py's default: 8192 Ants or 4096 Humanoids on a GPU)")
     ap.add_argument("--no-train", action="store_true", help="replay --probes / --replay only")
     ap.add_argument("--replay", nargs="+", default=[], metavar="RUN_DIR",
                     help="replay runs trained elsewhere (and train nothing)")

@@ -124,3 +124,22 @@ def test_fidelity_replays_a_probe_in_four_settings_and_reports_it(tmp_path, caps
     table = capsys.readouterr().out
     assert f"| ant_flying_policy.pt | default ({ANT.substeps} substeps) |" in table
     assert "| ant_flying_policy.pt | nov22 (3 substeps) |" in table
+
+
+def test_every_task_has_defaults_and_the_gpu_default_trains_as_it_was_measured():
+    """The GPU default envs were picked by benchmarks/envs_per_gpu.py, which trains with the preset's
+    mini-batch: a default whose rollout does not split into that mini-batch would train differently."""
+    from agents.config import PRESETS, Config
+
+    for task in PRESETS:
+        assert set(train.DEFAULT_ENVS) == set(train.DEFAULT_ITERATIONS) == {"cuda", "cpu"}
+        for kind in ("cuda", "cpu"):
+            assert train.DEFAULT_ENVS[kind][task] > 0 and train.DEFAULT_ITERATIONS[kind][task] > 0, (task, kind)
+        envs = train.DEFAULT_ENVS["cuda"][task]
+        cfg = train.build_config(train.parse_args(["--task", task]), task, envs, "cuda:0")
+        preset = Config.for_task(task)
+        assert cfg.batch_size == preset.batch_size, (task, envs)
+        assert (envs * cfg.horizon_len) % cfg.batch_size == 0
+        assert cfg.env_args["num_envs"] == envs
+    # larger Ant batches reach the target speeds sooner; the Humanoid's measured best is smaller
+    assert train.DEFAULT_ENVS["cuda"]["Ant"] > train.DEFAULT_ENVS["cuda"]["Humanoid"]
