@@ -3,6 +3,8 @@ target speeds at the sizes worth training.
 
     python benchmarks/envs_per_gpu.py --out OUT --task Ant
     python benchmarks/envs_per_gpu.py --out OUT --task Humanoid --target-seeds 0
+    python benchmarks/envs_per_gpu.py --report OUT/envs_per_gpu_Humanoid.json OUT2/envs_per_gpu_Humanoid.json \
+        --figure FIG.png                                   # two runs' rows in one table and figure, again
     python benchmarks/envs_per_gpu.py --out OUT --task Ant --envs 16 32 --target-envs 16 32 --batch-size 64 \\
         --throughput-iterations 20 --target-seconds 30 --device cpu               # a smoke run on a CPU
 
@@ -35,6 +37,7 @@ import statistics
 import subprocess
 import sys
 import threading
+import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
@@ -197,13 +200,47 @@ def learning_by_size(doc: dict, key: str = "num_envs") -> dict:
     out = {}
     for n in sorted({r[key] for r in doc["learning"]}):
         runs = [r for r in doc["learning"] if r[key] == n]
-        cell = {"seeds": len(runs), "samples_per_s": statistics.median(r["samples_per_s"] for r in runs)}
+        rates = [r["samples_per_s"] for r in runs if r.get("samples_per_s")]
+        cell = {"seeds": len(runs), "samples_per_s": statistics.median(rates) if rates else None}
         for t in doc["targets"]:
             times = [r["to_target"][str(t)]["time_s"] for r in runs if r["to_target"].get(str(t))]
             cell[t] = {"reached": len(times),
                        "median_s": statistics.median(times) if len(times) * 2 > len(runs) else None}
         out[n] = cell
     return out
+
+
+ALIKE = ("task", "device", "targets", "scale_batch")  # what rows of two script runs must share to sit in one table
+
+
+def merged(paths: list[str]) -> dict:
+    """The envs_per_gpu_<task>.json of earlier script runs as one document: the throughput rows of all,
+    and the learning runs of all (for example more seeds on the same machine). A ValueError names a file
+    that is missing, was run differently, or repeats a size's throughput or a size and seed."""
+    doc = None
+    for path in paths:
+        if not os.path.isfile(path):
+            raise ValueError(f"--report {path}: no such file; pass the envs_per_gpu_<task>.json of an earlier run")
+        with open(path) as f:
+            part = json.load(f)
+        if doc is None:
+            doc = {**part, "sources": [path]}
+            continue
+        differ = [k for k in ALIKE if part.get(k) != doc.get(k)]
+        if differ:
+            raise ValueError(f"--report {path}: made differently from {paths[0]} ({', '.join(differ)}); "
+                             "report runs made alike together, the others apart")
+        sizes = {r["num_envs"] for r in doc["throughput"]}
+        runs = {(r["num_envs"], r["seed"]) for r in doc["learning"]}
+        again = [f"throughput at {r['num_envs']}" for r in part["throughput"] if r["num_envs"] in sizes] + \
+                [f"{r['num_envs']} envs seed {r['seed']}" for r in part["learning"] if (r["num_envs"], r["seed"]) in runs]
+        if again:
+            raise ValueError(f"--report {path}: measures again what an earlier file has ({', '.join(again)}); "
+                             "pick one of the two")
+        doc["throughput"] = sorted(doc["throughput"] + part["throughput"], key=lambda r: r["num_envs"])
+        doc["learning"] += part["learning"]
+        doc["sources"].append(path)
+    return doc
 
 
 def figure(doc: dict, path: str) -> None:
@@ -223,12 +260,19 @@ def figure(doc: dict, path: str) -> None:
     a.set_xticks([r["num_envs"] for r in rows], [str(r["num_envs"]) for r in rows])
     a.legend()
     cells = learning_by_size(doc)
-    for t in doc["targets"]:
+    for i, t in enumerate(doc["targets"]):
         pts = [(n, c[t]["median_s"]) for n, c in cells.items() if c[t]["median_s"] is not None]
         if pts:
-            b.plot(*zip(*pts), "o-", label=f"training episodes at {t:g} m/s")
-    b.set(xscale="log", xlabel="envs per GPU", ylabel="seconds (median over seeds)", title=f"{doc['task']}: time to target")
+            b.plot(*zip(*pts), "o-", color=f"C{i}", label=f"training episodes at {t:g} m/s (median)")
+        # every seed that got there, so a target reached by too few seeds for a median still shows
+        seeds = [(r["num_envs"], r["to_target"][str(t)]["time_s"]) for r in doc["learning"] if r["to_target"].get(str(t))]
+        if seeds:
+            b.scatter(*zip(*seeds), s=14, alpha=0.45, color=f"C{i}",
+                      label=None if pts else f"training episodes at {t:g} m/s (seeds; too few for a median)")
+    b.set(xscale="log", xlabel="envs per GPU", ylabel="seconds from process start", title=f"{doc['task']}: time to target")
     b.set_xticks(list(cells), [str(n) for n in cells])
+    for ax in (a, b):
+        ax.minorticks_off()  # the log axis's own minor labels overprint the sizes
     if b.lines:
         b.legend()
     fig.suptitle(doc["device"])
@@ -275,7 +319,12 @@ def stop_at(args) -> tuple:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--out", required=True, help="output directory")
+    ap.add_argument("--out", help="output directory")
+    ap.add_argument("--report", nargs="+", metavar="JSON",
+                    help="print the tables of earlier runs' envs_per_gpu_<task>.json (several run alike: their rows "
+                         "together) and draw the figure again")
+    ap.add_argument("--figure", default=None,
+                    help="with --report: the figure's path (default: envs_per_gpu_<task>.png beside the first JSON)")
     ap.add_argument("--task", default="Ant", choices=sorted(TARGETS))
     ap.add_argument("--envs", type=int, nargs="*", default=[2048, 4096, 8192, 16384, 32768],
                     help="sizes for the throughput table (none: skip it)")
@@ -296,6 +345,16 @@ def main(argv=None) -> int:
                     help="train every learning run for its whole time (default: stop it once it reaches the last target)")
     ap.add_argument("--device", default=None)
     args = ap.parse_args(argv)
+    if args.report:
+        try:
+            doc = merged(args.report)
+        except ValueError as e:
+            ap.error(str(e))
+        print(f"{doc['task']}, {doc['device']}\n\n{tables(doc)}")
+        figure(doc, args.figure or os.path.join(os.path.dirname(args.report[0]), f"envs_per_gpu_{doc['task']}.png"))
+        return 0
+    if not args.out:
+        ap.error("--out OUT is needed to measure (or --report JSON to print the tables of an earlier run)")
     seeds = args.target_seeds if args.target_seeds is not None else ([0, 1, 2] if args.task == "Ant" else [0])
     seconds = args.target_seconds or (180.0 if args.task == "Ant" else 240.0)
     for flag, sizes in (("--envs", args.envs), ("--target-envs", args.target_envs)):
@@ -332,7 +391,8 @@ def main(argv=None) -> int:
     name = torch.cuda.get_device_name(torch.device(device)) if device.startswith("cuda") else "cpu"
     os.makedirs(os.path.join(args.out, "runs"), exist_ok=True)
     path = os.path.join(args.out, f"envs_per_gpu_{args.task}.json")
-    doc = {"task": args.task, "device": name, "targets": list(TARGETS[args.task]), "scale_batch": args.scale_batch,
+    doc = {"task": args.task, "device": name, "date": time.strftime("%Y-%m-%d"),
+           "targets": list(TARGETS[args.task]), "scale_batch": args.scale_batch,
            "argv": sys.argv[1:] if argv is None else argv, "throughput": [], "learning": []}
     for n in args.envs:
         steps = env_steps(args.task, n, args)

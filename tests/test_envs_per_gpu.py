@@ -27,6 +27,37 @@ def test_time_to_target_is_the_median_of_the_seeds_that_got_there_when_most_did(
     assert "| 8192 | 3 | 35 s (3/3) | not reached (1/3) | 2.00 M |" in table
 
 
+def test_report_puts_runs_made_alike_in_one_table_and_refuses_others(tmp_path, capsys):
+    import json
+
+    def doc(throughput, learning, **changes):
+        return {"task": "Ant", "device": "GPU", "targets": [3.0, 8.0], "scale_batch": False,
+                "throughput": [{"num_envs": n, "env_steps_per_s": 2e6, "samples_per_s": 1.5e6, "peak_mib": 2048,
+                                "batch_size": 32768, "iterations": 60} for n in throughput],
+                "learning": learning, **changes}
+
+    def write(name, d):
+        path = tmp_path / name
+        path.write_text(json.dumps(d))
+        return str(path)
+
+    first = write("a.json", doc([4096, 8192], [run(4096, 0, 40.0, None), run(8192, 0, 30.0, 90.0)]))
+    second = write("b.json", doc([], [run(4096, 1, 50.0, 100.0), run(8192, 1, 20.0, 70.0)]))
+    figure = tmp_path / "fig.png"
+    assert epg.main(["--report", first, second, "--figure", str(figure)]) == 0
+    out = capsys.readouterr().out
+    assert "| 8192 | 2 | 25 s (2/2) | 80 s (2/2) | 2.00 M |" in out  # both files' seeds in one median
+    assert "| 4096 | 2 | 45 s (2/2) | not reached (1/2) | 1.00 M |" in out
+    assert figure.stat().st_size > 0
+    for bad, says in ((write("c.json", doc([], [], device="Other GPU")), "made differently"),
+                      (write("d.json", doc([8192], [])), "throughput at 8192"),
+                      (write("e.json", doc([], [run(4096, 0, 1.0, 2.0)])), "4096 envs seed 0"),
+                      (str(tmp_path / "missing.json"), "no such file")):
+        with pytest.raises(SystemExit):
+            epg.main(["--report", first, bad])
+        assert says in capsys.readouterr().err
+
+
 @pytest.mark.parametrize(("envs", "scale", "expected"), [(4096, False, 32768), (16384, False, 32768),
                                                           (16384, True, 131072), (2048, True, 16384)])
 def test_the_mini_batch_keeps_its_size_unless_scaled_with_the_envs(envs, scale, expected):

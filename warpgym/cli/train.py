@@ -29,7 +29,7 @@ PROCESS_START = process_start_time()
 # episodes go from drifting backwards to about 0.8 m/s: enough to see it learn.
 DEFAULT_ITERATIONS = {"cuda": {"Ant": 500, "Humanoid": 1000}, "cpu": {"Ant": 200, "Humanoid": 20}}
 # On one H100 (benchmarks/envs_per_gpu.py, docs/benchmarks.md "Envs per GPU"): 8192 Ants reach 8 m/s in
-# 39 s (median of 3 seeds) against 70 s at 4096 and 55 s at 16384; the Humanoid reaches 2 m/s soonest at
+# 39 s (median of 3 seeds) against 70 s at 4096 and 54.5 s at 16384; the Humanoid reaches 2 m/s soonest at
 # 4096 (45 s against 55 s at 8192) and its 6 m/s is reached by one seed in two at either size.
 DEFAULT_ENVS = {"cuda": {"Ant": 8192, "Humanoid": 4096}, "cpu": {"Ant": 64, "Humanoid": 64}}
 
