@@ -3,7 +3,7 @@ target speeds at the sizes worth training.
 
     python benchmarks/envs_per_gpu.py --out OUT --task Ant
     python benchmarks/envs_per_gpu.py --out OUT --task Humanoid --target-seeds 0
-    python benchmarks/envs_per_gpu.py --report OUT/envs_per_gpu_Humanoid.json OUT2/envs_per_gpu_Humanoid.json \
+    python benchmarks/envs_per_gpu.py --report OUT/envs_per_gpu_Humanoid.json OUT2/envs_per_gpu_Humanoid.json \\
         --figure FIG.png                                   # two runs' rows in one table and figure, again
     python benchmarks/envs_per_gpu.py --out OUT --task Ant --envs 16 32 --target-envs 16 32 --batch-size 64 \\
         --throughput-iterations 20 --target-seconds 30 --device cpu               # a smoke run on a CPU
