@@ -62,9 +62,20 @@ def adapted_lr(lr: torch.Tensor, kl: torch.Tensor, desired_kl: float) -> torch.T
     return torch.where(kl > 2.0 * desired_kl, lower, torch.where(kl < 0.5 * desired_kl, higher, lr))
 
 
+def compiled(fn, device: torch.device, backend: str):
+    """``fn`` under torch.compile; on CUDA, Inductor writes Triton kernels, so Triton must be importable."""
+    if backend == "inductor" and device.type == "cuda":
+        try:
+            import triton  # noqa: F401, PLC0415
+        except ImportError as e:
+            raise RuntimeError(f"compile_update=True on {device} needs Triton ({e}): install the triton wheel "
+                               "that matches this torch, or train without --compile-update") from None
+    return torch.compile(fn, backend=backend, dynamic=False)
+
+
 class PPO:
     def __init__(self, policy: ActorCritic, cfg: Config, device: torch.device, cuda_graph: bool = True,
-                 workers: Workers | None = None):
+                 workers: Workers | None = None, compile_backend: str = "inductor"):
         self.policy = policy
         self.workers = workers or Workers()
         self.cfg = cfg
@@ -75,6 +86,9 @@ class PPO:
         # Across several processes the captured step holds its NCCL all-reduce (tests/test_cuda.py
         # checks it against the eager step on 2 GPUs).
         self.use_graph = cuda_graph and is_cuda
+        # Compiled, the loss's forward and backward are a few dozen fused Triton kernels instead of a few
+        # hundred small ones; the optimiser, the collective and the clipping stay eager (and captured).
+        self._loss_fn = compiled(self._losses, device, compile_backend) if cfg.compile_update else self._losses
         self._graph = None
         self._batch: dict[str, torch.Tensor] | None = None
         self._lagged = False
@@ -98,26 +112,31 @@ class PPO:
         self._storage_id = id(storage)
         self._graph = None
 
-    def _step(self) -> None:
-        cfg, policy, b, idx = self.cfg, self.policy, self._batch, self._idx
+    def _losses(self, idx: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        """The mini-batch ``idx``'s loss, and its terms: surrogate, value, entropy, KL, bounds (detached)."""
+        cfg, policy, b = self.cfg, self.policy, self._batch
         log_prob, entropy, values, mean = policy.evaluate(b["obs"][idx], b["actions"][idx])
-        with torch.no_grad():
-            kl = gaussian_kl(b["prox_means"][idx], self._prox_log_std, mean, policy.log_std).mean()
+        kl = gaussian_kl(b["prox_means"][idx], self._prox_log_std, mean, policy.log_std).mean().detach()
         surr = surrogate_loss(log_prob, b["prox_log_probs"][idx], b["adv"][idx], cfg.clip_ratio,
                               b["log_probs"][idx] if self._lagged else None)
         v_loss = value_loss(values, b["values"][idx], b["returns"][idx], cfg.value_clip)
         ent = entropy.mean()
         b_loss = bounds_loss(mean)
         loss = surr + cfg.value_coef * v_loss - cfg.entropy_coef * ent + cfg.bounds_coef * b_loss
+        return loss, torch.stack([surr, v_loss, ent, kl, b_loss]).detach()
+
+    def _step(self) -> None:
+        cfg, policy = self.cfg, self.policy
+        loss, terms = self._loss_fn(self._idx)
         self.optimizer.zero_grad(set_to_none=False)
         loss.backward()
         # one collective per mini-batch: every process's gradients and KL, averaged
-        (kl,) = self.workers.mean_grads_(policy.parameters(), kl)
+        (kl,) = self.workers.mean_grads_(policy.parameters(), terms[3])
         if cfg.desired_kl > 0:
             self.lr.copy_(adapted_lr(self.lr, kl, cfg.desired_kl))
         torch.nn.utils.clip_grad_norm_(policy.parameters(), cfg.max_grad_norm, foreach=True)
         self.optimizer.step()
-        self._sums += torch.stack([surr.detach(), v_loss.detach(), ent.detach(), kl, b_loss.detach()])
+        self._sums += torch.stack([terms[0], terms[1], terms[2], kl, terms[4]])
 
     def release_graph(self) -> None:
         """Free the captured step. Under NCCL a communicator cannot be destroyed while a graph that

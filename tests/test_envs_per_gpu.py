@@ -123,3 +123,25 @@ def test_a_throughput_run_cut_too_short_to_time_gives_no_samples_per_s_and_says_
     assert epg.throughput_row(16384, 2.5e6, run, args)["samples_per_s"] == 5.6e5
     doc = {"task": "Ant", "device": "GPU", "targets": [3.0, 8.0], "throughput": [row], "learning": []}
     assert "| 32768 | 2.90 M | - | - |" in epg.tables(doc)
+
+
+def test_the_overlap_benchmark_times_no_mode_from_a_run_too_short_to_time_it():
+    """A compiled run's first update compiles for seconds: a short throughput run is all warm-up
+    (on an H100, 3 iterations in 40 s read 0.08 M samples/s), and must not enter the table as a rate."""
+    import argparse
+
+    import overlap
+
+    def run(iterations):
+        return {"summary": {"iterations": iterations, "steady_samples_per_s_median": 8e4,
+                            "steady_phase_s_median": {"iteration_s": 1.6}}, "peak_mib": 100}
+
+    args = argparse.Namespace(throughput_seconds=40.0)
+    short = overlap.throughput_row("compiled", run(3), args)
+    assert short["samples_per_s"] is None and short["phase_s"] is None
+    assert "3 iterations in 40 s" in short["too_short"] and "--throughput-seconds" in short["too_short"]
+    timed = overlap.throughput_row("compiled", run(epg.MIN_ITERATIONS), args)
+    assert timed["samples_per_s"] == 8e4 and "too_short" not in timed
+    doc = {"task": "Ant", "device": "GPU", "num_envs": 4096, "targets": [3.0, 8.0], "env_steps_per_s": 1e6,
+           "throughput": [short], "learning": []}
+    assert "| compiled | not timed: 3 iterations" in overlap.tables(doc)

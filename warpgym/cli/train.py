@@ -75,7 +75,7 @@ def build_config(args, task: str, num_envs: int, device: str, saved: dict | None
         "horizon_len": args.horizon_len, "repeat_times": args.repeat_times, "learning_rate": args.learning_rate,
         "save_gap": args.save_gap, "eval_gap": args.eval_gap, "eval_envs": args.eval_envs,
         "batch_size": args.batch_size, "keep_checkpoints": args.keep_checkpoints or None,
-        "overlap": args.overlap or None,
+        "overlap": args.overlap or None, "compile_update": args.compile_update or None,
         "save_at": tuple(args.save_at) if args.save_at else None,
     }.items() if v is not None}
     if saved is None and "eval_envs" not in changes and device == "cpu":

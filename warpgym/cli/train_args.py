@@ -54,6 +54,9 @@ def parse_args(argv=None, description: str | None = None):
     ap.add_argument("--overlap", action="store_true",
                     help="collect the next rollout while PPO learns from the last one (two CUDA streams; "
                          "each rollout learnt one update after the weights that drew it: agents.overlap)")
+    ap.add_argument("--compile-update", action="store_true",
+                    help="torch.compile the PPO loss (fused Triton kernels on CUDA; the first update compiles "
+                         "for tens of seconds on a cold cache)")
     ap.add_argument("--profile", action="store_true",
                     help="time each phase of an iteration (synchronises the GPU between phases: slower)")
     args = ap.parse_args(argv)
