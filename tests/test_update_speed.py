@@ -32,7 +32,7 @@ def learn(compile_update: bool, lagged: bool = False):
     storage.means.copy_(storage.actions + 0.1 * torch.randn(storage.means.shape, generator=g))
     storage.log_probs.copy_(gaussian_log_prob(storage.actions, storage.means, policy.log_std.detach()))
     # aot_eager: the compiled forward and backward graphs, run by eager kernels (Inductor's C++ build
-    # would take half a minute on two cores; it matches to 1e-8, tried by hand)
+    # would take half a minute on two cores; by hand it matched within 2e-8)
     ppo = PPO(policy, cfg, torch.device("cpu"), compile_backend="aot_eager")
     torch.manual_seed(2)
     stats = [ppo.update(storage, policy.log_std.detach().clone(), 2, lagged=lagged) for _ in range(3)]
