@@ -42,13 +42,13 @@ def tables(doc: dict) -> str:
              "| mode | samples/s | of env-steps/s | iteration | collect | update | idle |",
              "|---|---:|---:|---:|---:|---:|---:|"]
     for row in doc["throughput"]:
+        if row.get("too_short"):
+            lines.append(f"| {row['mode']} | not timed: {row['too_short']} | | | | | |")
+            continue
         phase = row["phase_s"] or {}
         ms = {k: f"{1e3 * phase[k]:.1f} ms" if k in phase else "-" for k in
               ("iteration_s", "phase/collect_s", "phase/update_s", "phase/idle_s")}
         ratio = f"{row['samples_per_s'] / ceiling:.2f}" if row["samples_per_s"] and ceiling else "-"
-        if row.get("too_short"):
-            lines.append(f"| {row['mode']} | not timed: {row['too_short']} | | | | | |")
-            continue
         lines.append(f"| {row['mode']} | {epg.fmt_m(row['samples_per_s'])} | {ratio} | {ms['iteration_s']} | "
                      f"{ms['phase/collect_s']} | {ms['phase/update_s']} | {ms['phase/idle_s']} |")
     targets = doc["targets"]
@@ -96,7 +96,7 @@ def main(argv=None) -> int:
     args.scale_batch = False
     seconds = args.seconds or (180.0 if args.task == "Ant" else 240.0)
     if args.throughput_seconds < 0:
-        ap.error(f"--throughput-seconds {args.throughput_seconds}: must be positive (0: no throughput runs)")
+        ap.error(f"--throughput-seconds {args.throughput_seconds}: must be 0 (no throughput runs) or more")
     for flag, v in (("--envs", args.envs), ("--seconds", seconds),
                     ("--bench-steps", args.bench_steps), ("--batch-size", args.batch_size or 1)):
         if not v > 0:

@@ -56,7 +56,7 @@ def parse_args(argv=None, description: str | None = None):
                          "each rollout learnt one update after the weights that drew it: agents.overlap)")
     ap.add_argument("--compile-update", action="store_true",
                     help="torch.compile the PPO loss (fused Triton kernels on CUDA; the first update compiles "
-                         "for tens of seconds on a cold cache)")
+                         "for 3-16 s, the longer with an empty Inductor cache)")
     ap.add_argument("--profile", action="store_true",
                     help="time each phase of an iteration (synchronises the GPU between phases: slower)")
     args = ap.parse_args(argv)
