@@ -235,8 +235,9 @@ class OnPolicyRunner:
         self.last_eval_time = self.elapsed()
         self.clock.restart()
         self._in_flight = None
+        self._logged_through = self.iteration  # a fresh or resumed state: its rows are on disk already
         stop = False
-        finished = True  # the state is that of a finished iteration: safe to checkpoint
+        finished = True  # the state is that of a finished iteration
         try:
             while not stop and (last_iter is None or self.iteration < last_iter):
                 finished = False
@@ -262,14 +263,17 @@ class OnPolicyRunner:
                 self._keep_if_due()
             self.flush_log(last_iter, final=True)  # the last iteration always carries an evaluation
         finally:
-            # Interrupted: keep the finished iteration's row if it can be read. An error inside an
-            # iteration may leave the policy half updated: the last checkpoint, written between
-            # iterations, stands (at most save_gap iterations are lost).
+            # Interrupted: keep the finished iteration's row if it can be read, and save only a
+            # finished iteration whose row is on disk. An error inside an iteration may leave the
+            # policy half updated; an iteration whose statistics could not be gathered (a peer died
+            # in that collective) has no row, and a resume from it would never log one (it keeps the
+            # rows up to its checkpoint). Either way the last checkpoint stands: at most save_gap
+            # iterations are lost, and the metrics have no gap.
             try:
                 self.flush_log(last_iter, may_evaluate=False)
             except Exception:  # noqa: BLE001  (the original error is the one to see)
                 pass
-            if self.run_dir and finished:
+            if self.run_dir and finished and self._logged_through == self.iteration:
                 self.save()
         return self.history
 
@@ -351,6 +355,7 @@ class OnPolicyRunner:
         self.history.append(row)
         if self.logger:
             self.logger.log(row)
+        self._logged_through = staged.iteration
         self.print(progress_line(row, last_iter))
         return values[-1] > 0
 

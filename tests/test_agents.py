@@ -13,6 +13,7 @@ import torch
 from agents import Config, OnPolicyRunner, RunningMeanStd
 from agents.actor_critic import ActorCritic, gaussian_kl, gaussian_log_prob
 from agents.checkpoint import load, save_atomic
+from agents.logger import read_metrics
 from agents.ppo import adapted_lr, surrogate_loss, value_loss
 from agents.storage import compute_gae
 from point_mass import PointMassVecEnv
@@ -146,7 +147,7 @@ def test_resume_restores_policy_normalizer_optimizer_and_counters(tmp_path):
     assert b.ppo.lr.item() == pytest.approx(a.ppo.lr.item())
     b.learn(max_iterations=5)
     assert b.iteration == 5
-    rows = [r["iteration"] for r in __import__("agents.logger", fromlist=["x"]).read_metrics(str(tmp_path))]
+    rows = [r["iteration"] for r in read_metrics(str(tmp_path))]
     assert rows == [1, 2, 3, 4, 5]
 
 
@@ -201,11 +202,34 @@ def test_an_error_inside_an_iteration_keeps_its_rows_and_the_last_clean_checkpoi
     runner.update = update_then_stop
     with pytest.raises(KeyboardInterrupt):
         runner.learn(max_iterations=10)
-    rows = [r["iteration"] for r in __import__("agents.logger", fromlist=["x"]).read_metrics(str(tmp_path))]
+    rows = [r["iteration"] for r in read_metrics(str(tmp_path))]
     assert rows == [1, 2, 3]  # the third was still waiting to be logged when the fourth was cut short
     # the fourth iteration had collected (and moved the normaliser) before it stopped: saving then
     # would mix two iterations, so the checkpoint of iteration 2 stands
     assert load(str(tmp_path / "checkpoint.pt"), torch.device("cpu"))["iteration"] == 2
+
+
+def test_a_peer_lost_while_gathering_statistics_leaves_no_checkpoint_ahead_of_the_metrics(tmp_path):
+    """A peer dies in the collective that gathers iteration 5's statistics: iteration 5 finished,
+    but its row was never made. Saving it would leave a resume with no row 5 ever."""
+    cfg = Config(net_dims=(8,), horizon_len=4, batch_size=32, repeat_times=1, eval_gap=1e9, save_gap=2)
+    runner = OnPolicyRunner(PointMassVecEnv(8), cfg, run_dir=str(tmp_path), print_fn=lambda s: None)
+    real_sum = runner.workers.sum_
+
+    def sum_or_lose_the_peer(t):
+        if runner.iteration == 5:
+            raise RuntimeError("Connection closed by peer")  # what gloo raises when the other process dies
+        return real_sum(t)
+
+    runner.workers.sum_ = sum_or_lose_the_peer
+    with pytest.raises(RuntimeError, match="peer"):
+        runner.learn(max_iterations=10)
+    assert [r["iteration"] for r in read_metrics(str(tmp_path))] == [1, 2, 3, 4]
+    assert load(str(tmp_path / "checkpoint.pt"), torch.device("cpu"))["iteration"] == 4
+    resumed = OnPolicyRunner(PointMassVecEnv(8), cfg, run_dir=str(tmp_path), print_fn=lambda s: None)
+    resumed.load(str(tmp_path / "checkpoint.pt"))
+    resumed.learn(max_iterations=6)
+    assert [r["iteration"] for r in read_metrics(str(tmp_path))] == [1, 2, 3, 4, 5, 6]
 
 
 def test_checkpoints_are_kept_at_the_first_iteration_after_each_save_at_mark_and_not_again_on_resume(tmp_path):
