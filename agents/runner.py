@@ -88,6 +88,7 @@ class OnPolicyRunner:
         self._rollout_graph: torch.cuda.CUDAGraph | None = None
         self._rollouts_eager = 0
         self._in_flight: StagedRow | None = None  # an iteration's row on its way to the host (log())
+        self._logged_through = 0  # the last iteration whose row is logged: only such a state is saved on an error
 
     # ------------------------------------------------------------------ pieces
     def normalize(self, obs: torch.Tensor) -> torch.Tensor:
