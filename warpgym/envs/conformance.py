@@ -1,0 +1,203 @@
+"""warpgym's suite against Gymnasium's own envs: one step from the same states, and the distributions
+of random-action episodes. Used by tests/test_suite.py and benchmarks/conformance.py.
+
+"The same state" is everything Gymnasium's ``step`` reads before it simulates: qpos, qvel, the
+solver's warm start, and the position the forward speed is measured from (a body position as the
+last physics step left it, for Ant and Humanoid). States come from Gymnasium's env itself: its reset
+states and states along random-action episodes.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import torch
+
+from kernels import gym_params as G
+from warpgym.envs.suite import SuiteVecEnv
+from warpgym.tasks.suite import GymTask, get_suite_task
+
+
+def gymnasium_env(task: str | GymTask, **kwargs):
+    """``gymnasium.make`` of the same task with the same constructor arguments (TimeLimit included)."""
+    import gymnasium  # noqa: PLC0415
+
+    task = get_suite_task(task)
+    args = {name: getattr(task, name) for name in task.argument_names()}
+    return gymnasium.make(task.name, max_episode_steps=task.episode_length, **args, **kwargs)
+
+
+def reference_position(task: GymTask, env) -> np.ndarray:
+    """The (x, y) Gymnasium's next ``step`` measures the forward speed from, read off its data."""
+    u = env.unwrapped
+    model, data = u.model, u.data
+    if task.kind != G.FORWARD:
+        return np.zeros(2)
+    p = task.params(_Shape(model, u.frame_skip))
+    if p.position_source == G.POSITION_QPOS_X:
+        return np.array([data.qpos[0], 0.0])
+    if p.position_source == G.POSITION_QPOS_XY:
+        return data.qpos[:2].copy()
+    if p.position_source == G.POSITION_BODY:
+        return data.xpos[p.main_body, :2].copy()
+    return (model.body_mass @ data.xipos / model.body_mass.sum())[:2]
+
+
+class _Shape:
+    """What ``GymTask.params`` reads of a sim, from a MuJoCo model (for ``reference_position``)."""
+
+    def __init__(self, model, frame_skip: int):
+        import mujoco  # noqa: PLC0415
+
+        self.mjm, self.nq, self.nv, self.nu, self.nbody = model, model.nq, model.nv, model.nu, model.nbody
+        self.timestep = float(model.opt.timestep)
+        self.dt = self.timestep * frame_skip
+        self.body_names = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, b) or "" for b in range(model.nbody)]
+
+
+@dataclass
+class Sample:
+    """One Gymnasium step: the state before it, the action, and what Gymnasium returned."""
+
+    qpos: np.ndarray
+    qvel: np.ndarray
+    warm_start: np.ndarray
+    before: np.ndarray
+    action: np.ndarray
+    obs: np.ndarray
+    reward: float
+    terms: dict
+    terminated: bool
+    after_reset: bool
+
+
+def gymnasium_samples(task: GymTask, episodes: int, steps_apart: int, per_episode: int, seed: int = 0) -> list[Sample]:
+    """Steps of Gymnasium's env from its reset states and along random-action episodes: every
+    ``steps_apart``-th step of each episode, ``per_episode`` of them (fewer if it ends)."""
+    env = gymnasium_env(task)
+    rng = np.random.default_rng(seed)
+    out = []
+    for e in range(episodes):
+        env.reset(seed=seed * 1000 + e)
+        u = env.unwrapped
+        for t in range(steps_apart * per_episode):
+            action = rng.uniform(env.action_space.low, env.action_space.high).astype(np.float32)
+            keep = t % steps_apart == 0
+            if keep:
+                state = (u.data.qpos.copy(), u.data.qvel.copy(), u.data.qacc_warmstart.copy(),
+                         reference_position(task, env))
+            obs, reward, terminated, truncated, info = env.step(action)
+            if keep:
+                terms = {k: float(info[k]) for k in task.info_keys if k in info}
+                out.append(Sample(*state, action, obs, float(reward), terms, bool(terminated), t == 0))
+            if terminated or truncated:
+                break
+    env.close()
+    return out
+
+
+@dataclass
+class StepGaps:
+    """The largest differences between warpgym's step and Gymnasium's over the samples."""
+
+    samples: int
+    obs: float = 0.0  # max |warpgym - Gymnasium| / (1 + |Gymnasium|) over observation entries
+    reward: float = 0.0  # same, for the reward
+    terms: dict = field(default_factory=dict)
+    terminated_mismatches: int = 0
+    worst_obs_entry: int = -1
+
+
+def compare_steps(env: SuiteVecEnv, samples: list[Sample]) -> StepGaps:
+    """Put each sample's state into one world of ``env``, step every world once with the samples'
+    actions, and measure the differences. ``env.num_envs`` must be at least ``len(samples)``."""
+    n = len(samples)
+    if env.num_envs < n:
+        raise ValueError(f"{n} samples need num_envs >= {n}, got {env.num_envs}")
+    sim, dev = env.sim, env.device
+    qpos = sim.dof_pos.clone()
+    qvel = sim.dof_vel.clone()
+    warm = sim.to_torch(sim.d.qacc_warmstart)
+    before = sim.to_torch(env._episodes.before)
+    actions = torch.zeros(env.num_envs, env.num_actions, device=dev)
+    for i, s in enumerate(samples):
+        qpos[i] = torch.as_tensor(s.qpos, dtype=torch.float32)
+        qvel[i] = torch.as_tensor(s.qvel, dtype=torch.float32)
+        actions[i] = torch.as_tensor(s.action)
+    sim.set_state(qpos, qvel)
+    for i, s in enumerate(samples):
+        warm[i] = torch.as_tensor(s.warm_start, dtype=torch.float32)
+        before[i] = torch.as_tensor(s.before, dtype=torch.float32)
+    env.episode_steps.zero_()
+    obs, reward, terminated, truncated, info = env.step(actions)
+    done = (terminated | truncated).cpu().numpy()
+    obs = torch.where(torch.as_tensor(done, device=dev)[:, None], info["final_obs"], obs).cpu().numpy().astype(np.float64)
+    reward, terminated = reward.cpu().numpy().astype(np.float64), terminated.cpu().numpy()
+    gaps = StepGaps(n)
+    for i, s in enumerate(samples):
+        rel = np.abs(obs[i] - s.obs) / (1.0 + np.abs(s.obs))
+        if rel.size and rel.max() > gaps.obs:
+            gaps.obs, gaps.worst_obs_entry = float(rel.max()), int(rel.argmax())
+        gaps.reward = max(gaps.reward, abs(reward[i] - s.reward) / (1.0 + abs(s.reward)))
+        for key, value in s.terms.items():
+            mine = float(info[key][i])
+            gaps.terms[key] = max(gaps.terms.get(key, 0.0), abs(mine - value) / (1.0 + abs(value)))
+        gaps.terminated_mismatches += int(bool(terminated[i]) != s.terminated)
+    return gaps
+
+
+# ---------------------------------------------------------------------- episode distributions
+def ks_two_sample(a, b) -> tuple[float, float]:
+    """The two-sample Kolmogorov-Smirnov statistic of ``a`` and ``b`` and its asymptotic p-value."""
+    a, b = np.sort(np.asarray(a, np.float64)), np.sort(np.asarray(b, np.float64))
+    grid = np.concatenate([a, b])
+    cdf_a = np.searchsorted(a, grid, side="right") / a.size
+    cdf_b = np.searchsorted(b, grid, side="right") / b.size
+    stat = float(np.abs(cdf_a - cdf_b).max())
+    m = a.size * b.size / (a.size + b.size)
+    lam = (math.sqrt(m) + 0.12 + 0.11 / math.sqrt(m)) * stat
+    if lam < 1e-3:
+        return stat, 1.0
+    p = 2.0 * sum((-1) ** (k - 1) * math.exp(-2.0 * k * k * lam * lam) for k in range(1, 101))
+    return stat, float(min(max(p, 0.0), 1.0))
+
+
+def gymnasium_episodes(task: GymTask, episodes: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """Returns and lengths of ``episodes`` uniform-random-action episodes of Gymnasium's env."""
+    env = gymnasium_env(task)
+    env.action_space.seed(seed)
+    returns, lengths = [], []
+    for e in range(episodes):
+        env.reset(seed=seed + e)
+        total, steps, done = 0.0, 0, False
+        while not done:
+            _, reward, terminated, truncated, _ = env.step(env.action_space.sample())
+            total, steps, done = total + reward, steps + 1, terminated or truncated
+        returns.append(total)
+        lengths.append(steps)
+    env.close()
+    return np.array(returns), np.array(lengths)
+
+
+def warpgym_episodes(env: SuiteVecEnv, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """Returns and lengths of every world's first episode under uniform random actions (the first of
+    each world, not the first to end, which would favour short episodes)."""
+    gen = torch.Generator(device=env.device).manual_seed(seed)
+    low = torch.as_tensor(env.single_action_space.low, device=env.device)
+    high = torch.as_tensor(env.single_action_space.high, device=env.device)
+    env.reset(seed=seed)
+    returns = torch.zeros(env.num_envs, device=env.device)
+    lengths = torch.zeros(env.num_envs, dtype=torch.int32, device=env.device)
+    ended = torch.zeros(env.num_envs, dtype=torch.bool, device=env.device)
+    for _ in range(env.task.episode_length):
+        u = torch.rand(env.num_envs, env.num_actions, device=env.device, generator=gen)
+        _, _, terminated, truncated, info = env.step(low + (high - low) * u)
+        first = (terminated | truncated) & ~ended
+        returns = torch.where(first, info["episode"]["r"], returns)
+        lengths = torch.where(first, info["episode"]["l"], lengths)
+        ended |= first
+        if bool(ended.all()):
+            break
+    return returns.cpu().numpy().astype(np.float64), lengths.cpu().numpy()

@@ -1,0 +1,203 @@
+"""Gymnasium's MuJoCo tasks (v5) as a vector environment whose every step stays on the device.
+
+A step: the actions into MuJoCo Warp's controls, ``frame_skip`` physics steps, Gymnasium's
+observation, reward and termination, then the finished worlds reset and their first observation
+written, all one graph launch. Tensors are float32 on the env's device (Gymnasium's own envs return
+float64 numpy arrays) and persistent: the next step overwrites them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import torch
+import warp as wp
+from gymnasium import logger as gymnasium_logger
+from gymnasium import spaces
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+
+from kernels.buffers import StepOutputs
+from kernels.gym_params import GymEpisodes, MjView
+from kernels.gym_resets import reset_gym_worlds
+from kernels.gym_step import apply_gym_actions, gym_step, write_reset_observation
+from kernels.locomotion import advance_rng
+from kernels.solver_load import count_faults
+from warpgym.sim.checks import check_float_tensor
+from warpgym.sim.mjw_sim import MjwSim
+from warpgym.tasks.suite import GymTask, get_suite_task
+from warpgym.tasks.suite.base import MAX_TERMS
+
+
+class SuiteVecEnv(VectorEnv):
+    """``num_envs`` worlds of one of Gymnasium's MuJoCo tasks; tensors in, tensors out.
+
+    Args:
+        task: a suite id ("Hopper-v5", ...) or a ``GymTask``.
+        num_envs: parallel environments.
+        device: "cpu" or "cuda:N" (default: cuda:0 when present).
+        seed: seed of the reset noise; ``reset(seed=...)`` replaces it.
+        max_episode_steps: the time limit (default: Gymnasium's for the task).
+        **kwargs: Gymnasium's constructor arguments of the task (e.g. ``ctrl_cost_weight=0.5``,
+            ``frame_skip=2``, ``xml_file=PATH``), and ``nconmax`` / ``njmax`` for MuJoCo Warp's buffers.
+    """
+
+    metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
+    graph_capturable = True
+    FAULTS = ("nan_actions", "diverged_resets", "solver_overflows")
+    FAULT_HELP = {
+        "nan_actions": "the policy sent NaN/inf actions; they were applied as 0",
+        "diverged_resets": "a world's state stopped being finite; it ended with reward 0 and was reset",
+        "solver_overflows": "MuJoCo Warp's constraint or contact buffers were full and a world lost constraints for "
+                            "a physics step: pass larger nconmax / njmax",
+    }
+
+    def __init__(self, task: str | GymTask = "Hopper-v5", num_envs: int = 1, device: str | None = None, seed: int = 0,
+                 max_episode_steps: int | None = None, render_mode: str | None = None, **kwargs):
+        task = get_suite_task(task)
+        if render_mode is not None:
+            raise ValueError(f"render_mode={render_mode!r}: the suite's envs do not draw yet; pass render_mode=None "
+                             f"and draw with gymnasium.make('{task.name}', render_mode=...) from the same states")
+        if max_episode_steps is not None:
+            kwargs["episode_length"] = max_episode_steps
+        if kwargs:
+            task = task.replace(**kwargs)
+        task.validate()
+        self.task = task
+        self.render_mode = None
+        self.sim = sim = MjwSim(task.xml_file, num_envs, device, frame_skip=task.frame_skip, nconmax=task.nconmax,
+                                njmax=task.njmax, contact_forces=task.contact_forces)
+        self.num_envs = n = sim.num_envs
+        self.device = sim.torch_device
+        self.num_actions = a = sim.nu
+        self.num_obs = o = task.observation_size(sim)
+        self.metadata = {**self.metadata, "render_fps": int(np.round(1.0 / sim.dt))}
+        self.spec_dt = sim.dt
+
+        low, high = sim.ctrl_range[:, 0], sim.ctrl_range[:, 1]
+        self.single_observation_space = spaces.Box(-np.inf, np.inf, (o,), np.float32)
+        self.single_action_space = spaces.Box(low, high, (a,), np.float32)
+        self.observation_space = batch_space(self.single_observation_space, n)
+        self.action_space = batch_space(self.single_action_space, n)
+
+        dev = sim.device
+        self.params = task.params(sim)
+
+        def buf(shape, dtype=float):
+            return wp.zeros(shape, dtype=dtype, device=dev)
+
+        d = sim.d
+        self._view = view = MjView()
+        view.qpos, view.qvel, view.ctrl = d.qpos, d.qvel, d.ctrl
+        view.xpos, view.xipos, view.cinert, view.cvel = d.xpos, d.xipos, d.cinert, d.cvel
+        view.cfrc_ext, view.qfrc_actuator, view.qfrc_constraint = d.cfrc_ext, d.qfrc_actuator, d.qfrc_constraint
+        view.site_xpos, view.warm_start = d.site_xpos, d.qacc_warmstart
+        mjm = sim.mjm
+        view.body_mass = wp.array(mjm.body_mass.astype(np.float32), dtype=float, device=dev)
+        view.qpos0 = wp.array(mjm.qpos0.astype(np.float32), dtype=float, device=dev)
+        view.total_mass = float(mjm.body_mass.sum())
+
+        self._episodes = ep = GymEpisodes()
+        ep.before, ep.length, ep.total_return = buf((n, 2)), buf(n, wp.int32), buf(n)
+        ep.travel, ep.speed = buf(n), buf(n)
+        ep.ended_return, ep.ended_length, ep.ended_speed = buf(n), buf(n, wp.int32), buf(n)
+        ep.terms, ep.actions = buf((n, MAX_TERMS)), buf((n, a))
+
+        self._out = out = StepOutputs()
+        out.obs, out.final_obs, out.reward = buf((n, o)), buf((n, o)), buf(n)
+        out.terminated, out.truncated = buf(n, wp.bool), buf(n, wp.bool)
+        out.done, out.diverged = buf(n, wp.bool), buf(n, wp.bool)
+
+        self._actions_in = buf((n, a))
+        self._nan_count = buf(n, wp.int32)
+        self._fault_totals = buf(3, wp.int64)
+        self._rng_state = wp.array(np.array([seed, 0], np.int32), dtype=wp.int32, device=dev)
+
+        t = sim.to_torch
+        self._actions_in_t = t(self._actions_in)
+        self.obs, self.reward = t(out.obs), t(out.reward)
+        self.terminated, self.truncated = t(out.terminated), t(out.truncated)
+        self.actions = t(ep.actions)
+        self.episode_steps = t(ep.length)
+        done = t(out.done)
+        terms = t(ep.terms)
+        episode = {"r": t(ep.ended_return), "l": t(ep.ended_length), "_r": done, "_l": done}
+        so_far = {"r": t(ep.total_return), "l": t(ep.length)}
+        if task.has_speed:
+            episode.update(s=t(ep.ended_speed), _s=done)
+            so_far["s"] = t(ep.speed)
+        self.info = {
+            **{key: terms[:, col] for key, col in task.term_columns().items()},
+            "final_obs": t(out.final_obs), "_final_obs": done,
+            "episode": episode, "_episode": done, "episode_so_far": so_far,
+            "nan_actions": t(self._nan_count), "diverged": t(out.diverged),
+            "solver_overflows": t(sim.solver_overflows),
+        }
+        totals = t(self._fault_totals)
+        self._fault_views = {name: totals[i] for i, name in enumerate(self.FAULTS)}
+        self._graph = None
+        sim.compile_ahead(self._launch_step)
+        self._reset_all()
+
+    # ------------------------------------------------------------------ device work
+    def _launch_step(self) -> None:
+        sim, n, dev = self.sim, self.num_envs, self.sim.device
+        wp.launch(apply_gym_actions, dim=n, inputs=[self._actions_in],
+                  outputs=[sim.d.ctrl, self._episodes.actions, self._nan_count], device=dev)
+        sim.simulate()
+        wp.launch(gym_step, dim=n, inputs=[self.params, self._view, self._episodes, self._out], device=dev)
+        self._launch_reset(force_all=0)
+        wp.launch(count_faults, dim=n, inputs=[self._nan_count, self._out.diverged, sim.solver_overflows],
+                  outputs=[self._fault_totals], device=dev)
+        wp.launch(advance_rng, dim=1, inputs=[self._rng_state], device=dev)
+
+    def _launch_reset(self, force_all: int) -> None:
+        dev = self.sim.device
+        wp.launch(reset_gym_worlds, dim=self.num_envs,
+                  inputs=[self.params, force_all, self._rng_state, self._view, self._episodes, self._out], device=dev)
+        if self.task.reset_kinematics:  # all worlds: the others' observations are already written
+            self.sim.kinematics(com=self.task.reset_com)
+        wp.launch(write_reset_observation, dim=self.num_envs,
+                  inputs=[self.params, force_all, self._view, self._episodes, self._out], device=dev)
+
+    def _reset_all(self) -> None:
+        def run():
+            self._launch_reset(force_all=1)
+            wp.launch(advance_rng, dim=1, inputs=[self._rng_state], device=self.sim.device)
+
+        self.sim.launch(None, run)
+
+    # ------------------------------------------------------------------ Gymnasium API
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        """Reset every env. With ``seed``, the noise of this and all later resets is reproducible."""
+        if seed is not None:
+            self._rng_state.assign(np.array([int(seed) & 0x7FFFFFFF, 0], np.int32))
+        self._reset_all()
+        return self.obs, {}
+
+    def step(self, actions: torch.Tensor | np.ndarray):
+        """Step every env with ``actions`` (num_envs, num_actions): a float32 tensor on the env's device,
+        or a numpy array (copied to the device). Actions are not clipped: MuJoCo clamps the controls to
+        their range, and the control cost is charged on the actions as given, as in Gymnasium."""
+        if isinstance(actions, np.ndarray):
+            actions = torch.as_tensor(actions, dtype=torch.float32, device=self.device)
+        actions = check_float_tensor("actions", actions, self.device, [(self.num_envs, self.num_actions)])
+        self._actions_in_t.copy_(actions)
+        if self._graph is None:
+            self._graph = self.sim.capture(self._launch_step)
+        self.sim.launch(self._graph, self._launch_step)
+        return self.obs, self.reward, self.terminated, self.truncated, self.info
+
+    def fault_counters(self) -> dict[str, torch.Tensor]:
+        """Running totals of non-finite actions, diverged worlds and world-steps that lost constraints."""
+        return self._fault_views
+
+    def render(self):
+        gymnasium_logger.warn("the suite's envs do not draw yet: render() returns None")
+        return None
+
+    def close(self, **kwargs) -> None:
+        self._graph = None
+        self.closed = True
+
+    def __repr__(self) -> str:
+        return f"SuiteVecEnv({self.task.name}, num_envs={self.num_envs}, device={self.sim.device!r})"

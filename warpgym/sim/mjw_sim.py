@@ -1,0 +1,221 @@
+"""``MjwSim``: N worlds of one MuJoCo model, as MuJoCo compiled its file, stepped by MuJoCo Warp.
+
+Gymnasium's MuJoCo tasks run here rather than through Newton (``warpgym.sim.Sim``): Newton's
+``add_mjcf`` rebuilds a model from the file and does not reproduce MuJoCo's compile of it (it
+replaces HalfCheetah's Euler integrator by implicitfast, ignores ``settotalmass`` and rejects
+``solver="PGS"``), while ``mujoco_warp.put_model`` takes MuJoCo's own ``MjModel``, so the physics
+is the file's by construction (``warpgym.sim.gym_model``; tests/test_suite.py compares them field
+by field).
+
+Every buffer is MuJoCo Warp's ``Data``, allocated once; torch views of it stay valid for the life of
+the sim. A control step is ``frame_skip`` calls of ``mujoco_warp.step`` captured as one graph.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import torch
+import warp as wp
+
+from kernels.solver_load import track_solver_load
+from warpgym.compile.preload import compile_ahead
+from warpgym.sim.checks import check_env_ids, check_float_tensor
+from warpgym.sim.device import resolve_device
+from warpgym.sim.gym_model import CompiledModel, compile_model
+from warpgym.sim.mjw_internals import mujoco_contact_frames
+from warpgym.sim.streams import StreamOrder
+
+
+def _positive_int(name: str, value, fix: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise ValueError(f"{name}={value!r} must be a positive integer: {fix}")
+    return int(value)
+
+
+class MjwSim:
+    """Batched MuJoCo Warp simulation of ``num_envs`` worlds of one model file.
+
+    Args:
+        model: a model file name in gymnasium's assets (e.g. "hopper.xml"), a path, or a ``CompiledModel``.
+        num_envs: worlds.
+        device: "cpu", "cuda" or "cuda:N"; default: cuda:0 when present, else cpu.
+        frame_skip: physics steps per control step.
+        nconmax, njmax: contacts and constraint rows per world MuJoCo Warp makes room for; a world that
+            needs more loses the rest for that step (counted in ``solver_overflows``).
+        contact_forces: compute ``cfrc_ext`` after the last physics step (``mj_rnePostConstraint``).
+    """
+
+    def __init__(self, model: str | CompiledModel, num_envs: int = 1, device: str | None = None,
+                 frame_skip: int = 1, nconmax: int = 32, njmax: int = 128, contact_forces: bool = False):
+        import mujoco  # noqa: PLC0415
+        import mujoco_warp as mjw  # noqa: PLC0415
+
+        self.compiled = model if isinstance(model, CompiledModel) else compile_model(model)
+        self.mjm = mjm = self.compiled.mjm
+        self.num_envs = _positive_int("num_envs", num_envs, "pass num_envs >= 1")
+        self.frame_skip = _positive_int("frame_skip", frame_skip, "pass frame_skip >= 1 (the task's, e.g. 5)")
+        self.nconmax = _positive_int("nconmax", nconmax, "pass e.g. 32")
+        self.njmax = _positive_int("njmax", njmax, "pass e.g. 128")
+        self.device = resolve_device(device)
+        self.torch_device = torch.device(self.device)
+        self.contact_forces = bool(contact_forces)
+        self._order = StreamOrder(self.device)
+        self._mjw = mjw
+        start = time.perf_counter()
+        with wp.ScopedDevice(self.device):
+            try:
+                self.m = mjw.put_model(mjm)
+            except NotImplementedError as e:
+                raise NotImplementedError(f"{self.compiled.path}: MuJoCo Warp cannot simulate this model ({e}); "
+                                          "change that feature in a copy of the file and pass its path") from None
+            self.d = mjw.make_data(mjm, nworld=self.num_envs, nconmax=self.nconmax, njmax=self.njmax)
+        self.nq, self.nv, self.nu, self.nbody = mjm.nq, mjm.nv, mjm.nu, mjm.nbody
+        self.timestep = float(mjm.opt.timestep)
+        self.dt = self.timestep * self.frame_skip
+        self.has_free_root = mjm.njnt > 0 and mjm.jnt_type[0] == mujoco.mjtJoint.mjJNT_FREE
+        self.body_names = [mujoco.mj_id2name(mjm, mujoco.mjtObj.mjOBJ_BODY, b) or "" for b in range(mjm.nbody)]
+        self.ctrl_range = np.asarray(mjm.actuator_ctrlrange, np.float32).copy()
+
+        from mujoco_warp import OverflowType as OF  # noqa: PLC0415
+
+        self._drop_bits = int(OF.NEFC | OF.NJMAX_NNZ | OF.BROADPHASE | OF.NARROWPHASE)
+        quiet = ~int(OF.ITERATIONS | OF.LS_ITERATIONS | self._drop_bits)
+        self.m.opt.warn_overflow = int(self.m.opt.warn_overflow) & quiet
+        n = self.num_envs
+        self._peak_nefc = wp.zeros(n, dtype=wp.int32, device=self.device)
+        self._peak_nacon = wp.zeros(1, dtype=wp.int32, device=self.device)
+        self._overflowed = wp.zeros(n, dtype=wp.int32, device=self.device)
+        self._graph = None
+        self.compile_log = [("model", {"seconds": time.perf_counter() - start})]
+
+    # ------------------------------------------------------------------ stepping
+    def simulate(self) -> None:
+        """One control step as plain launches: ``frame_skip`` physics steps (what the graph holds)."""
+        mjw, m, d = self._mjw, self.m, self.d
+        with wp.ScopedDevice(self.device), mujoco_contact_frames():
+            for i in range(self.frame_skip):
+                mjw.step(m, d)
+                wp.launch(track_solver_load, dim=self.num_envs,
+                          inputs=[d.nefc, d.nacon, self._drop_bits, int(i == 0)],
+                          outputs=[d.overflow, self._peak_nefc, self._peak_nacon, self._overflowed])
+            if self.contact_forces:
+                mjw.rne_postconstraint(m, d)
+
+    def kinematics(self, com: bool) -> None:
+        """Body poses of the current qpos (``mj_kinematics``) and, with ``com``, com inertias and
+        velocities (``mj_comPos``, ``mj_comVel``): what ``mj_forward`` gives an observation after a reset."""
+        mjw, m, d = self._mjw, self.m, self.d
+        with wp.ScopedDevice(self.device):
+            mjw.kinematics(m, d)
+            if com:
+                mjw.com_pos(m, d)
+                mjw.com_vel(m, d)
+
+    def capture(self, fn):
+        """``fn``'s launches as one graph (a CUDA graph, or Warp's recorded launch list on the CPU); None
+        while torch is capturing: ``launch`` then records ``fn`` into torch's graph."""
+        if self._order.torch_is_capturing():
+            return None
+        self.compile_ahead(fn)
+        with wp.ScopedCapture(device=self.device) as cap:
+            fn()
+        return cap.graph
+
+    def compile_ahead(self, fn) -> None:
+        """Compile every module ``fn``'s launches need side by side (``warpgym.compile.preload``)."""
+        self.compile_log.append(("step", compile_ahead(fn)))
+
+    def launch(self, graph, fn) -> None:
+        """Run ``fn`` (captured as ``graph``), ordered after and before torch's stream."""
+        if self._order.torch_is_capturing():
+            self._order.run_in_torch_capture(fn)
+            return
+        self._order.warp_waits_for_torch()
+        if graph is not None:
+            wp.capture_launch(graph)
+        else:
+            fn()
+        self._order.torch_waits_for_warp()
+
+    def step(self) -> None:
+        """Advance every world one control step with the controls in ``ctrl``."""
+        if self._graph is None:
+            self._graph = self.capture(self.simulate)
+        self.launch(self._graph, self.simulate)
+
+    # ------------------------------------------------------------------ solver load
+    @property
+    def solver_overflows(self) -> wp.array:
+        """(N,) int32: physics steps of the last control step in which a world lost constraints or contacts."""
+        return self._overflowed
+
+    def solver_load(self) -> dict:
+        """The most constraint rows of any world against ``njmax`` and the most contacts of all worlds in
+        one physics step against ``naconmax``, since the sim was built. One host read."""
+        peak = int(self._peak_nacon.numpy()[0])
+        return {"njmax": int(self.d.njmax), "peak_constraints_per_world": int(self._peak_nefc.numpy().max()),
+                "naconmax": int(self.d.naconmax), "peak_contacts": peak,
+                "peak_contacts_per_world_mean": peak / self.num_envs}
+
+    # ------------------------------------------------------------------ Tensor API (MuJoCo's layout)
+    def to_torch(self, array: wp.array) -> torch.Tensor:
+        return wp.to_torch(array, requires_grad=False)
+
+    @property
+    def dof_pos(self) -> torch.Tensor:
+        """(N, nq) MuJoCo's qpos of every world: a writable view (``set_state`` clears the solver's warm start)."""
+        return self.to_torch(self.d.qpos)
+
+    @property
+    def dof_vel(self) -> torch.Tensor:
+        """(N, nv) MuJoCo's qvel: a writable view."""
+        return self.to_torch(self.d.qvel)
+
+    @property
+    def ctrl(self) -> torch.Tensor:
+        """(N, nu) the controls of the next physics step (MuJoCo clamps them to ``ctrl_range``)."""
+        return self.to_torch(self.d.ctrl)
+
+    @property
+    def dof_actuation_force(self) -> torch.Tensor:
+        """(N, nv) MuJoCo's qfrc_actuator: the generalized force the actuators applied in the last physics step."""
+        return self.to_torch(self.d.qfrc_actuator)
+
+    def _root(self, what: str) -> None:
+        if not self.has_free_root:
+            raise AttributeError(f"{what}: {self.compiled.path} has no free root joint; use dof_pos / dof_vel")
+
+    @property
+    def root_pose(self) -> torch.Tensor:
+        """(N, 7) position and quaternion (w, x, y, z: MuJoCo's order) of a free root joint; a view of qpos."""
+        self._root("root_pose")
+        return self.dof_pos[:, :7]
+
+    @property
+    def root_vel(self) -> torch.Tensor:
+        """(N, 6) a free root's linear velocity (world frame) and angular velocity (body frame, as MuJoCo's
+        qvel has it); a view of qvel."""
+        self._root("root_vel")
+        return self.dof_vel[:, :6]
+
+    def set_state(self, qpos: torch.Tensor, qvel: torch.Tensor, env_ids: torch.Tensor | None = None) -> None:
+        """Write qpos and qvel of the worlds ``env_ids`` (all when None) and forget their warm start."""
+        ids = None
+        if env_ids is not None:
+            ids = check_env_ids("env_ids", env_ids, self.torch_device, self.num_envs, check_range=True).long()
+        rows = self.num_envs if ids is None else ids.numel()
+        qpos = check_float_tensor("qpos", qpos, self.torch_device, [(rows, self.nq)])
+        qvel = check_float_tensor("qvel", qvel, self.torch_device, [(rows, self.nv)])
+        warm = self.to_torch(self.d.qacc_warmstart)
+        self._order.warp_waits_for_torch()
+        if ids is None:
+            self.dof_pos.copy_(qpos), self.dof_vel.copy_(qvel), warm.zero_()
+        else:
+            self.dof_pos[ids], self.dof_vel[ids], warm[ids] = qpos, qvel, 0.0
+
+    def __repr__(self) -> str:
+        return (f"MjwSim({self.compiled.path.rsplit('/', 1)[-1]!r}, num_envs={self.num_envs}, device={self.device!r}, "
+                f"dt={self.dt:.5g}, frame_skip={self.frame_skip})")
+

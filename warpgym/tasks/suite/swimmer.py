@@ -1,0 +1,30 @@
+"""Swimmer-v5 (gymnasium/envs/mujoco/swimmer_v5.py): swim forward through a viscous fluid; never terminates."""
+
+from dataclasses import dataclass
+from typing import ClassVar
+
+from kernels import gym_params as G
+from warpgym.tasks.suite.base import GymTask, forward_observation_size
+
+
+@dataclass(frozen=True)
+class Swimmer(GymTask):
+    name: str = "Swimmer-v5"
+    xml_file: str = "swimmer.xml"
+    frame_skip: int = 4
+    forward_reward_weight: float = 1.0
+    ctrl_cost_weight: float = 1e-4
+    reset_noise_scale: float = 0.1
+    exclude_current_positions_from_observation: bool = True
+
+    info_keys: ClassVar = ("reward_forward", "reward_ctrl", "x_velocity", "y_velocity", "x_position")
+    has_speed: ClassVar = True
+
+    def observation_size(self, sim) -> int:
+        return forward_observation_size(sim, 2 * int(self.exclude_current_positions_from_observation))
+
+    def fill_params(self, p, sim) -> None:
+        p.qpos_skip = 2 * int(self.exclude_current_positions_from_observation)
+        p.position_source = G.POSITION_QPOS_XY
+        p.forward_reward_weight, p.ctrl_cost_weight = self.forward_reward_weight, self.ctrl_cost_weight
+        p.qpos_noise = p.qvel_noise = self.reset_noise_scale
