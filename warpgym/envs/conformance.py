@@ -108,6 +108,7 @@ class StepGaps:
     terms: dict = field(default_factory=dict)
     terminated_mismatches: int = 0
     worst_obs_entry: int = -1
+    obs_by_entry: np.ndarray | None = None  # the largest difference of each observation entry
 
 
 def compare_steps(env: SuiteVecEnv, samples: list[Sample]) -> StepGaps:
@@ -135,9 +136,10 @@ def compare_steps(env: SuiteVecEnv, samples: list[Sample]) -> StepGaps:
     done = (terminated | truncated).cpu().numpy()
     obs = torch.where(torch.as_tensor(done, device=dev)[:, None], info["final_obs"], obs).cpu().numpy().astype(np.float64)
     reward, terminated = reward.cpu().numpy().astype(np.float64), terminated.cpu().numpy()
-    gaps = StepGaps(n)
+    gaps = StepGaps(n, obs_by_entry=np.zeros(obs.shape[1]))
     for i, s in enumerate(samples):
         rel = np.abs(obs[i] - s.obs) / (1.0 + np.abs(s.obs))
+        np.maximum(gaps.obs_by_entry, rel, out=gaps.obs_by_entry)
         if rel.size and rel.max() > gaps.obs:
             gaps.obs, gaps.worst_obs_entry = float(rel.max()), int(rel.argmax())
         gaps.reward = max(gaps.reward, abs(reward[i] - s.reward) / (1.0 + abs(s.reward)))

@@ -14,9 +14,10 @@ class LocomotionEnv(gym.Env):
     viewer (needs a display)."""
 
     metadata = LocomotionVecEnv.metadata
+    vec_class = LocomotionVecEnv
 
     def __init__(self, task="Ant", device: str = "cpu", seed: int = 0, render_mode=None, **kwargs):
-        self._vec = LocomotionVecEnv(task, num_envs=1, device=device, seed=seed, render_mode=render_mode, **kwargs)
+        self._vec = self.vec_class(task, num_envs=1, device=device, seed=seed, render_mode=render_mode, **kwargs)
         self.render_mode = render_mode
         self.metadata = self._vec.metadata
         self.task = self._vec.task
@@ -34,10 +35,12 @@ class LocomotionEnv(gym.Env):
         done = bool(terminated[0] or truncated[0])
         # the vector env has already started the next episode; report the one that ended
         out = info["final_obs"][0] if done else obs[0]
-        extra = {"nan_actions": int(info["nan_actions"][0]), "diverged": bool(info["diverged"][0])}
+        extra = {key: float(value[0]) for key, value in info.items()
+                 if isinstance(value, torch.Tensor) and key.startswith(("reward_", "x_", "y_"))}
+        extra.update(nan_actions=int(info["nan_actions"][0]), diverged=bool(info["diverged"][0]))
         if done:
-            ep = info["episode"]
-            extra["episode"] = {"r": float(ep["r"][0]), "l": int(ep["l"][0]), "s": float(ep["s"][0])}
+            extra["episode"] = {key: float(v[0]) for key, v in info["episode"].items() if not key.startswith("_")}
+            extra["episode"]["l"] = int(extra["episode"]["l"])
         return out.cpu().numpy().copy(), float(reward[0]), bool(terminated[0]), bool(truncated[0]), extra
 
     def render(self):
@@ -46,3 +49,15 @@ class LocomotionEnv(gym.Env):
 
     def close(self):
         self._vec.close()
+
+
+class SuiteEnv(LocomotionEnv):
+    """One world of Gymnasium's MuJoCo task (``gym.make("warpgym/Hopper-v5")``): numpy float32 in and out,
+    Gymnasium's reward terms in ``info``."""
+
+    from warpgym.envs.suite import SuiteVecEnv as vec_class  # noqa: N813
+
+    metadata = vec_class.metadata
+
+    def __init__(self, task="Hopper-v5", device: str = "cpu", seed: int = 0, render_mode=None, **kwargs):
+        super().__init__(task, device, seed, render_mode, **kwargs)

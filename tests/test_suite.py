@@ -1,0 +1,190 @@
+"""Gymnasium's MuJoCo suite against Gymnasium's own envs (CPU): the model each task simulates is
+MuJoCo's compile of the file, one step from the same states gives the same observation, reward,
+reward terms and termination, and random-action episodes have the same distributions."""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+import torch
+
+from conftest import DEVICE
+from warpgym.envs.conformance import (
+    compare_steps,
+    gymnasium_env,
+    gymnasium_episodes,
+    gymnasium_samples,
+    ks_two_sample,
+    warpgym_episodes,
+)
+from warpgym.envs.suite import SuiteVecEnv
+from warpgym.sim.gym_model import PHYSICS_FIELDS, compile_model, field_value, model_differences
+from warpgym.tasks.suite import SUITE
+
+NAMES = list(SUITE)
+# Largest relative step differences allowed (|warpgym - Gymnasium| / (1 + |Gymnasium|)): float32
+# against float64 over one env step (2-5 physics steps). The observation bound is the loosest:
+# HalfCheetah's joint speeds reach 6e-5 after its five Euler steps. The humanoids solve their
+# contacts with Newton's method where the file asks for PGS (docs/tasks.md): the contact forces
+# in their observation (its last 78 entries) differ by up to 5e-3 of (1 + force) lying on the floor.
+OBS_TOL = 2e-4
+CONTACT_OBS_TOL = {"Humanoid-v5": 2e-2, "HumanoidStandup-v5": 2e-2}
+REWARD_TOL = 2e-5
+SAMPLES = dict(episodes=6, steps_apart=5, per_episode=4)  # reset states and states 5, 10, 15 steps in
+
+
+@pytest.fixture(scope="module")
+def suite_envs():
+    """One env per task, enough worlds for the step samples, built once."""
+    envs = {}
+
+    def get(name):
+        if name not in envs:
+            envs[name] = SuiteVecEnv(name, num_envs=SAMPLES["episodes"] * SAMPLES["per_episode"], device=DEVICE,
+                                     seed=0)
+        return envs[name]
+
+    return get
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_the_simulated_model_is_mujocos_compile_of_the_file(name, suite_envs):
+    env = suite_envs(name)
+    mujoco_compile = gymnasium_env(name).unwrapped.model  # Gymnasium's own compile of its file
+    assert model_differences(mujoco_compile, compile_model(SUITE[name].xml_file).mjm) == {}
+    # and MuJoCo Warp holds those numbers (float32) in the model it steps
+    m, gaps = env.sim.m, {}
+    for field in PHYSICS_FIELDS:
+        obj = m
+        for part in field.split("."):
+            obj = getattr(obj, part, None)
+        if obj is None:
+            continue
+        ours = np.asarray(obj.numpy() if hasattr(obj, "numpy") else obj, np.float64)
+        theirs = field_value(mujoco_compile, field).astype(np.float64)
+        assert ours.size == theirs.size, field
+        ours = ours.reshape(theirs.shape)
+        finite = np.isfinite(theirs)
+        assert np.array_equal(np.isfinite(ours), finite), field
+        gap = np.abs(ours - theirs)[finite] / np.maximum(1.0, np.abs(theirs[finite]))
+        gaps[field] = float(gap.max()) if gap.size else 0.0
+    assert len(gaps) >= len(PHYSICS_FIELDS) - 3, sorted(set(PHYSICS_FIELDS) - set(gaps))
+    assert max(gaps.values()) < 1e-6, {k: v for k, v in gaps.items() if v >= 1e-6}
+
+
+def test_only_the_humanoids_solver_is_substituted():
+    changed = {name: compile_model(task.xml_file).substitutions for name, task in SUITE.items()}
+    assert {n for n, s in changed.items() if s} == {"Humanoid-v5", "HumanoidStandup-v5"}
+    assert all("PGS -> Newton" in s[0] for s in changed.values() if s)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_one_step_matches_gymnasium_from_the_same_states(name, suite_envs):
+    samples = gymnasium_samples(SUITE[name], **SAMPLES)
+    assert sum(s.after_reset for s in samples) == SAMPLES["episodes"] and len(samples) > SAMPLES["episodes"]
+    gaps = compare_steps(suite_envs(name), samples)
+    print(f"{name}: {gaps}")
+    contact = 78 if name in CONTACT_OBS_TOL else 0
+    body = gaps.obs_by_entry[: len(gaps.obs_by_entry) - contact]
+    assert body.max() < OBS_TOL, (gaps, int(body.argmax()))
+    if contact:
+        assert gaps.obs_by_entry[-contact:].max() < CONTACT_OBS_TOL[name], gaps
+    assert gaps.reward < REWARD_TOL, gaps
+    assert set(gaps.terms) == set(SUITE[name].info_keys) - {"y_position"} or set(gaps.terms) <= set(
+        SUITE[name].info_keys)
+    assert max(gaps.terms.values()) < REWARD_TOL, gaps.terms
+    assert gaps.terminated_mismatches == 0, gaps
+
+
+@pytest.mark.parametrize("change, field", [({"ctrl_cost_weight": 2e-3}, "reward"), ({"frame_skip": 5}, "obs"),
+                                           ({"healthy_reward": 0.5}, "reward"),
+                                           ({"exclude_current_positions_from_observation": False}, "shape")])
+def test_a_wrong_definition_fails_the_comparison(change, field):
+    samples = gymnasium_samples(SUITE["Hopper-v5"], episodes=2, steps_apart=5, per_episode=3)
+    env = SuiteVecEnv(SUITE["Hopper-v5"].replace(**change), num_envs=len(samples), device=DEVICE)
+    if field == "shape":
+        with pytest.raises(ValueError, match="broadcast|shape"):
+            compare_steps(env, samples)
+        return
+    gaps = compare_steps(env, samples)
+    assert getattr(gaps, field) > 10 * (OBS_TOL if field == "obs" else REWARD_TOL), gaps
+
+
+def test_the_pendulum_observation_term_is_checked():
+    """An observation of the wrong quantity, not only of the wrong size, fails: InvertedDoublePendulum's
+    last entry is the cart's constraint force, which a reset state reads as 0 and a state at the rail's
+    end does not."""
+    task = SUITE["InvertedDoublePendulum-v5"]
+    samples = gymnasium_samples(task, episodes=3, steps_apart=1, per_episode=3)
+    env = SuiteVecEnv(task, num_envs=len(samples), device=DEVICE)
+    for s in samples:
+        s.obs = s.obs.copy()
+        s.obs[-1] += 0.5
+    assert compare_steps(env, samples).worst_obs_entry == task.observation_size(env.sim) - 1
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_random_action_episodes_have_gymnasiums_distribution(name):
+    """Two-sample Kolmogorov-Smirnov tests of return and length over 32 uniform-random-action
+    episodes each, cut at 200 steps on both sides (the full episodes: benchmarks/conformance.py)."""
+    task = SUITE[name].replace(episode_length=min(SUITE[name].episode_length, 200))
+    returns, lengths = gymnasium_episodes(task, 32, seed=0)
+    mine_r, mine_l = warpgym_episodes(SuiteVecEnv(task, num_envs=32, device=DEVICE, seed=0), seed=0)
+    ks_r, ks_l = ks_two_sample(returns, mine_r), ks_two_sample(lengths, mine_l)
+    print(f"{name}: return {returns.mean():.2f} vs {mine_r.mean():.2f} (KS {ks_r[0]:.3f}, p {ks_r[1]:.3f}); "
+          f"length {lengths.mean():.1f} vs {mine_l.mean():.1f} (KS {ks_l[0]:.3f}, p {ks_l[1]:.3f})")
+    assert ks_r[1] > 1e-3 and ks_l[1] > 1e-3
+
+
+def test_ks_test_tells_different_distributions_apart():
+    rng = np.random.default_rng(0)
+    same = ks_two_sample(rng.normal(size=200), rng.normal(size=200))
+    shifted = ks_two_sample(rng.normal(size=200), rng.normal(0.5, 1.0, size=200))
+    assert same[1] > 0.05 and shifted[1] < 1e-3
+
+
+def test_gymnasium_ids_spaces_and_time_limits():
+    for name, task in SUITE.items():
+        spec = gym.spec(f"warpgym/{name}")
+        assert spec.max_episode_steps == gym.spec(name).max_episode_steps == task.episode_length
+    env = gym.make("warpgym/Reacher-v5")
+    theirs = gym.make("Reacher-v5")
+    assert env.observation_space.shape == theirs.observation_space.shape
+    assert np.array_equal(env.action_space.low, theirs.action_space.low)
+    assert np.array_equal(env.action_space.high, theirs.action_space.high)
+    obs, _ = env.reset(seed=0)
+    for t in range(60):
+        obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
+        if terminated or truncated:
+            break
+    assert (t + 1, terminated, truncated) == (50, False, True)
+    assert set(info) >= {"reward_dist", "reward_ctrl", "episode"} and info["episode"]["l"] == 50
+
+
+def test_vector_env_autoresets_in_the_step_with_final_obs(suite_envs):
+    env = suite_envs("Hopper-v5")
+    env.reset(seed=3)
+    ended = torch.zeros(env.num_envs, dtype=torch.bool)
+    for _ in range(200):
+        obs, reward, terminated, truncated, info = env.step(torch.ones(env.num_envs, env.num_actions))
+        done = terminated | truncated
+        if done.any():
+            # the final observation is the fallen hopper's; the returned one a fresh start near the reset pose
+            assert torch.all(info["final_obs"][done][:, 0] != obs[done][:, 0])
+            assert torch.all((obs[done][:, 0] - 1.25).abs() < 0.01)  # qpos[1], the torso height at reset
+            assert torch.all(info["episode"]["l"][done] > 0)
+            ended |= done
+    assert ended.any()
+
+
+def test_bad_input_names_the_value_and_the_fix():
+    with pytest.raises(ValueError, match=r"unknown task 'Hoper-v5'.*Hopper-v5"):
+        SuiteVecEnv("Hoper-v5")
+    with pytest.raises(ValueError, match=r"no argument\(s\) \['ctrl_cost'\].*ctrl_cost_weight"):
+        SuiteVecEnv("Hopper-v5", ctrl_cost=0.1)
+    with pytest.raises(ValueError, match="healthy_z_range"):
+        SuiteVecEnv("Hopper-v5", healthy_z_range=(2.0, 1.0))
+    with pytest.raises(FileNotFoundError, match="xml_file='nope.xml'.*gymnasium ships"):
+        SuiteVecEnv("Hopper-v5", xml_file="nope.xml")
+    with pytest.raises(ValueError, match=r"actions has shape"):
+        env = gym.make_vec("warpgym/InvertedPendulum-v5", num_envs=2, device=DEVICE)
+        env.step(torch.zeros(2, 3))
