@@ -10,6 +10,7 @@ Each figure is the median of --repeats timings of --steps steps, after a warm-up
 NAME=VALUE (repeatable) times other solver settings, e.g. --physics ls_iterations=2.
 
     warpgym bench --robots ant humanoid --num-envs 1024 4096 16384
+    warpgym bench --tasks Hopper-v5 Humanoid-v5 --num-envs 4096 32768   (Gymnasium's suite: bench_suite.py)
 """
 
 from __future__ import annotations
@@ -145,6 +146,8 @@ def bench_one(robot: str, num_envs: int, device: str, steps: int, repeats: int, 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--robots", nargs="+", default=["ant", "humanoid"], choices=sorted(TASK_OF_ROBOT))
+    ap.add_argument("--tasks", nargs="+", default=None, metavar="NAME-v5",
+                    help="Gymnasium's MuJoCo tasks instead of the robots: MuJoCo Warp's step against the task's")
     ap.add_argument("--num-envs", nargs="+", type=int, default=[1024, 4096, 16384])
     ap.add_argument("--device", default=None)
     ap.add_argument("--steps", type=int, default=200, help="steps per timing")
@@ -171,6 +174,8 @@ def main(argv=None) -> int:
     device = resolve_device(args.device)
     gpu = torch.cuda.get_device_name(torch.device(device)) if device.startswith("cuda") else platform.processor()
 
+    if args.tasks:
+        return bench_suite(args, device, gpu, argv)
     rows = []
     for robot in args.robots:
         for n in args.num_envs:
@@ -190,6 +195,11 @@ def main(argv=None) -> int:
               f"{r['physics_steps_per_s'] / 1e6:.2f}M | {r['physics_over_raw']:.3f} | "
               f"{r['env_steps_per_s'] / 1e6:.2f}M | {r['env_over_physics']:.3f} | "
               f"{r['gpu_mem_mib'] / r['num_envs'] * 1000:.0f} |")
+    write_json(args, device, gpu, argv, rows)
+    return 0
+
+
+def write_json(args, device, gpu, argv, rows) -> None:
     if args.out:
         meta = {"device": device, "gpu": gpu, "warp": wp.__version__, "torch": torch.__version__,
                 "mathdx_solver": bool(wp.config.enable_mathdx_solver),
@@ -198,6 +208,30 @@ def main(argv=None) -> int:
         with open(args.out + ".tmp", "w") as f:
             json.dump({"meta": meta, "results": rows}, f, indent=1)
         os.replace(args.out + ".tmp", args.out)
+
+
+def bench_suite(args, device, gpu, argv) -> int:
+    from warpgym.cli.bench_suite import bench_suite_task  # noqa: PLC0415
+    from warpgym.tasks.suite import get_suite_task  # noqa: PLC0415
+
+    try:
+        for name in args.tasks:
+            get_suite_task(name)
+    except ValueError as e:
+        raise SystemExit(f"--tasks: {e}") from None
+    rows = []
+    for name in args.tasks:
+        for n in args.num_envs:
+            r = bench_suite_task(name, n, device, args.steps, args.repeats, timed, gpu_memory_used)
+            rows.append(r)
+            print(json.dumps({k: v for k, v in r.items() if not k.endswith("seconds")}), flush=True)
+    print(f"\n{gpu}, {args.steps} steps x {args.repeats} repeats, median env-steps/s")
+    print("| task | envs | MuJoCo Warp | warpgym env | env/MuJoCo Warp |")
+    print("|---|---:|---:|---:|---:|")
+    for r in rows:
+        print(f"| {r['task']} | {r['num_envs']} | {r['mjwarp_steps_per_s'] / 1e6:.3f}M | "
+              f"{r['env_steps_per_s'] / 1e6:.3f}M | {r['env_over_mjwarp']:.3f} |")
+    write_json(args, device, gpu, argv, rows)
     return 0
 
 
