@@ -19,6 +19,24 @@ PRESETS: dict[str, dict[str, Any]] = {
     "Humanoid": dict(net_dims=(400, 200, 100), horizon_len=32, batch_size=32768, repeat_times=5,
                      learning_rate=5e-4, reward_scale=0.01, value_coef=2.0),
 }
+# Gymnasium's MuJoCo suite (v5): starting points, not yet swept. The reward scale brings a step's
+# reward near 0.1-1 (HumanoidStandup's is the torso height over MuJoCo's timestep: about 100); Swimmer's
+# reward is a slow drift, which a discount close to 1 sees.
+_SUITE = dict(net_dims=(256, 128, 64), horizon_len=32, batch_size=32768, repeat_times=5, learning_rate=3e-4,
+              reward_scale=0.1)
+PRESETS.update({
+    "InvertedPendulum-v5": dict(_SUITE, net_dims=(64, 64), horizon_len=32, batch_size=4096),
+    "InvertedDoublePendulum-v5": dict(_SUITE, reward_scale=0.01),
+    "Reacher-v5": dict(_SUITE, reward_scale=1.0),
+    "Pusher-v5": dict(_SUITE, reward_scale=1.0),
+    "Swimmer-v5": dict(_SUITE, reward_scale=1.0, gamma=0.9999),
+    "HalfCheetah-v5": _SUITE,
+    "Hopper-v5": _SUITE,
+    "Walker2d-v5": _SUITE,
+    "Ant-v5": _SUITE,
+    "Humanoid-v5": dict(_SUITE, net_dims=(400, 200, 100), reward_scale=0.05),
+    "HumanoidStandup-v5": dict(_SUITE, net_dims=(400, 200, 100), reward_scale=0.001),
+})
 
 
 @dataclass

@@ -332,6 +332,9 @@ def write_reset_observation(p: GymParams, force_all: int, d: MjView, ep: GymEpis
 @wp.kernel
 def apply_gym_actions(
     actions_in: wp.array2d[float],  # (N, U) as the learner gave them
+    unit: int,  # 1: actions in [-1, 1] (clipped), mapped linearly onto [low, high]; 0: as given
+    low: wp.array[float],  # (U,) the actuators' control range
+    high: wp.array[float],
     ctrl: wp.array2d[float],  # (N, U) out: MuJoCo's controls, which MuJoCo clamps to ctrlrange itself
     actions: wp.array2d[float],  # (N, U) out: what the control cost is charged on
     nan_count: wp.array[wp.int32],  # (N,) out: non-finite entries, applied as 0
@@ -343,6 +346,8 @@ def apply_gym_actions(
         if not wp.isfinite(a):
             a = 0.0
             bad += 1
+        if unit != 0:
+            a = low[i] + (clipf(a, -1.0, 1.0) + 1.0) * 0.5 * (high[i] - low[i])
         ctrl[w, i] = a
         actions[w, i] = a
     nan_count[w] = bad

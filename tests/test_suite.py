@@ -188,3 +188,57 @@ def test_bad_input_names_the_value_and_the_fix():
     with pytest.raises(ValueError, match=r"actions has shape"):
         env = gym.make_vec("warpgym/InvertedPendulum-v5", num_envs=2, device=DEVICE)
         env.step(torch.zeros(2, 3))
+
+
+@pytest.mark.slow
+def test_inverted_pendulum_trains_to_900_in_gymnasiums_own_env(tmp_path, capsys):
+    """``warpgym train --task InvertedPendulum-v5`` on the CPU, then the deterministic policy of its
+    checkpoint scored over 10 episodes of ``gymnasium.make("InvertedPendulum-v5")`` (float64 MuJoCo)."""
+    from agents.checkpoint import load, policy_from_checkpoint
+    from warpgym.cli import train
+    from warpgym.envs.conformance import gymnasium_policy_episodes
+
+    run = str(tmp_path / "ip")
+    assert train.main(["--task", "InvertedPendulum-v5", "--device", DEVICE, "--max-iterations", "60", "--run-dir",
+                       run, "--no-plots", "--seed", "1"]) == 0
+    capsys.readouterr()
+    ckpt = load(f"{run}/checkpoint.pt", torch.device("cpu"))
+    assert ckpt["config"]["env_args"]["unit_actions"] is True
+    policy, normalize = policy_from_checkpoint(ckpt, 4, 1, torch.device("cpu"))
+    returns, lengths = gymnasium_policy_episodes("InvertedPendulum-v5",
+                                                 lambda obs: policy.act_deterministic(normalize(obs)), 10, seed=7)
+    print(f"InvertedPendulum-v5 in Gymnasium's env: returns {returns.tolist()}")
+    assert returns.mean() >= 900, returns
+
+
+def test_suite_training_refuses_the_robots_physics_flags(capsys):
+    from warpgym.cli import train
+
+    with pytest.raises(SystemExit, match="--substeps / --physics"):
+        train.main(["--task", "Hopper-v5", "--device", DEVICE, "--substeps", "2", "--max-iterations", "1"])
+
+
+def test_learner_adapters_and_elegantrl_take_the_tasks_sizes():
+    """Each adapter built on a suite task reports its observation and action sizes and steps it."""
+    from warpgym.envs import make_vec_env
+    from warpgym.envs.elegantrl import IsaacVecEnv
+    from warpgym.wrappers.rsl_rl import RslRlVecEnv
+    from warpgym.wrappers.sb3 import Sb3VecEnv
+
+    env = make_vec_env("Reacher-v5", num_envs=4, device=DEVICE)
+    assert env.unit_actions and (env.num_obs, env.num_actions) == (10, 2)
+    assert np.array_equal(env.single_action_space.low, [-1.0, -1.0])
+    rsl = RslRlVecEnv(env)
+    assert (rsl.num_actions, rsl.max_episode_length, rsl.cfg["task"]) == (2, 50, "Reacher-v5")
+    sb3 = Sb3VecEnv(env)
+    obs = sb3.reset()
+    assert obs.shape == (4, 10)
+    sb3.step_async(np.ones((4, 2), np.float32) * 5.0)  # clipped to 1, the top of the control range
+    _, reward, _, infos = sb3.step_wait()
+    # Gymnasium's control cost of ctrl = (1, 1) at weight 1: -2
+    assert np.allclose([i.get("reward_ctrl", env.info["reward_ctrl"][k].item()) for k, i in enumerate(infos)], -2.0)
+    erl = IsaacVecEnv("Hopper-v5", env_num=3, device_id=-1)
+    assert (erl.state_dim, erl.action_dim, erl.max_step) == (11, 3, 1000)
+    state = erl.reset()
+    state, reward, done, _ = erl.step(torch.zeros(3, 3))
+    assert state.shape == (3, 11) and reward.shape == (3,)

@@ -134,8 +134,9 @@ def test_every_task_has_defaults_and_the_gpu_default_trains_as_it_was_measured()
     assert set(train.DEFAULT_ENVS) == set(train.DEFAULT_ITERATIONS) == {"cuda", "cpu"}
     for task in PRESETS:
         for kind in ("cuda", "cpu"):
-            assert train.DEFAULT_ENVS[kind][task] > 0 and train.DEFAULT_ITERATIONS[kind][task] > 0, (task, kind)
-        envs = train.DEFAULT_ENVS["cuda"][task]
+            envs, iterations = train.default_envs_and_iterations(kind, task)
+            assert envs > 0 and iterations > 0, (task, kind)
+        envs = train.default_envs_and_iterations("cuda", task)[0]
         cfg = train.build_config(train.parse_args(["--task", task]), task, envs, "cuda:0")
         preset = Config.for_task(task)
         assert cfg.batch_size == preset.batch_size, (task, envs)

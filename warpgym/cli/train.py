@@ -32,6 +32,14 @@ DEFAULT_ITERATIONS = {"cuda": {"Ant": 500, "Humanoid": 1000}, "cpu": {"Ant": 200
 # 39 s (median of 3 seeds) against 70 s at 4096 and 54.5 s at 16384; the Humanoid reaches 2 m/s soonest at
 # 4096 (45 s against 55 s at 8192) and its 6 m/s is reached by one seed in two at either size.
 DEFAULT_ENVS = {"cuda": {"Ant": 8192, "Humanoid": 4096}, "cpu": {"Ant": 64, "Humanoid": 64}}
+# Gymnasium's suite (not yet swept, issue 43's presets will replace these): 4096 worlds on a GPU, 64 on the CPU
+SUITE_DEFAULTS = {"cuda": (4096, 500), "cpu": (64, 100)}  # envs, iterations
+
+
+def default_envs_and_iterations(kind: str, task: str) -> tuple[int, int]:
+    if task in DEFAULT_ENVS[kind]:
+        return DEFAULT_ENVS[kind][task], DEFAULT_ITERATIONS[kind][task]
+    return SUITE_DEFAULTS[kind]
 
 
 def parse_args(argv=None):
@@ -86,20 +94,30 @@ def build_config(args, task: str, num_envs: int, device: str, saved: dict | None
     if saved is None and args.batch_size is None and (batch > samples // 2 or samples % batch):
         batch = max(samples // 2, 1)  # the preset's mini-batch does not fit this env count
     from warpgym.envs import LocomotionVecEnv  # noqa: PLC0415
-
+    from warpgym.envs.suite import SuiteVecEnv  # noqa: PLC0415
     from warpgym.tasks import get_task  # noqa: PLC0415
+    from warpgym.tasks.suite import SUITE  # noqa: PLC0415
 
-    # The whole physics goes into the config, not only what the flags changed: a checkpoint then
-    # replays (play.py, sim2sim.py) with the physics it was trained with, whatever the defaults later.
-    defined = get_task(task)
-    common = {"task": task, "device": device, "max_episode_steps": args.episode_length,
-              "substeps": args.substeps or defined.substeps,
-              "physics": defined.physics.replace(**(args.physics or {})).to_dict()}
+    if task in SUITE:
+        if args.substeps or args.physics:
+            raise ValueError(f"--substeps / --physics set warpgym's own robots' physics; {task} simulates "
+                             "Gymnasium's model file as it is: drop them")
+        # the policy acts in [-1, 1], mapped onto the control ranges (SuiteVecEnv's unit_actions)
+        common = {"task": task, "device": device, "max_episode_steps": args.episode_length, "unit_actions": True}
+        env_class = SuiteVecEnv
+    else:
+        # The whole physics goes into the config, not only what the flags changed: a checkpoint then
+        # replays (play.py, sim2sim.py) with the physics it was trained with, whatever the defaults later.
+        defined = get_task(task)
+        common = {"task": task, "device": device, "max_episode_steps": args.episode_length,
+                  "substeps": args.substeps or defined.substeps,
+                  "physics": defined.physics.replace(**(args.physics or {})).to_dict()}
+        env_class = LocomotionVecEnv
     return cfg.replace(
         batch_size=batch,
-        env_class=LocomotionVecEnv,
+        env_class=env_class,
         env_args={**common, "num_envs": num_envs, "seed": args.seed},
-        eval_env_class=LocomotionVecEnv,
+        eval_env_class=env_class,
         eval_env_args={**common, "num_envs": cfg.eval_envs, "seed": args.seed + 1},
     )
 
@@ -279,6 +297,7 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
     from warpgym.sim.device import resolve_device  # noqa: PLC0415
     from warpgym.sim.physics import recorded  # noqa: PLC0415
     from warpgym.envs import LocomotionVecEnv  # noqa: PLC0415
+    from warpgym.envs.suite import SuiteVecEnv  # noqa: PLC0415
 
     saved = None
     if args.resume:
@@ -296,7 +315,7 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
         has_checkpoint = False
         task = TASK_NAMES[(args.task or "Ant").lower()]
         device = resolve_device(args.device)
-        num_envs = args.num_envs or DEFAULT_ENVS["cuda" if device.startswith("cuda") else "cpu"][task]
+        num_envs = args.num_envs or default_envs_and_iterations("cuda" if device.startswith("cuda") else "cpu", task)[0]
         run_dir = args.run_dir or os.path.join("runs", f"{task}-{time.strftime('%Y%m%d-%H%M%S')}")
         run_dir = same_on_every_worker(run_dir, device)  # a default name could differ by a second
     kind = "cuda" if device.startswith("cuda") else "cpu"
@@ -309,7 +328,7 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
         cfg = cfg.replace(env_args={**cfg.env_args, "seed": cfg.env_args["seed"] + 1000 * rank})
         args.no_eval = True
     if args.max_iterations is None and args.total_steps is None and args.time_limit is None:
-        args.max_iterations = DEFAULT_ITERATIONS[kind][task]
+        args.max_iterations = default_envs_and_iterations(kind, task)[1]
 
     args.run_dir = run_dir
     if rank == 0:
@@ -344,7 +363,7 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
     env = built(lambda: cfg.env_class(**cfg.env_args), f"training env: {task} x {num_envs}", phase)
     eval_env = None if args.no_eval else built(lambda: cfg.eval_env_class(**cfg.eval_env_args),
                                                f"evaluation env: {task} x {cfg.eval_env_args['num_envs']}", phase)
-    assert isinstance(env, LocomotionVecEnv)
+    assert isinstance(env, (LocomotionVecEnv, SuiteVecEnv))
     recorder = None
     if args.video and eval_env is not None:
         from warpgym.media.clips import EvalVideoRecorder  # noqa: PLC0415

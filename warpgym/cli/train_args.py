@@ -12,7 +12,8 @@ TASK_NAMES = {t.lower(): t for t in PRESETS}
 
 def parse_args(argv=None, description: str | None = None):
     ap = argparse.ArgumentParser(description=description, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--task", default=None, help="Ant (default) or Humanoid")
+    ap.add_argument("--task", default=None, help="Ant (default), Humanoid, or one of Gymnasium's MuJoCo tasks "
+                                                 "(InvertedPendulum-v5 ... HumanoidStandup-v5)")
     ap.add_argument("--num-envs", type=int, default=None, help="default on a GPU: 8192 (Ant), 4096 (Humanoid); 64 on the CPU")
     ap.add_argument("--device", default=None, help="default: cuda:0 when present, else cpu")
     ap.add_argument("--seed", type=int, default=0)
@@ -69,6 +70,8 @@ def parse_args(argv=None, description: str | None = None):
     except ValueError as e:
         ap.error(f"--physics: {e}")
     if args.video:
+        if args.task is not None and args.task.endswith("-v5"):
+            ap.error(f"--video: the suite's tasks ({args.task}) do not draw yet; drop --video")
         check_video_args(ap, args)
     return args
 

@@ -32,12 +32,18 @@ PIP_NAME = {"rsl_rl": "rsl_rl", "skrl": "skrl", "rl_games": "rl_games", "sb3": "
 HORIZON = {"rsl_rl": {"Ant": 32, "Humanoid": 32}, "skrl": {"Ant": 16, "Humanoid": 32},
            "rl_games": {"Ant": 16, "Humanoid": 32}, "sb3": {"Ant": 64, "Humanoid": 64},
            "rllib": {"Ant": 16, "Humanoid": 32}}
+# Gymnasium's suite: the Humanoid's horizon (the SB3 one for sb3) and, for the two humanoids, its wider network
+WIDE = {"Humanoid", "Humanoid-v5", "HumanoidStandup-v5"}
+
+
+def horizon_of(learner: str, task: str) -> int:
+    return HORIZON[learner].get(task, HORIZON[learner]["Humanoid"])
 
 
 def parse_args(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("learner", help=f"one of {', '.join(LEARNERS)}")
-    ap.add_argument("--task", default="Ant", help="Ant or Humanoid")
+    ap.add_argument("--task", default="Ant", help="Ant, Humanoid or one of Gymnasium's suite (Hopper-v5, ...)")
     ap.add_argument("--num-envs", type=int, default=None, help="default: 4096 on a GPU, 64 on the CPU")
     ap.add_argument("--device", default=None, help="default: cuda:0 when present, else cpu")
     ap.add_argument("--seed", type=int, default=0)
@@ -60,9 +66,12 @@ def parse_args(argv=None):
     args = ap.parse_args(argv)
     if args.learner not in LEARNERS:
         ap.error(f"learner {args.learner!r}: choose one of {', '.join(LEARNERS)}")
-    if args.task.lower() not in ("ant", "humanoid"):
-        ap.error(f"--task {args.task!r}: choose Ant or Humanoid")
-    args.task = args.task.capitalize()
+    from warpgym.tasks.suite import SUITE  # noqa: PLC0415
+
+    names = {name.lower(): name for name in ("Ant", "Humanoid", *SUITE)}
+    if args.task.lower() not in names:
+        ap.error(f"--task {args.task!r}: choose one of {list(names.values())}")
+    args.task = names[args.task.lower()]
     rllib_only = [f for f in ("horizon_len", "batch_size", "repeat_times", "learning_rate") if getattr(args, f) is not None]
     rllib_only += [f for f, default in (("gpus", 1), ("env_runners", None)) if getattr(args, f) != default]
     if rllib_only and args.learner != "rllib":
@@ -90,7 +99,7 @@ def parse_args(argv=None):
 def run_rsl_rl(env, args, horizon: int, run_dir: str) -> None:
     from rsl_rl.runners import OnPolicyRunner  # noqa: PLC0415
 
-    wide = args.task == "Humanoid"
+    wide = args.task in WIDE
     net = {"class_name": "MLPModel", "hidden_dims": [400, 200, 100], "activation": "elu", "obs_normalization": True}
     cfg = {
         "num_steps_per_env": horizon, "save_interval": 10**9, "obs_groups": {"actor": ["policy"], "critic": ["policy"]},
@@ -119,7 +128,7 @@ def run_skrl(env, args, horizon: int, run_dir: str) -> None:
     from skrl.resources.schedulers.torch import KLAdaptiveLR  # noqa: PLC0415
     from skrl.trainers.torch import SequentialTrainer  # noqa: PLC0415
 
-    hidden = [400, 200, 100] if args.task == "Humanoid" else [256, 128, 64]
+    hidden = [400, 200, 100] if args.task in WIDE else [256, 128, 64]
 
     def mlp(n_in: int, n_out: int) -> torch.nn.Sequential:
         layers, width = [], n_in
@@ -257,14 +266,14 @@ def main(argv=None, args=None) -> int:
     import warpgym  # noqa: PLC0415,F401
     from agents.logger import MetricsLogger  # noqa: PLC0415
     from warpgym.sim.device import resolve_device  # noqa: PLC0415
-    from warpgym.envs import LocomotionVecEnv  # noqa: PLC0415
+    from warpgym.envs import make_vec_env  # noqa: PLC0415
     from warpgym.wrappers.common import EpisodeLog, TimeLimitReached  # noqa: PLC0415
 
     device = resolve_device(args.device)
     gpu = device.startswith("cuda")
     num_envs = args.num_envs or (4096 if gpu else 64)
     args.iterations = args.iterations or (500 if gpu else 20)
-    horizon = getattr(args, "horizon_len", None) or HORIZON[args.learner][args.task]
+    horizon = getattr(args, "horizon_len", None) or horizon_of(args.learner, args.task)
     runners = max(getattr(args, "env_runners", 0), 1)  # rllib: every runner's rollout, split over the learners
     rollout = runners * num_envs * horizon // max(getattr(args, "gpus", 1), 1)
     if getattr(args, "batch_size", None) and args.batch_size > rollout:
@@ -292,8 +301,8 @@ def main(argv=None, args=None) -> int:
 
         stopped = run_rllib_remote(args, horizon, num_envs, device, run_dir, sink, PROCESS_START)
     else:
-        env = LocomotionVecEnv(args.task, num_envs=num_envs, device=device, seed=args.seed,
-                               max_episode_steps=args.episode_length)
+        env = make_vec_env(args.task, num_envs=num_envs, device=device, seed=args.seed,
+                           max_episode_steps=args.episode_length)
         log = args.episode_log = EpisodeLog(env, every=horizon, sink=sink, stop_after_s=args.time_limit,
                                             start=PROCESS_START, keep_returns=getattr(args, "keep_returns", False))
         if args.learner == "rllib":

@@ -203,3 +203,28 @@ def warpgym_episodes(env: SuiteVecEnv, seed: int = 0) -> tuple[np.ndarray, np.nd
         if bool(ended.all()):
             break
     return returns.cpu().numpy().astype(np.float64), lengths.cpu().numpy()
+
+
+# ---------------------------------------------------------------------- a policy in Gymnasium's env
+def gymnasium_policy_episodes(task: str | GymTask, act, episodes: int, seed: int = 0, unit_actions: bool = True):
+    """Returns and lengths of ``episodes`` episodes of ``act`` (a float32 observation batch (1, O) ->
+    action batch (1, U), torch, on the CPU) in ``gymnasium.make`` of the task: native MuJoCo, float64.
+    ``unit_actions``: the policy acts in [-1, 1], clipped and mapped onto the control range, as
+    ``SuiteVecEnv(unit_actions=True)`` trains it."""
+    env = gymnasium_env(task)
+    low, high = env.action_space.low.astype(np.float64), env.action_space.high.astype(np.float64)
+    returns, lengths = [], []
+    with torch.no_grad():
+        for e in range(episodes):
+            obs, _ = env.reset(seed=seed + e)
+            total, steps, done = 0.0, 0, False
+            while not done:
+                a = act(torch.as_tensor(obs, dtype=torch.float32)[None])[0].double().numpy()
+                if unit_actions:
+                    a = low + (np.clip(a, -1.0, 1.0) + 1.0) * 0.5 * (high - low)
+                obs, reward, terminated, truncated, _ = env.step(a)
+                total, steps, done = total + float(reward), steps + 1, terminated or truncated
+            returns.append(total)
+            lengths.append(steps)
+    env.close()
+    return np.array(returns), np.array(lengths)

@@ -13,7 +13,7 @@ import numpy as np
 import torch
 
 from warpgym.sim.device import default_device
-from warpgym.envs.locomotion import LocomotionVecEnv
+from warpgym.envs import make_vec_env
 
 
 def _device(device_id) -> str:
@@ -24,18 +24,18 @@ def _device(device_id) -> str:
 
 class IsaacVecEnv:
     def __init__(self, env_name: str = "Ant", env_num: int = 4096, device_id: int | None = None,
-                 max_step: int = 1000, state_dim: int | None = None, action_dim: int | None = None,
+                 max_step: int | None = None, state_dim: int | None = None, action_dim: int | None = None,
                  if_discrete: bool = False, target_return: float | None = None, if_print: bool = False,
                  seed: int = 0):
         if if_discrete:
-            raise ValueError("if_discrete=True: Ant and Humanoid have continuous actions; pass if_discrete=False")
-        self.env = LocomotionVecEnv(env_name, num_envs=env_num, device=_device(device_id), seed=seed,
+            raise ValueError(f"if_discrete=True: {env_name} has continuous actions; pass if_discrete=False")
+        self.env = make_vec_env(env_name, num_envs=env_num, device=_device(device_id), seed=seed,
                                     max_episode_steps=max_step)
         for name, given, actual in (("state_dim", state_dim, self.env.num_obs),
                                     ("action_dim", action_dim, self.env.num_actions)):
             if given is not None and given != actual:
                 raise ValueError(f"{name}={given} but {env_name} has {actual}: pass {name}={actual}")
-        self.env_name, self.env_num, self.max_step = env_name, env_num, max_step
+        self.env_name, self.env_num, self.max_step = env_name, env_num, self.env.task.episode_length
         self.state_dim, self.action_dim = self.env.num_obs, self.env.num_actions
         self.if_discrete = False
         self.target_return = target_return

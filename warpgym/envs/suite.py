@@ -37,6 +37,10 @@ class SuiteVecEnv(VectorEnv):
         device: "cpu" or "cuda:N" (default: cuda:0 when present).
         seed: seed of the reset noise; ``reset(seed=...)`` replaces it.
         max_episode_steps: the time limit (default: Gymnasium's for the task).
+        unit_actions: take actions in [-1, 1], clip them there and map them linearly onto the actuators'
+            control ranges, as a learner that rescales its actions before Gymnasium's env (SB3's
+            ``unscale_action``) does; the control cost is charged on the mapped controls. The action
+            space is then [-1, 1]. Default False: Gymnasium's own action space and actions as given.
         **kwargs: Gymnasium's constructor arguments of the task (e.g. ``ctrl_cost_weight=0.5``,
             ``frame_skip=2``, ``xml_file=PATH``), and ``nconmax`` / ``njmax`` for MuJoCo Warp's buffers.
     """
@@ -52,7 +56,8 @@ class SuiteVecEnv(VectorEnv):
     }
 
     def __init__(self, task: str | GymTask = "Hopper-v5", num_envs: int = 1, device: str | None = None, seed: int = 0,
-                 max_episode_steps: int | None = None, render_mode: str | None = None, **kwargs):
+                 max_episode_steps: int | None = None, render_mode: str | None = None, unit_actions: bool = False,
+                 **kwargs):
         task = get_suite_task(task)
         if render_mode is not None:
             raise ValueError(f"render_mode={render_mode!r}: the suite's envs do not draw yet; pass render_mode=None "
@@ -74,8 +79,10 @@ class SuiteVecEnv(VectorEnv):
         self.spec_dt = sim.dt
 
         low, high = sim.ctrl_range[:, 0], sim.ctrl_range[:, 1]
+        self.unit_actions = bool(unit_actions)
         self.single_observation_space = spaces.Box(-np.inf, np.inf, (o,), np.float32)
-        self.single_action_space = spaces.Box(low, high, (a,), np.float32)
+        self.single_action_space = (spaces.Box(-1.0, 1.0, (a,), np.float32) if self.unit_actions
+                                    else spaces.Box(low, high, (a,), np.float32))
         self.observation_space = batch_space(self.single_observation_space, n)
         self.action_space = batch_space(self.single_action_space, n)
 
@@ -108,6 +115,8 @@ class SuiteVecEnv(VectorEnv):
         out.done, out.diverged = buf(n, wp.bool), buf(n, wp.bool)
 
         self._actions_in = buf((n, a))
+        self._ctrl_low = wp.array(low, dtype=float, device=dev)
+        self._ctrl_high = wp.array(high, dtype=float, device=dev)
         self._nan_count = buf(n, wp.int32)
         self._fault_totals = buf(3, wp.int64)
         self._rng_state = wp.array(np.array([seed, 0], np.int32), dtype=wp.int32, device=dev)
@@ -141,7 +150,8 @@ class SuiteVecEnv(VectorEnv):
     # ------------------------------------------------------------------ device work
     def _launch_step(self) -> None:
         sim, n, dev = self.sim, self.num_envs, self.sim.device
-        wp.launch(apply_gym_actions, dim=n, inputs=[self._actions_in],
+        wp.launch(apply_gym_actions, dim=n,
+                  inputs=[self._actions_in, int(self.unit_actions), self._ctrl_low, self._ctrl_high],
                   outputs=[sim.d.ctrl, self._episodes.actions, self._nan_count], device=dev)
         sim.simulate()
         wp.launch(gym_step, dim=n, inputs=[self.params, self._view, self._episodes, self._out], device=dev)

@@ -34,13 +34,14 @@ class ObsCopies:
 
 
 def base_env(env):
-    """The ``LocomotionVecEnv`` under a Gymnasium wrapper chain or one of these adapters (or the env itself)."""
+    """The warpgym vector env (``LocomotionVecEnv``, ``SuiteVecEnv``) under a Gymnasium wrapper chain or one of
+    these adapters (or the env itself)."""
     inner = getattr(env, "_base", None)
     if inner is None:
         inner = getattr(env, "unwrapped", env)
     if not hasattr(inner, "sim") or not hasattr(inner, "info"):
-        raise TypeError(f"{type(env).__name__} is not a warpgym LocomotionVecEnv (or a wrapper of one): build it "
-                        "with warpgym.envs.LocomotionVecEnv or gymnasium.make_vec('warpgym/Ant-v0', ...)")
+        raise TypeError(f"{type(env).__name__} is not a warpgym vector env (or a wrapper of one): build it with "
+                        "warpgym.envs.make_vec_env or gymnasium.make_vec('warpgym/Ant-v0', ...)")
     return inner
 
 

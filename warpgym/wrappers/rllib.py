@@ -86,12 +86,13 @@ class RllibVecEnv(VectorEnv):
 
 def rllib_env_creator(config: dict) -> RllibVecEnv:
     """RLlib's env creator: ``config`` (RLlib's ``env_config``, plus ``num_envs`` from RLlib) names the task
-    (``"Ant"`` or ``"Humanoid"``), ``device``, ``seed`` and any other ``LocomotionVecEnv`` argument."""
-    from warpgym.envs import LocomotionVecEnv
+    (``"Ant"``, ``"Humanoid"`` or one of Gymnasium's suite, ``"Hopper-v5"``...), ``device``, ``seed`` and any
+    other argument of its env (``warpgym.envs.make_vec_env``)."""
+    from warpgym.envs import make_vec_env
 
     kwargs = dict(config)
     task = kwargs.pop("task", "Ant")
-    return RllibVecEnv(LocomotionVecEnv(task, **kwargs))
+    return RllibVecEnv(make_vec_env(task, **kwargs))
 
 
 RLLIB_ENV = "warpgym-rllib"
