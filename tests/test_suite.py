@@ -22,11 +22,13 @@ from warpgym.tasks.suite import SUITE
 
 NAMES = list(SUITE)
 # Largest relative step differences allowed (|warpgym - Gymnasium| / (1 + |Gymnasium|)): float32
-# against float64 over one env step (2-5 physics steps). The observation bound is the loosest:
-# HalfCheetah's joint speeds reach 6e-5 after its five Euler steps. The humanoids solve their
-# contacts with Newton's method where the file asks for PGS (docs/tasks.md): the contact forces
-# in their observation (its last 78 entries) differ by up to 5e-3 of (1 + force) lying on the floor.
+# against float64 over one env step (2-5 physics steps). HalfCheetah's joint speeds differ most: a
+# contact that starts within float32's reach of the margin in one of its five Euler steps gave 3.5e-4
+# in 1 of 128 states (benchmarks/conformance.py); every other task stays below 8e-5. The humanoids
+# solve their contacts with Newton's method where the file asks for PGS (docs/tasks.md): the contact
+# forces in their observation (its last 78 entries) differ by up to 5e-3 of (1 + force) lying down.
 OBS_TOL = 2e-4
+OBS_TOL_OF = {"HalfCheetah-v5": 1e-3}
 CONTACT_OBS_TOL = {"Humanoid-v5": 2e-2, "HumanoidStandup-v5": 2e-2}
 REWARD_TOL = 2e-5
 SAMPLES = dict(episodes=6, steps_apart=5, per_episode=4)  # reset states and states 5, 10, 15 steps in
@@ -85,7 +87,7 @@ def test_one_step_matches_gymnasium_from_the_same_states(name, suite_envs):
     print(f"{name}: {gaps}")
     contact = 78 if name in CONTACT_OBS_TOL else 0
     body = gaps.obs_by_entry[: len(gaps.obs_by_entry) - contact]
-    assert body.max() < OBS_TOL, (gaps, int(body.argmax()))
+    assert body.max() < OBS_TOL_OF.get(name, OBS_TOL), (gaps, int(body.argmax()))
     if contact:
         assert gaps.obs_by_entry[-contact:].max() < CONTACT_OBS_TOL[name], gaps
     assert gaps.reward < REWARD_TOL, gaps
@@ -242,3 +244,33 @@ def test_learner_adapters_and_elegantrl_take_the_tasks_sizes():
     state = erl.reset()
     state, reward, done, _ = erl.step(torch.zeros(3, 3))
     assert state.shape == (3, 11) and reward.shape == (3,)
+
+
+def test_plane_capsule_contact_frames_are_mujocos_and_mujoco_warps_own_still_differ():
+    """A capsule 80 degrees from the floor: MuJoCo's first contact tangent is its axis projected onto the
+    floor; warpgym's correction (warpgym/sim/mjw_internals.py) gives the same. MuJoCo Warp's own frame
+    still differs: when this part fails, MuJoCo Warp has been fixed and the correction can go."""
+    import mujoco
+    import mujoco_warp as mjw
+    import warp as wp
+
+    from warpgym.sim.mjw_internals import mujoco_contact_frames
+
+    xml = """<mujoco><worldbody><geom type="plane" size="5 5 0.1"/>
+      <body pos="0 0 0.24" euler="0 10 30"><freejoint/><geom type="capsule" size="0.05 0.2" condim="3"/></body>
+      </worldbody></mujoco>"""
+    mjm = mujoco.MjModel.from_xml_string(xml)
+    mjd = mujoco.MjData(mjm)
+    mujoco.mj_forward(mjm, mjd)
+    assert mjd.ncon >= 1
+    frames = {}
+    with wp.ScopedDevice(DEVICE):
+        m = mjw.put_model(mjm)
+        for corrected in (True, False):
+            d = mjw.put_data(mjm, mjd, nconmax=8, njmax=32)
+            with mujoco_contact_frames(corrected):
+                mjw.forward(m, d)
+            frames[corrected] = d.contact.frame.numpy()[: int(d.nacon.numpy()[0])].reshape(-1, 9)
+    theirs = mjd.contact.frame[: mjd.ncon]
+    assert np.allclose(frames[True], theirs, atol=1e-5), (frames[True], theirs)
+    assert not np.allclose(frames[False][:, 3:6], theirs[:, 3:6], atol=1e-2)
