@@ -31,6 +31,7 @@ OBS_TOL = 2e-4
 OBS_TOL_OF = {"HalfCheetah-v5": 1e-3}
 CONTACT_OBS_TOL = {"Humanoid-v5": 2e-2, "HumanoidStandup-v5": 2e-2}
 REWARD_TOL = 2e-5
+REWARD_TOL_OF = {"Humanoid-v5": 1e-4, "HumanoidStandup-v5": 1e-4}  # their contact cost: PGS against Newton
 SAMPLES = dict(episodes=6, steps_apart=5, per_episode=4)  # reset states and states 5, 10, 15 steps in
 
 
@@ -90,10 +91,10 @@ def test_one_step_matches_gymnasium_from_the_same_states(name, suite_envs):
     assert body.max() < OBS_TOL_OF.get(name, OBS_TOL), (gaps, int(body.argmax()))
     if contact:
         assert gaps.obs_by_entry[-contact:].max() < CONTACT_OBS_TOL[name], gaps
-    assert gaps.reward < REWARD_TOL, gaps
+    assert gaps.reward < REWARD_TOL_OF.get(name, REWARD_TOL), gaps
     assert set(gaps.terms) == set(SUITE[name].info_keys) - {"y_position"} or set(gaps.terms) <= set(
         SUITE[name].info_keys)
-    assert max(gaps.terms.values()) < REWARD_TOL, gaps.terms
+    assert max(gaps.terms.values()) < REWARD_TOL_OF.get(name, REWARD_TOL), gaps.terms
     assert gaps.terminated_mismatches == 0, gaps
 
 
