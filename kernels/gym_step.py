@@ -156,6 +156,15 @@ def contact_cost(p: GymParams, d: MjView, w: int):
 
 
 @wp.func
+def state_entry(d: MjView, w: int, i: int):
+    """Entry ``i`` of Gymnasium's ``state_vector()``: qpos, then qvel."""
+    nq = d.qpos.shape[1]
+    if i < nq:
+        return d.qpos[w, i]
+    return d.qvel[w, i - nq]
+
+
+@wp.func
 def is_healthy(p: GymParams, d: MjView, w: int):
     nq = d.qpos.shape[1]
     nv = d.qvel.shape[1]
@@ -169,20 +178,14 @@ def is_healthy(p: GymParams, d: MjView, w: int):
     if p.healthy_angle_index >= 0:
         a = d.qpos[w, p.healthy_angle_index]
         healthy = healthy and p.healthy_angle_lo < a and a < p.healthy_angle_hi
-    for i in range(2, nq + nv):  # Hopper's state range; (-inf, inf) elsewhere
-        s = float(0.0)
-        if i < nq:
-            s = d.qpos[w, i]
-        else:
-            s = d.qvel[w, i - nq]
-        if not (p.healthy_state_lo < s and s < p.healthy_state_hi):
-            if p.healthy_state_lo > -1.0e30 or p.healthy_state_hi < 1.0e30:
+    if p.healthy_state_lo > -1.0e30 or p.healthy_state_hi < 1.0e30:  # Hopper: state_vector()[2:] in range
+        for i in range(2, nq + nv):
+            s = state_entry(d, w, i)
+            if not (p.healthy_state_lo < s and s < p.healthy_state_hi):
                 healthy = False
-        if p.healthy_finite != 0 and not wp.isfinite(s):
-            healthy = False
-    if p.healthy_finite != 0:
-        for i in range(2):
-            if not wp.isfinite(d.qpos[w, i]):
+    if p.healthy_finite != 0:  # Ant: the whole state finite
+        for i in range(nq + nv):
+            if not wp.isfinite(state_entry(d, w, i)):
                 healthy = False
     return healthy
 

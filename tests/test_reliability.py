@@ -105,7 +105,7 @@ BAD_FLAGS = [
     (["--substeps", "0"], "--substeps 0"),
     (["--seed", "-1"], "--seed -1"),
     (["--save-at", "60", "-5"], "--save-at -5.0: must be non-negative seconds"),
-    (["--task", "Hopper"], "--task 'Hopper': choose one of ['Ant', 'Humanoid']"),
+    (["--task", "Hopper"], "--task 'Hopper': choose one of ['Ant', 'Humanoid', 'InvertedPendulum-v5'"),
     (["--physics", "armature=-1"], "--physics: armature=-1"),
     (["--num-envs", "8", "--horizon-len", "8", "--batch-size", "48"],
      "--batch-size 48 does not divide the 64 samples of one rollout"),

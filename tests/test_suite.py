@@ -100,6 +100,7 @@ def test_one_step_matches_gymnasium_from_the_same_states(name, suite_envs):
 
 @pytest.mark.parametrize("change, field", [({"ctrl_cost_weight": 2e-3}, "reward"), ({"frame_skip": 5}, "obs"),
                                            ({"healthy_reward": 0.5}, "reward"),
+                                           ({"healthy_state_range": (-1.0, 1.0)}, "terminated_mismatches"),
                                            ({"exclude_current_positions_from_observation": False}, "shape")])
 def test_a_wrong_definition_fails_the_comparison(change, field):
     samples = gymnasium_samples(SUITE["Hopper-v5"], episodes=2, steps_apart=5, per_episode=3)
@@ -109,6 +110,9 @@ def test_a_wrong_definition_fails_the_comparison(change, field):
             compare_steps(env, samples)
         return
     gaps = compare_steps(env, samples)
+    if field == "terminated_mismatches":
+        assert gaps.terminated_mismatches > 0, gaps
+        return
     assert getattr(gaps, field) > 10 * (OBS_TOL if field == "obs" else REWARD_TOL), gaps
 
 
@@ -128,8 +132,8 @@ def test_the_pendulum_observation_term_is_checked():
 @pytest.mark.parametrize("name", NAMES)
 def test_random_action_episodes_have_gymnasiums_distribution(name):
     """Two-sample Kolmogorov-Smirnov tests of return and length over 32 uniform-random-action
-    episodes each, cut at 200 steps on both sides (the full episodes: benchmarks/conformance.py)."""
-    task = SUITE[name].replace(episode_length=min(SUITE[name].episode_length, 200))
+    episodes each, cut at 120 steps on both sides (the full episodes: benchmarks/conformance.py)."""
+    task = SUITE[name].replace(episode_length=min(SUITE[name].episode_length, 120))
     returns, lengths = gymnasium_episodes(task, 32, seed=0)
     mine_r, mine_l = warpgym_episodes(SuiteVecEnv(task, num_envs=32, device=DEVICE, seed=0), seed=0)
     ks_r, ks_l = ks_two_sample(returns, mine_r), ks_two_sample(lengths, mine_l)
@@ -275,3 +279,19 @@ def test_plane_capsule_contact_frames_are_mujocos_and_mujoco_warps_own_still_dif
     theirs = mjd.contact.frame[: mjd.ncon]
     assert np.allclose(frames[True], theirs, atol=1e-5), (frames[True], theirs)
     assert not np.allclose(frames[False][:, 3:6], theirs[:, 3:6], atol=1e-2)
+
+
+def test_a_model_mujoco_warp_cannot_run_fails_in_one_line_naming_the_file(monkeypatch):
+    """MuJoCo Warp refuses some features at put_model (plugins, some flex collisions); the env says which
+    file, what MuJoCo Warp said, and the way out."""
+    import mujoco_warp
+
+    def refuse(mjm):
+        raise NotImplementedError("Body plugins not supported.")
+
+    monkeypatch.setattr(mujoco_warp, "put_model", refuse)
+    with pytest.raises(NotImplementedError) as caught:
+        SuiteVecEnv("Hopper-v5", num_envs=1, device=DEVICE)
+    message = str(caught.value)
+    assert "\n" not in message and "hopper.xml" in message and "Body plugins not supported" in message
+    assert "pass its path" in message

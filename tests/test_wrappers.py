@@ -19,14 +19,16 @@ def learner_returns(name: str, learner) -> list[float]:
     return [float(np.asarray(learner.game_rewards.get_mean()).reshape(-1)[0])]  # rl_games keeps a running mean only
 
 
+@pytest.mark.parametrize("task", ["Ant", "Hopper-v5"])
 @pytest.mark.parametrize("name", list(LEARNERS))
-def test_each_learner_trains_and_counts_warpgym_episodes(name, tmp_path):
+def test_each_learner_trains_and_counts_warpgym_episodes(name, task, tmp_path):
+    """warpgym's Ant and one of Gymnasium's suite (its observation and action sizes from the task)."""
     pytest.importorskip(LEARNERS[name])
     from warpgym.cli import train_with
 
     from agents.logger import read_metrics
 
-    args = train_with.parse_args([name, "--num-envs", "4", "--iterations", "3", "--device", "cpu",
+    args = train_with.parse_args([name, "--task", task, "--num-envs", "4", "--iterations", "3", "--device", "cpu",
                                   "--episode-length", "16", "--run-dir", str(tmp_path), "--no-plots", "--no-compile"])
     args.keep_returns = True
     assert train_with.main(args=args) == 0

@@ -101,7 +101,7 @@ def check_values(ap, args) -> None:
         if not (v >= 0 and math.isfinite(v)):
             ap.error(f"--save-at {v}: must be non-negative seconds since start, e.g. --save-at 60 120")
     if args.task is not None and args.task.lower() not in TASK_NAMES:
-        ap.error(f"--task {args.task!r}: choose one of {sorted(TASK_NAMES.values())}")
+        ap.error(f"--task {args.task!r}: choose one of {list(TASK_NAMES.values())}")
     if args.resume is not None:
         given = [f for f in ("num_envs", "horizon_len", "episode_length", "substeps") if getattr(args, f) is not None]
         if given or args.physics:

@@ -8,11 +8,10 @@ returned tensors are persistent buffers that the next step overwrites: clone wha
 from __future__ import annotations
 
 import numpy as np
-import torch
 import warp as wp
 from gymnasium import logger as gymnasium_logger
 from gymnasium import spaces
-from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector import AutoresetMode
 from gymnasium.vector.utils import batch_space
 
 from kernels.actions import apply_actions
@@ -20,12 +19,12 @@ from kernels.buffers import EpisodeBuffers, RobotView, StepOutputs
 from kernels.locomotion import advance_rng, locomotion_step
 from kernels.resets import reset_finished_envs
 from kernels.solver_load import count_faults
-from warpgym.sim.checks import check_float_tensor
+from warpgym.envs.graph_env import GraphVecEnv
 from warpgym.sim.simulator import Sim
 from warpgym.tasks import LocomotionTask, get_task
 
 
-class LocomotionVecEnv(VectorEnv):
+class LocomotionVecEnv(GraphVecEnv):
     """``num_envs`` copies of a locomotion task on one device; tensors in, tensors out.
 
     Args:
@@ -180,34 +179,7 @@ class LocomotionVecEnv(VectorEnv):
                   inputs=[self.params, force_all, self._rng_state, self._robot, self._episodes, self._out],
                   device=self.sim.device)
 
-    def _reset_all(self) -> None:
-        def run():
-            self._launch_reset(force_all=1)
-            wp.launch(advance_rng, dim=1, inputs=[self._rng_state], device=self.sim.device)
-
-        self.sim.launch(None, run)
-
-    # ------------------------------------------------------------------ Gymnasium API
-    def reset(self, *, seed: int | None = None, options: dict | None = None):
-        """Reset every env. With ``seed``, the noise of this and all later resets is reproducible."""
-        if seed is not None:
-            self._rng_state.assign(np.array([int(seed) & 0x7FFFFFFF, 0], np.int32))
-        self._reset_all()
-        return self.obs, {}
-
-    def step(self, actions: torch.Tensor | np.ndarray):
-        """Step every env. ``actions`` (num_envs, num_actions): a float32 tensor on the env's device
-        (the zero-copy path), or a numpy array as Gymnasium learners pass, copied to the device here
-        (one host-to-device copy per step)."""
-        if isinstance(actions, np.ndarray):
-            actions = torch.as_tensor(actions, dtype=torch.float32, device=self.device)
-        actions = check_float_tensor("actions", actions, self.device, [(self.num_envs, self.num_actions)])
-        self._actions_in_t.copy_(actions)
-        if self._graph is None:
-            self._graph = self.sim.capture(self._launch_step)
-        self.sim.launch(self._graph, self._launch_step)
-        return self.obs, self.reward, self.terminated, self.truncated, self.info
-
+    # ------------------------------------------------------------------ Gymnasium API (GraphVecEnv: reset, step)
     FAULTS = ("nan_actions", "diverged_resets", "solver_overflows")
     FAULT_HELP = {
         "nan_actions": "the policy sent NaN/inf actions; they were applied as 0",
@@ -215,12 +187,6 @@ class LocomotionVecEnv(VectorEnv):
         "solver_overflows": "MuJoCo Warp's constraint or contact buffers were full and a world lost constraints "
                             "for a substep; raise njmax/nconmax (sim_options) above the peak in Sim.solver_load()",
     }
-
-    def fault_counters(self) -> dict[str, torch.Tensor]:
-        """Running totals since the env was built of things that should never happen (agents.protocol):
-        non-finite action entries, diverged worlds, and world-substeps that lost constraints. Device
-        tensors; reading them costs nothing until they are copied to the host."""
-        return self._fault_views
 
     def render(self):
         """Gymnasium's render: a tuple of (height, width, 3) uint8 frames of the first ``render_robots``

@@ -7,6 +7,7 @@ import numpy as np
 import torch
 
 from warpgym.envs.locomotion import LocomotionVecEnv
+from warpgym.envs.suite import SuiteVecEnv
 
 
 class LocomotionEnv(gym.Env):
@@ -55,9 +56,8 @@ class SuiteEnv(LocomotionEnv):
     """One world of Gymnasium's MuJoCo task (``gym.make("warpgym/Hopper-v5")``): numpy float32 in and out,
     Gymnasium's reward terms in ``info``."""
 
-    from warpgym.envs.suite import SuiteVecEnv as vec_class  # noqa: N813
-
-    metadata = vec_class.metadata
+    vec_class = SuiteVecEnv
+    metadata = SuiteVecEnv.metadata
 
     def __init__(self, task="Hopper-v5", device: str = "cpu", seed: int = 0, render_mode=None, **kwargs):
         super().__init__(task, device, seed, render_mode, **kwargs)

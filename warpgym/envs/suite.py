@@ -9,11 +9,10 @@ float64 numpy arrays) and persistent: the next step overwrites them.
 from __future__ import annotations
 
 import numpy as np
-import torch
 import warp as wp
 from gymnasium import logger as gymnasium_logger
 from gymnasium import spaces
-from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector import AutoresetMode
 from gymnasium.vector.utils import batch_space
 
 from kernels.buffers import StepOutputs
@@ -22,14 +21,16 @@ from kernels.gym_resets import reset_gym_worlds
 from kernels.gym_step import apply_gym_actions, gym_step, write_reset_observation
 from kernels.locomotion import advance_rng
 from kernels.solver_load import count_faults
-from warpgym.sim.checks import check_float_tensor
+from warpgym.envs.graph_env import GraphVecEnv
 from warpgym.sim.mjw_sim import MjwSim
 from warpgym.tasks.suite import GymTask, get_suite_task
 from warpgym.tasks.suite.base import MAX_TERMS
 
 
-class SuiteVecEnv(VectorEnv):
-    """``num_envs`` worlds of one of Gymnasium's MuJoCo tasks; tensors in, tensors out.
+class SuiteVecEnv(GraphVecEnv):
+    """``num_envs`` worlds of one of Gymnasium's MuJoCo tasks; tensors in, tensors out. Actions are not
+    clipped: MuJoCo clamps the controls to their range and the control cost is charged on the actions as
+    given, as in Gymnasium (``unit_actions`` below maps [-1, 1] onto the ranges instead).
 
     Args:
         task: a suite id ("Hopper-v5", ...) or a ``GymTask``.
@@ -76,7 +77,6 @@ class SuiteVecEnv(VectorEnv):
         self.num_actions = a = sim.nu
         self.num_obs = o = task.observation_size(sim)
         self.metadata = {**self.metadata, "render_fps": int(np.round(1.0 / sim.dt))}
-        self.spec_dt = sim.dt
 
         low, high = sim.ctrl_range[:, 0], sim.ctrl_range[:, 1]
         self.unit_actions = bool(unit_actions)
@@ -169,38 +169,7 @@ class SuiteVecEnv(VectorEnv):
         wp.launch(write_reset_observation, dim=self.num_envs,
                   inputs=[self.params, force_all, self._view, self._episodes, self._out], device=dev)
 
-    def _reset_all(self) -> None:
-        def run():
-            self._launch_reset(force_all=1)
-            wp.launch(advance_rng, dim=1, inputs=[self._rng_state], device=self.sim.device)
-
-        self.sim.launch(None, run)
-
-    # ------------------------------------------------------------------ Gymnasium API
-    def reset(self, *, seed: int | None = None, options: dict | None = None):
-        """Reset every env. With ``seed``, the noise of this and all later resets is reproducible."""
-        if seed is not None:
-            self._rng_state.assign(np.array([int(seed) & 0x7FFFFFFF, 0], np.int32))
-        self._reset_all()
-        return self.obs, {}
-
-    def step(self, actions: torch.Tensor | np.ndarray):
-        """Step every env with ``actions`` (num_envs, num_actions): a float32 tensor on the env's device,
-        or a numpy array (copied to the device). Actions are not clipped: MuJoCo clamps the controls to
-        their range, and the control cost is charged on the actions as given, as in Gymnasium."""
-        if isinstance(actions, np.ndarray):
-            actions = torch.as_tensor(actions, dtype=torch.float32, device=self.device)
-        actions = check_float_tensor("actions", actions, self.device, [(self.num_envs, self.num_actions)])
-        self._actions_in_t.copy_(actions)
-        if self._graph is None:
-            self._graph = self.sim.capture(self._launch_step)
-        self.sim.launch(self._graph, self._launch_step)
-        return self.obs, self.reward, self.terminated, self.truncated, self.info
-
-    def fault_counters(self) -> dict[str, torch.Tensor]:
-        """Running totals of non-finite actions, diverged worlds and world-steps that lost constraints."""
-        return self._fault_views
-
+    # ------------------------------------------------------------------ Gymnasium API (GraphVecEnv: reset, step)
     def render(self):
         gymnasium_logger.warn("the suite's envs do not draw yet: render() returns None")
         return None

@@ -25,7 +25,7 @@ from warpgym.sim.checks import check_env_ids, check_float_tensor
 from warpgym.sim.device import resolve_device
 from warpgym.sim.gym_model import CompiledModel, compile_model
 from warpgym.sim.mjw_internals import mujoco_contact_frames
-from warpgym.sim.streams import StreamOrder
+from warpgym.sim.streams import CapturedLaunches, StreamOrder
 
 
 def _positive_int(name: str, value, fix: str) -> int:
@@ -34,7 +34,7 @@ def _positive_int(name: str, value, fix: str) -> int:
     return int(value)
 
 
-class MjwSim:
+class MjwSim(CapturedLaunches):
     """Batched MuJoCo Warp simulation of ``num_envs`` worlds of one model file.
 
     Args:
@@ -113,37 +113,9 @@ class MjwSim:
                 mjw.com_pos(m, d)
                 mjw.com_vel(m, d)
 
-    def capture(self, fn):
-        """``fn``'s launches as one graph (a CUDA graph, or Warp's recorded launch list on the CPU); None
-        while torch is capturing: ``launch`` then records ``fn`` into torch's graph."""
-        if self._order.torch_is_capturing():
-            return None
-        self.compile_ahead(fn)
-        with wp.ScopedCapture(device=self.device) as cap:
-            fn()
-        return cap.graph
-
     def compile_ahead(self, fn) -> None:
         """Compile every module ``fn``'s launches need side by side (``warpgym.compile.preload``)."""
         self.compile_log.append(("step", compile_ahead(fn)))
-
-    def launch(self, graph, fn) -> None:
-        """Run ``fn`` (captured as ``graph``), ordered after and before torch's stream."""
-        if self._order.torch_is_capturing():
-            self._order.run_in_torch_capture(fn)
-            return
-        self._order.warp_waits_for_torch()
-        if graph is not None:
-            wp.capture_launch(graph)
-        else:
-            fn()
-        self._order.torch_waits_for_warp()
-
-    def step(self) -> None:
-        """Advance every world one control step with the controls in ``ctrl``."""
-        if self._graph is None:
-            self._graph = self.capture(self.simulate)
-        self.launch(self._graph, self.simulate)
 
     # ------------------------------------------------------------------ solver load
     @property

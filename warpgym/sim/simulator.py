@@ -22,7 +22,7 @@ from warpgym.sim import newton_internals
 from warpgym.sim.device import resolve_device
 from warpgym.sim.physics import Physics, exact_damping_scale, motor_damping
 from warpgym.sim.robots import RobotSpec, hinge_joint_names, mjcf_path, motor_gears, robot_spec
-from warpgym.sim.streams import StreamOrder
+from warpgym.sim.streams import CapturedLaunches, StreamOrder
 from warpgym.sim.tensor_api import TensorAPI
 
 
@@ -54,7 +54,7 @@ class _PhaseClock:
         self._last = now
 
 
-class Sim(TensorAPI):
+class Sim(TensorAPI, CapturedLaunches):
     """Batched rigid-body simulation of ``num_envs`` independent worlds of one robot.
 
     Args:
@@ -324,42 +324,11 @@ class Sim(TensorAPI):
         self._peak_nefc.zero_()
         self._peak_nacon.zero_()
 
-    def capture(self, fn):
-        """Capture ``fn``'s launches as one graph: a CUDA graph, or on the CPU Warp's recorded
-        launch list, replayed in C++ (a CPU step is mostly Python launch overhead otherwise).
-        Return None while torch is capturing: ``launch`` then records ``fn`` into torch's graph."""
-        if self._order.torch_is_capturing():
-            return None
-        self.compile_ahead(fn)
-        with wp.ScopedCapture(device=self.device) as cap:
-            fn()
-        return cap.graph
-
     def compile_ahead(self, fn) -> None:
         """Compile, side by side, every module ``fn``'s launches need (``warpgym.compile.preload``). Newton
         counts solver steps on the host; the launch-free pass must not move that count."""
         with newton_internals.keep_step_count(self.solver):
             self.compile_log.append(("step", compile_ahead(fn)))
-
-    def launch(self, graph, fn) -> None:
-        """Run ``fn`` (captured as ``graph``), ordered after and before torch's stream.
-
-        While torch captures a CUDA graph, ``fn``'s launches are recorded into it instead."""
-        if self._order.torch_is_capturing():
-            self._order.run_in_torch_capture(fn)
-            return
-        self._order.warp_waits_for_torch()
-        if graph is not None:
-            wp.capture_launch(graph)
-        else:
-            fn()
-        self._order.torch_waits_for_warp()
-
-    def step(self) -> None:
-        """Advance every world one control step (``substeps`` physics steps)."""
-        if self._graph is None:
-            self._graph = self.capture(self.simulate)
-        self.launch(self._graph, self.simulate)
 
     def enable_contact_forces(self) -> None:
         """Have the solver compute per-body contact wrenches (MuJoCo's ``cfrc_ext``) in the last

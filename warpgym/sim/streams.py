@@ -58,3 +58,39 @@ class StreamOrder:
         with wp.ScopedCapture(device=self.device, stream=ws, external=True):
             with wp.ScopedStream(ws, sync_enter=False, sync_exit=False):
                 fn()
+
+
+class CapturedLaunches:
+    """``capture`` and ``launch`` of a simulator's step: what ``Sim`` and ``MjwSim`` share. The class using
+    it has ``device``, ``_order`` (a ``StreamOrder``), ``_graph`` and ``compile_ahead(fn)``; ``simulate()``
+    is one control step as plain launches."""
+
+    def capture(self, fn):
+        """Capture ``fn``'s launches as one graph: a CUDA graph, or on the CPU Warp's recorded launch list,
+        replayed in C++ (a CPU step is mostly Python launch overhead otherwise). Return None while torch is
+        capturing: ``launch`` then records ``fn`` into torch's graph."""
+        if self._order.torch_is_capturing():
+            return None
+        self.compile_ahead(fn)
+        with wp.ScopedCapture(device=self.device) as cap:
+            fn()
+        return cap.graph
+
+    def launch(self, graph, fn) -> None:
+        """Run ``fn`` (captured as ``graph``), ordered after and before torch's stream. While torch captures
+        a CUDA graph, ``fn``'s launches are recorded into it instead."""
+        if self._order.torch_is_capturing():
+            self._order.run_in_torch_capture(fn)
+            return
+        self._order.warp_waits_for_torch()
+        if graph is not None:
+            wp.capture_launch(graph)
+        else:
+            fn()
+        self._order.torch_waits_for_warp()
+
+    def step(self) -> None:
+        """Advance every world one control step."""
+        if self._graph is None:
+            self._graph = self.capture(self.simulate)
+        self.launch(self._graph, self.simulate)

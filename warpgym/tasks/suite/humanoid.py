@@ -38,10 +38,7 @@ class HumanoidV5(GymTask):
     has_speed: ClassVar = True
 
     def observation_size(self, sim) -> int:
-        return forward_observation_size(sim, 2 * int(self.exclude_current_positions_from_observation),
-                                        self.include_cinert_in_observation, self.include_cvel_in_observation,
-                                        self.include_qfrc_actuator_in_observation,
-                                        self.include_cfrc_ext_in_observation)
+        return com_observation_size(self, sim)
 
     def fill_params(self, p, sim) -> None:
         fill_com_observation(self, p)
@@ -51,6 +48,12 @@ class HumanoidV5(GymTask):
         p.contact_lo, p.contact_hi = (float(v) for v in self.contact_cost_range)
         fill_health(p, self.healthy_reward, self.terminate_when_unhealthy, 2, self.healthy_z_range)
         p.qpos_noise = p.qvel_noise = self.reset_noise_scale
+
+
+def com_observation_size(task, sim) -> int:
+    return forward_observation_size(sim, 2 * int(task.exclude_current_positions_from_observation),
+                                    task.include_cinert_in_observation, task.include_cvel_in_observation,
+                                    task.include_qfrc_actuator_in_observation, task.include_cfrc_ext_in_observation)
 
 
 def fill_com_observation(task, p) -> None:

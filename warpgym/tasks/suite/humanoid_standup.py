@@ -7,8 +7,8 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 from kernels import gym_params as G
-from warpgym.tasks.suite.base import INF, GymTask, forward_observation_size
-from warpgym.tasks.suite.humanoid import fill_com_observation
+from warpgym.tasks.suite.base import INF, GymTask
+from warpgym.tasks.suite.humanoid import com_observation_size, fill_com_observation
 
 
 @dataclass(frozen=True)
@@ -36,10 +36,7 @@ class HumanoidStandup(GymTask):
     reset_com: ClassVar = True
 
     def observation_size(self, sim) -> int:
-        return forward_observation_size(sim, 2 * int(self.exclude_current_positions_from_observation),
-                                        self.include_cinert_in_observation, self.include_cvel_in_observation,
-                                        self.include_qfrc_actuator_in_observation,
-                                        self.include_cfrc_ext_in_observation)
+        return com_observation_size(self, sim)
 
     def fill_params(self, p, sim) -> None:
         fill_com_observation(self, p)
