@@ -27,7 +27,7 @@ def test_version_is_the_projects():
 def test_every_subcommand_answers_help_under_its_own_name():
     from warpgym.cli import COMMANDS
 
-    assert set(COMMANDS) == {"train", "play", "plot", "sim2sim", "train-with", "bench"}
+    assert set(COMMANDS) == {"train", "play", "plot", "sim2sim", "train-with", "bench", "eval"}
     for name in COMMANDS:
         done = warpgym(name, "--help")
         assert done.returncode == 0 and f"usage: warpgym {name}" in done.stdout, (name, done.stderr[-500:])

@@ -2,6 +2,8 @@
 MuJoCo's compile of the file, one step from the same states gives the same observation, reward,
 reward terms and termination, and random-action episodes have the same distributions."""
 
+import os
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -199,23 +201,33 @@ def test_bad_input_names_the_value_and_the_fix():
 
 @pytest.mark.slow
 def test_inverted_pendulum_trains_to_900_in_gymnasiums_own_env(tmp_path, capsys):
-    """``warpgym train --task InvertedPendulum-v5`` on the CPU, then the deterministic policy of its
-    checkpoint scored over 10 episodes of ``gymnasium.make("InvertedPendulum-v5")`` (float64 MuJoCo)."""
-    from agents.checkpoint import load, policy_from_checkpoint
-    from warpgym.cli import train
-    from warpgym.envs.conformance import gymnasium_policy_episodes
+    """``warpgym train --task InvertedPendulum-v5`` on the CPU, then ``warpgym eval``: the deterministic
+    policy over 10 episodes (seeds 0 and 1) of ``gymnasium.make("InvertedPendulum-v5")`` (float64 MuJoCo),
+    beside its return in warpgym's env."""
+    import json
+
+    from warpgym.cli import eval as eval_command, train
 
     run = str(tmp_path / "ip")
     assert train.main(["--task", "InvertedPendulum-v5", "--device", DEVICE, "--max-iterations", "60", "--run-dir",
                        run, "--no-plots", "--seed", "1"]) == 0
-    capsys.readouterr()
-    ckpt = load(f"{run}/checkpoint.pt", torch.device("cpu"))
-    assert ckpt["config"]["env_args"]["unit_actions"] is True
-    policy, normalize = policy_from_checkpoint(ckpt, 4, 1, torch.device("cpu"))
-    returns, lengths = gymnasium_policy_episodes("InvertedPendulum-v5",
-                                                 lambda obs: policy.act_deterministic(normalize(obs)), 10, seed=7)
-    print(f"InvertedPendulum-v5 in Gymnasium's env: returns {returns.tolist()}")
-    assert returns.mean() >= 900, returns
+    out = str(tmp_path / "eval.json")
+    assert eval_command.main([run, "--episodes", "5", "--seeds", "0", "1", "--json", out]) == 0
+    print(capsys.readouterr().out[-600:])
+    result = json.load(open(out))
+    assert result["episodes"] == 10 and [s["seed"] for s in result["per_seed"]] == [0, 1]
+    assert result["gymnasium_return"] >= 900, result
+    assert 0.95 <= result["gymnasium_over_warpgym"] <= 1.05, result
+
+
+def test_eval_refuses_a_policy_of_warpgyms_own_tasks(tmp_path):
+    import glob
+
+    from warpgym.cli import eval as eval_command
+
+    policy = sorted(glob.glob(os.path.join(os.path.dirname(__file__), "data", "ant*.pt")))[0]
+    with pytest.raises(SystemExit, match="not one of Gymnasium's tasks.*warpgym sim2sim"):
+        eval_command.main([policy])
 
 
 def test_suite_training_refuses_the_robots_physics_flags(capsys):

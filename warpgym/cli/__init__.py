@@ -1,4 +1,4 @@
-"""The ``warpgym`` command: ``warpgym train``, ``play``, ``plot``, ``sim2sim``, ``train-with`` and ``bench``.
+"""The ``warpgym`` command: ``warpgym train``, ``play``, ``plot``, ``sim2sim``, ``train-with``, ``bench`` and ``eval``.
 
 The one package of warpgym that imports ``agents``: the commands sit on top of both sides (the
 environment and the learner), so neither side imports the other. ``scripts/*.py`` in a source checkout
@@ -19,6 +19,7 @@ COMMANDS = {  # subcommand: (module, what it does)
     "sim2sim": ("sim2sim", "replay a checkpoint in warpgym and in native MuJoCo, at the training step and finer"),
     "train-with": ("train_with", "train with another learner through its adapter (rsl_rl, skrl, rl_games, sb3, rllib)"),
     "bench": ("bench", "env-steps per second of the simulation layers"),
+    "eval": ("eval", "score a suite task's policy in Gymnasium's own env beside warpgym's"),
 }
 
 

@@ -1,0 +1,98 @@
+"""Score a policy trained on one of Gymnasium's MuJoCo tasks in Gymnasium's own env, where papers report.
+
+    warpgym eval runs/Hopper-v5-20261125-120000                  # 10 episodes x seeds 0 1 2, on the CPU
+    warpgym eval RUN/checkpoint-1200.pt --episodes 20 --seeds 0 --json OUT.json
+
+The checkpoint's deterministic policy (the mean action, its observation normaliser as trained) runs in
+``gymnasium.make("<Name>-v5")``: native MuJoCo in float64, the task's constructor arguments and time
+limit as trained, the policy's actions in [-1, 1] mapped onto the control ranges as in training. The
+same policy's first episodes in warpgym's env, as many as Gymnasium's, stand beside them, and the ratio
+of the two mean returns says whether what was learnt on the GPU holds where it is scored.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+
+def parse_args(argv=None):
+    ap = argparse.ArgumentParser(prog="warpgym eval", description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("checkpoint", help="a run directory (its checkpoint.pt) or a checkpoint file")
+    ap.add_argument("--episodes", type=int, default=10, help="episodes per seed (default 10)")
+    ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2], help="reset seeds (default 0 1 2)")
+    ap.add_argument("--device", default="cpu", help="where the policy and warpgym's env run (default cpu)")
+    ap.add_argument("--json", default=None, metavar="OUT", help="also write the result as JSON")
+    args = ap.parse_args(argv)
+    if args.episodes < 1:
+        ap.error(f"--episodes {args.episodes}: must be a positive integer, e.g. --episodes 10")
+    if any(s < 0 for s in args.seeds):
+        ap.error(f"--seeds {args.seeds}: seeds are non-negative integers, e.g. --seeds 0 1 2")
+    return args
+
+
+def main(argv=None) -> int:
+    args = parse_args(argv)
+    import numpy as np  # noqa: PLC0415
+    import torch  # noqa: PLC0415
+
+    from agents.checkpoint import load_for_command, policy_from_checkpoint  # noqa: PLC0415
+    from agents.evaluate import evaluate  # noqa: PLC0415
+    from warpgym.cli import write_json  # noqa: PLC0415
+    from warpgym.envs import make_vec_env  # noqa: PLC0415
+    from warpgym.envs.conformance import gymnasium_policy_episodes  # noqa: PLC0415
+    from warpgym.sim.device import resolve_device  # noqa: PLC0415
+    from warpgym.tasks.suite import SUITE  # noqa: PLC0415
+
+    device = resolve_device(args.device)
+    path, ckpt = load_for_command(args.checkpoint, torch.device(device))
+    env_args = dict(ckpt["config"]["env_args"])
+    name = env_args.get("task")
+    if name not in SUITE:
+        raise SystemExit(f"{path}: its policy was trained on {name}, not one of Gymnasium's tasks ({list(SUITE)}); "
+                         "score warpgym's own Ant and Humanoid in native MuJoCo with `warpgym sim2sim`")
+    unit = bool(env_args.get("unit_actions", False))
+    task = SUITE[name]
+    if env_args.get("max_episode_steps"):
+        task = task.replace(episode_length=int(env_args["max_episode_steps"]))
+    episodes = args.episodes * len(args.seeds)
+    env = make_vec_env(name, num_envs=episodes, device=device, seed=args.seeds[0], unit_actions=unit,
+                       max_episode_steps=task.episode_length)
+    policy, normalize = policy_from_checkpoint(ckpt, env.num_obs, env.num_actions, torch.device(device))
+    ours = evaluate(env, policy, normalize, task.episode_length)
+    env.close()
+
+    def act(obs):
+        return policy.act_deterministic(normalize(obs.to(device))).cpu()
+
+    per_seed, returns, lengths = [], [], []
+    for seed in args.seeds:
+        r, n = gymnasium_policy_episodes(task, act, args.episodes, seed=1000 * seed, unit_actions=unit)
+        per_seed.append({"seed": seed, "return": float(r.mean()), "length": float(n.mean())})
+        returns += r.tolist()
+        lengths += n.tolist()
+    gym_return = float(np.mean(returns))
+    ratio = gym_return / ours["eval/return"] if ours["eval/return"] else float("nan")
+    result = {"task": name, "checkpoint": path, "iteration": ckpt["iteration"], "samples": ckpt["samples"],
+              "episodes": episodes, "gymnasium_return": gym_return, "gymnasium_return_std": float(np.std(returns)),
+              "gymnasium_length": float(np.mean(lengths)), "per_seed": per_seed,
+              "warpgym_return": ours["eval/return"], "warpgym_length": ours["eval/length"],
+              "gymnasium_over_warpgym": ratio}
+    print(f"{name}, policy of iteration {ckpt['iteration']} ({ckpt['samples'] / 1e6:.2f} M samples), deterministic, "
+          f"{episodes} episodes each:")
+    print(f"  Gymnasium's env (gymnasium.make, float64): return {gym_return:.1f} ± {np.std(returns):.1f}, "
+          f"length {np.mean(lengths):.0f}   per seed: "
+          + ", ".join(f"{s['seed']}: {s['return']:.1f}" for s in per_seed))
+    print(f"  warpgym's env (float32, {device}):          return {ours['eval/return']:.1f}, "
+          f"length {ours['eval/length']:.0f}")
+    print(f"  Gymnasium / warpgym: {ratio:.3f}")
+    print(json.dumps(result))
+    if args.json:
+        write_json(args.json, result)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
