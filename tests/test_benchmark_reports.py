@@ -44,3 +44,32 @@ def test_runs_made_differently_are_refused_by_name(tmp_path):
     other = write(tmp_path / "b", "2026-11-24", [row("rllib", "/x/Ant-rllib-1gpu", 2e4)], num_envs=1024, seconds=60.0)
     with pytest.raises(ValueError, match=r"differ from .* in num_envs, seconds"):
         cmp.merged_reports([first, other])
+
+
+def test_suite_learning_report_merges_runs_made_alike_and_refuses_others(tmp_path, capsys):
+    import suite_learning as sl
+
+    def doc(folder, task, seed, scale=1.0, gpu="NVIDIA H100 80GB HBM3", hit=True):
+        os.makedirs(folder, exist_ok=True)
+        marks = list(sl.marks_of(task, scale))
+        run = {"task": task, "seed": seed, "budget_s": marks[-1], "marks_s": marks, "samples": 2.4e8,
+               "num_envs": 4096, "samples_per_s": 4.0e5, "reference": sl.REFERENCE.get(task), "device": "cuda:0",
+               "first_eval_reaching": {"target": {"time_s": 420.0, "samples": 1.7e8} if hit else None,
+                                       "half": {"time_s": 180.0, "samples": 7e7}},
+               "scored": [{"mark_s": m, "time_s": m + 1, "samples": 1e6, "gymnasium_return": 1000.0 * (i + 1),
+                           "warpgym_return": 1000.0 * (i + 1), "gymnasium_over_warpgym": 0.97 + 0.01 * i}
+                          for i, m in enumerate(marks)]}
+        with open(os.path.join(folder, f"{task}-seed{seed}.json"), "w") as f:
+            json.dump({"meta": {"gpu": gpu, "scale": scale, "date": "2026-11-26", "command": "x"}, "run": run}, f)
+
+    doc(tmp_path / "a", "Hopper-v5", 0)
+    doc(tmp_path / "b", "Hopper-v5", 1, hit=False)
+    assert sl.report([str(tmp_path / "a"), str(tmp_path / "b")]) == 0
+    table = capsys.readouterr().out
+    # both seeds in one row: the marks' mean returns, the reference reached by one seed of two, the lowest ratio
+    assert "| Hopper-v5 | 2 | 1 min: 1000; 2 min: 2000; 5 min: 3000; 10 min: 4000 | 3542.0 | 7.0 (1/2) (3.0 (2/2)) |" in table
+    assert table.rstrip().endswith("| 0.970 |")
+    doc(tmp_path / "c", "Hopper-v5", 2, scale=0.1)
+    with pytest.raises(SystemExit, match="made differently"):
+        sl.report([str(tmp_path / "a"), str(tmp_path / "c")])
+    assert sl.half(-2.6) == -5.2 and sl.half(5850.0) == 2925.0
