@@ -307,3 +307,33 @@ def test_a_model_mujoco_warp_cannot_run_fails_in_one_line_naming_the_file(monkey
     message = str(caught.value)
     assert "\n" not in message and "hopper.xml" in message and "Body plugins not supported" in message
     assert "pass its path" in message
+
+
+def test_render_draws_the_worlds_as_gymnasiums_own_renderer_does():
+    """``render_mode="rgb_array"``: the frame of a world is Gymnasium's own frame of the same state."""
+    pytest.importorskip("PIL")
+    import mujoco
+
+    from warpgym.media.render import RendererUnavailable, probe_renderer
+
+    try:
+        probe_renderer()
+    except RendererUnavailable as e:
+        pytest.skip(str(e))
+    env = gym.make_vec("warpgym/Hopper-v5", num_envs=3, device=DEVICE, render_mode="rgb_array", render_robots=2,
+                       render_size=(96, 64))
+    env.reset(seed=0)
+    for _ in range(4):
+        env.step(torch.rand(3, 3) * 2 - 1)
+    frames = env.render()
+    assert len(frames) == 2 and frames[0].shape == (64, 96, 3) and frames[0].dtype == np.uint8
+    theirs = gym.make("Hopper-v5", render_mode="rgb_array", width=96, height=64)
+    theirs.reset(seed=0)
+    for i in range(2):
+        u = theirs.unwrapped
+        u.data.qpos[:], u.data.qvel[:] = env.sim.dof_pos[i].numpy(), env.sim.dof_vel[i].numpy()
+        mujoco.mj_forward(u.model, u.data)
+        assert np.array_equal(theirs.render(), frames[i])
+    assert not np.array_equal(frames[0], frames[1])  # two worlds, two states
+    theirs.close()
+    env.close()

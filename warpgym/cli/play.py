@@ -88,7 +88,8 @@ def main(argv=None) -> int:
     # the trained task as it was trained (episode length, substeps, physics), on this device
     if task in SUITE:
         if filming:
-            raise SystemExit(f"--video / --gif: the suite's tasks ({task}) do not draw yet; drop them")
+            raise SystemExit(f"--video / --gif draw warpgym's own robots only so far, not {task}: drop them (a suite "
+                             "env draws its worlds with render_mode='rgb_array')")
         env = make_vec_env(**{**env_args, "num_envs": n, "device": device, "seed": args.seed})
     else:
         env = LocomotionVecEnv(**{**env_args, "physics": recorded(env_args.get("physics")), "num_envs": n,

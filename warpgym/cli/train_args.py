@@ -71,7 +71,8 @@ def parse_args(argv=None, description: str | None = None):
         ap.error(f"--physics: {e}")
     if args.video:
         if args.task is not None and args.task.endswith("-v5"):
-            ap.error(f"--video: the suite's tasks ({args.task}) do not draw yet; drop --video")
+            ap.error(f"--video: training clips draw warpgym's own robots only so far, not {args.task}; drop --video "
+                     "(a suite env draws its worlds with render_mode='rgb_array')")
         check_video_args(ap, args)
     return args
 

@@ -38,6 +38,9 @@ class SuiteVecEnv(GraphVecEnv):
         device: "cpu" or "cuda:N" (default: cuda:0 when present).
         seed: seed of the reset noise; ``reset(seed=...)`` replaces it.
         max_episode_steps: the time limit (default: Gymnasium's for the task).
+        render_mode: None, "rgb_array" (``render()`` returns a tuple with one frame per world for the first
+            ``render_robots``, drawn by Gymnasium's own env of the task from these worlds' states) or "human".
+        render_robots, render_size: how many worlds an "rgb_array" render draws, and (width, height).
         unit_actions: take actions in [-1, 1], clip them there and map them linearly onto the actuators'
             control ranges, as a learner that rescales its actions before Gymnasium's env (SB3's
             ``unscale_action``) does; the control cost is charged on the mapped controls. The action
@@ -46,7 +49,7 @@ class SuiteVecEnv(GraphVecEnv):
             ``frame_skip=2``, ``xml_file=PATH``), and ``nconmax`` / ``njmax`` for MuJoCo Warp's buffers.
     """
 
-    metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
+    metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": ["rgb_array", "human"]}
     graph_capturable = True
     FAULTS = ("nan_actions", "diverged_resets", "solver_overflows")
     FAULT_HELP = {
@@ -57,19 +60,21 @@ class SuiteVecEnv(GraphVecEnv):
     }
 
     def __init__(self, task: str | GymTask = "Hopper-v5", num_envs: int = 1, device: str | None = None, seed: int = 0,
-                 max_episode_steps: int | None = None, render_mode: str | None = None, unit_actions: bool = False,
-                 **kwargs):
+                 max_episode_steps: int | None = None, render_mode: str | None = None, render_robots: int = 1,
+                 render_size: tuple[int, int] = (480, 480), unit_actions: bool = False, **kwargs):
         task = get_suite_task(task)
-        if render_mode is not None:
-            raise ValueError(f"render_mode={render_mode!r}: the suite's envs do not draw yet; pass render_mode=None "
-                             f"and draw with gymnasium.make('{task.name}', render_mode=...) from the same states")
         if max_episode_steps is not None:
             kwargs["episode_length"] = max_episode_steps
         if kwargs:
             task = task.replace(**kwargs)
         task.validate()
         self.task = task
-        self.render_mode = None
+        self.render_mode = render_mode
+        self._view = None
+        if render_mode is not None:
+            from warpgym.media.render import SuiteView  # noqa: PLC0415  (Gymnasium's renderer: only when asked for)
+
+            self._view = SuiteView(task, render_mode, render_robots, *render_size)
         self.sim = sim = MjwSim(task.xml_file, num_envs, device, frame_skip=task.frame_skip, nconmax=task.nconmax,
                                 njmax=task.njmax, contact_forces=task.contact_forces)
         self.num_envs = n = sim.num_envs
@@ -93,7 +98,7 @@ class SuiteVecEnv(GraphVecEnv):
             return wp.zeros(shape, dtype=dtype, device=dev)
 
         d = sim.d
-        self._view = view = MjView()
+        self._mj = view = MjView()
         view.qpos, view.qvel, view.ctrl = d.qpos, d.qvel, d.ctrl
         view.xpos, view.xipos, view.cinert, view.cvel = d.xpos, d.xipos, d.cinert, d.cvel
         view.cfrc_ext, view.qfrc_actuator, view.qfrc_constraint = d.cfrc_ext, d.qfrc_actuator, d.qfrc_constraint
@@ -154,7 +159,7 @@ class SuiteVecEnv(GraphVecEnv):
                   inputs=[self._actions_in, int(self.unit_actions), self._ctrl_low, self._ctrl_high],
                   outputs=[sim.d.ctrl, self._episodes.actions, self._nan_count], device=dev)
         sim.simulate()
-        wp.launch(gym_step, dim=n, inputs=[self.params, self._view, self._episodes, self._out], device=dev)
+        wp.launch(gym_step, dim=n, inputs=[self.params, self._mj, self._episodes, self._out], device=dev)
         self._launch_reset(force_all=0)
         wp.launch(count_faults, dim=n, inputs=[self._nan_count, self._out.diverged, sim.solver_overflows],
                   outputs=[self._fault_totals], device=dev)
@@ -163,19 +168,27 @@ class SuiteVecEnv(GraphVecEnv):
     def _launch_reset(self, force_all: int) -> None:
         dev = self.sim.device
         wp.launch(reset_gym_worlds, dim=self.num_envs,
-                  inputs=[self.params, force_all, self._rng_state, self._view, self._episodes, self._out], device=dev)
+                  inputs=[self.params, force_all, self._rng_state, self._mj, self._episodes, self._out], device=dev)
         if self.task.reset_kinematics:  # all worlds: the others' observations are already written
             self.sim.kinematics(com=self.task.reset_com)
         wp.launch(write_reset_observation, dim=self.num_envs,
-                  inputs=[self.params, force_all, self._view, self._episodes, self._out], device=dev)
+                  inputs=[self.params, force_all, self._mj, self._episodes, self._out], device=dev)
 
     # ------------------------------------------------------------------ Gymnasium API (GraphVecEnv: reset, step)
     def render(self):
-        gymnasium_logger.warn("the suite's envs do not draw yet: render() returns None")
-        return None
+        """Gymnasium's render: a tuple of (height, width, 3) uint8 frames of the first ``render_robots`` worlds
+        ("rgb_array"), or Gymnasium's viewer updated ("human"). One host copy of their states."""
+        if self._view is None:
+            gymnasium_logger.warn("render() was called on an env made without render_mode: pass render_mode="
+                                  "'rgb_array' (or 'human') to gym.make / gym.make_vec")
+            return None
+        k = min(self._view.robots, self.num_envs)
+        return self._view.render(self.sim.dof_pos[:k].cpu().numpy(), self.sim.dof_vel[:k].cpu().numpy())
 
     def close(self, **kwargs) -> None:
         self._graph = None
+        if self._view is not None:
+            self._view.close()
         self.closed = True
 
     def __repr__(self) -> str:

@@ -247,3 +247,55 @@ class EnvView:
             renderer.close()
         if viewer is not None:
             viewer.close()
+
+
+class SuiteView:
+    """What Gymnasium's ``render()`` shows of one of its MuJoCo tasks simulated by warpgym: the same worlds
+    drawn by Gymnasium's own env (its renderer, cameras and frame size), their states copied into it.
+
+    ``"rgb_array"``: a tuple of (height, width, 3) frames, one per world for the first ``robots``;
+    ``"human"``: Gymnasium's viewer window on the first world (needs a display)."""
+
+    def __init__(self, task, mode: str, robots: int = 1, width: int = 640, height: int = 480):
+        if mode not in RENDER_MODES:
+            raise ValueError(f"render_mode={mode!r}: choose one of {list(RENDER_MODES)} or None")
+        if isinstance(robots, bool) or not isinstance(robots, int) or robots < 1:
+            raise ValueError(f"render_robots={robots!r} must be a positive integer (how many worlds render() draws)")
+        if mode == "human" and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY") or os.name == "nt"):
+            raise RuntimeError("render_mode='human' opens MuJoCo's viewer, which needs a display, and this machine "
+                               "has none (DISPLAY is not set): use render_mode='rgb_array' for frames")
+        if mode == "rgb_array":
+            RobotRenderer.check_size(width, height)
+            if os.environ.get("MUJOCO_GL", "").strip().lower() not in ("egl", "osmesa"):
+                # Gymnasium's renderer reads MUJOCO_GL when it makes its context: point it at a headless one
+                context = _gl_context(16, 16)
+                os.environ["MUJOCO_GL"] = "egl" if type(context).__module__.endswith("egl") else "osmesa"
+                context.free()
+        import gymnasium  # noqa: PLC0415
+
+        args = {name: getattr(task, name) for name in task.argument_names()}
+        self.robots, self.mode = robots, mode
+        self._env = gymnasium.make(task.name, render_mode=mode, width=width, height=height, **args).unwrapped
+        # closed at exit before mujoco's own exit hook ends EGL, as EnvView's renderer (the hook holds the env,
+        # not the view)
+        self._at_exit = self._env.close
+        atexit.register(self._at_exit)
+
+    def render(self, qpos: np.ndarray, qvel: np.ndarray):
+        """``qpos``, ``qvel``: MuJoCo's layout, one row per world (at least ``robots`` rows)."""
+        import mujoco  # noqa: PLC0415
+
+        env = self._env
+        frames = []
+        for i in range(1 if self.mode == "human" else self.robots):
+            env.data.qpos[:] = qpos[i]
+            env.data.qvel[:] = qvel[i]
+            mujoco.mj_forward(env.model, env.data)
+            frames.append(env.render())
+        return None if self.mode == "human" else tuple(frames)
+
+    def close(self) -> None:
+        if self._env is not None:
+            self._env.close()
+            atexit.unregister(self._at_exit)
+            self._env = None
