@@ -337,3 +337,30 @@ def test_render_draws_the_worlds_as_gymnasiums_own_renderer_does():
     assert not np.array_equal(frames[0], frames[1])  # two worlds, two states
     theirs.close()
     env.close()
+
+
+def test_tensor_api_views_of_the_suites_worlds(suite_envs):
+    env = suite_envs("Ant-v5")
+    sim = env.sim
+    env.reset(seed=0)
+    assert sim.root_pose.shape == (env.num_envs, 7) and sim.root_vel.shape == (env.num_envs, 6)
+    assert sim.dof_pos.data_ptr() == sim.root_pose.data_ptr()  # views of MuJoCo Warp's qpos, no copies
+    qpos, qvel = sim.dof_pos.clone(), sim.dof_vel.clone()
+    qpos[1, 2] = 0.75  # lift world 1's torso
+    sim.set_state(qpos[1:2], qvel[1:2], torch.tensor([1]))
+    assert float(sim.root_pose[1, 2]) == pytest.approx(0.75) and float(sim.dof_pos[0, 2]) == float(qpos[0, 2])
+    assert float(sim.to_torch(sim.d.qacc_warmstart)[1].abs().sum()) == 0.0
+    with pytest.raises(ValueError, match="qpos has shape"):
+        sim.set_state(qpos, qvel, torch.tensor([1]))
+    with pytest.raises(AttributeError, match="no free root joint.*dof_pos"):
+        _ = suite_envs("Hopper-v5").sim.root_pose
+
+
+def test_bench_times_the_task_step_beside_mujoco_warps_from_the_same_states():
+    from warpgym.cli.bench import gpu_memory_used, timed
+    from warpgym.cli.bench_suite import bench_suite_task
+
+    row = bench_suite_task("Swimmer-v5", 4, DEVICE, steps=3, repeats=2, timed=timed, memory_used=gpu_memory_used)
+    assert row["env_steps_per_s"] > 0 and row["mjwarp_steps_per_s"] > 0
+    assert len(row["env_seconds"]) == len(row["mjwarp_seconds"]) == 2
+    assert row["faults"] == {"nan_actions": 0, "diverged_resets": 0, "solver_overflows": 0}
