@@ -4,6 +4,7 @@ import json
 import os
 import sys
 
+import pytest
 import torch
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -142,3 +143,15 @@ def test_every_task_has_defaults_and_the_gpu_default_trains_as_it_was_measured()
         assert cfg.batch_size == preset.batch_size, (task, envs)
         assert (envs * cfg.horizon_len) % cfg.batch_size == 0
         assert cfg.env_args["num_envs"] == envs
+
+
+def test_config_flags_set_any_ppo_setting_and_name_a_wrong_one():
+    args = train.parse_args(["--task", "Hopper-v5", "--config", "gamma=0.999", "--config", "net_dims=64,32",
+                             "--config", "batch_size=512", "--config", "normalize_obs=false"])
+    cfg = train.build_config(args, "Hopper-v5", 64, "cpu")
+    assert (cfg.gamma, cfg.net_dims, cfg.batch_size, cfg.normalize_obs) == (0.999, (64, 32), 512, False)
+    for bad, says in ((["--config", "gama=0.9"], "'gama' is not a PPO setting"),
+                      (["--config", "seed=3"], "'seed' is not a PPO setting"),
+                      (["--config", "net_dims=wide"], "comma-separated numbers")):
+        with pytest.raises(SystemExit):
+            train.parse_args(bad)

@@ -88,10 +88,11 @@ def build_config(args, task: str, num_envs: int, device: str, saved: dict | None
     }.items() if v is not None}
     if saved is None and "eval_envs" not in changes and device == "cpu":
         changes["eval_envs"] = 4
-    cfg = cfg.replace(**changes)
+    cfg = cfg.replace(**{**(args.config or {}), **changes})
     samples = num_envs * cfg.horizon_len
     batch = cfg.batch_size
-    if saved is None and args.batch_size is None and (batch > samples // 2 or samples % batch):
+    if saved is None and args.batch_size is None and "batch_size" not in (args.config or {}) and (
+            batch > samples // 2 or samples % batch):
         batch = max(samples // 2, 1)  # the preset's mini-batch does not fit this env count
     from warpgym.envs import LocomotionVecEnv  # noqa: PLC0415
     from warpgym.envs.suite import SuiteVecEnv  # noqa: PLC0415

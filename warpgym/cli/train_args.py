@@ -34,6 +34,9 @@ def parse_args(argv=None, description: str | None = None):
     ap.add_argument("--substeps", type=int, default=None, help="physics substeps per 1/60 s step (default: the task's)")
     ap.add_argument("--physics", action="append", default=[], metavar="NAME=VALUE",
                     help="a physics setting (warpgym/sim/physics.py), e.g. --physics armature=0.05; repeat for more")
+    ap.add_argument("--config", action="append", default=[], metavar="NAME=VALUE",
+                    help="any PPO setting of agents/config.py's Config, e.g. --config gamma=0.999 --config "
+                         "net_dims=256,256 --config reward_scale=0.1; repeat for more (a sweep's knobs)")
     ap.add_argument("--save-at", type=float, nargs="+", default=None, metavar="SECONDS",
                     help="also keep checkpoint-<iteration>.pt at the first iteration after each of these "
                          "wall-clock seconds since start, e.g. --save-at 60 120 (summary.json lists them)")
@@ -69,12 +72,43 @@ def parse_args(argv=None, description: str | None = None):
         Physics.from_dict(args.physics)
     except ValueError as e:
         ap.error(f"--physics: {e}")
+    try:
+        args.config = parse_config(args.config)
+    except ValueError as e:
+        ap.error(f"--config: {e}")
     if args.video:
         if args.task is not None and args.task.endswith("-v5"):
             ap.error(f"--video: training clips draw warpgym's own robots only so far, not {args.task}; drop --video "
                      "(a suite env draws its worlds with render_mode='rgb_array')")
         check_video_args(ap, args)
     return args
+
+
+# Config fields a --config flag may not set: the envs are the command's, the seed is --seed
+NOT_CONFIGURABLE = ("agent", "env_class", "env_args", "eval_env_class", "eval_env_args", "seed")
+
+
+def parse_config(texts: list[str]) -> dict:
+    """``["gamma=0.999", "net_dims=256,256"]`` -> {"gamma": 0.999, "net_dims": (256, 256)}; each name a Config
+    field (agents/config.py), checked with the preset when the run is configured."""
+    from dataclasses import fields  # noqa: PLC0415
+
+    from agents.config import Config  # noqa: PLC0415
+    from warpgym.sim.physics import parse_setting  # noqa: PLC0415
+
+    names = {f.name for f in fields(Config)} - set(NOT_CONFIGURABLE)
+    out = {}
+    for text in texts:
+        name, value = parse_setting(text)
+        if name not in names:
+            raise ValueError(f"{name!r} is not a PPO setting; choose from {sorted(names)}")
+        if name in ("net_dims", "save_at"):
+            try:
+                value = tuple(int(v) if name == "net_dims" else float(v) for v in str(value).split(","))
+            except ValueError:
+                raise ValueError(f"{text!r}: write comma-separated numbers, e.g. {name}=256,128") from None
+        out[name] = value
+    return out
 
 
 # flag -> a value that works, quoted in the error; every flag is checked before anything is built
