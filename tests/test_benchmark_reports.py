@@ -73,3 +73,24 @@ def test_suite_learning_report_merges_runs_made_alike_and_refuses_others(tmp_pat
     with pytest.raises(SystemExit, match="made differently"):
         sl.report([str(tmp_path / "a"), str(tmp_path / "c")])
     assert sl.half(-2.6) == -5.2 and sl.half(5850.0) == 2925.0
+
+
+def test_suite_sweep_ranks_combinations_by_their_return_in_gymnasiums_env():
+    import suite_sweep as sw
+
+    assert sw.parse_grid(["gamma=0.99,0.995", "net_dims=256x128,64x64"]) == {
+        "gamma": ["0.99", "0.995"], "net_dims": ["256,128", "64,64"]}
+    with pytest.raises(ValueError, match="NAME=V1,V2"):
+        sw.parse_grid(["gamma"])
+    cmd = sw.command("Hopper-v5", {"num_envs": "4096", "gamma": "0.995"}, 1, 60.0, "R", None)
+    assert cmd[-4:] == ["--num-envs", "4096", "--config", "gamma=0.995"] and cmd[cmd.index("--time-limit") + 1] == "60.0"
+
+    def row(label, value, ratio):
+        return {"label": label, "gymnasium_return": value,
+                "runs": [{"seed": 0, "gymnasium_return": value, "ratio": ratio, "samples_per_s": 2e6}]}
+
+    doc = {"rows": [row("gamma=0.99", 900.0, 0.99), row("gamma=0.995", 2400.0, 0.97),
+                    {"label": "gamma=0.9", "gymnasium_return": None, "runs": [{"seed": 0, "error": "exit 1"}]}]}
+    lines = sw.table(doc).splitlines()
+    assert lines[2].startswith("| 1 | gamma=0.995 | 2400.0 |") and lines[3].startswith("| 2 | gamma=0.99 | 900.0 |")
+    assert lines[4] == "| 3 | gamma=0.9 | failed | failed | - | - |"
