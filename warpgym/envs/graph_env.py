@@ -18,6 +18,17 @@ class GraphVecEnv(VectorEnv):
     # Set by the subclass: sim (with launch/capture), num_envs, num_actions, device, obs, reward,
     # terminated, truncated, info, _actions_in_t, _rng_state, _graph, _fault_views.
 
+    @staticmethod
+    def configured(task, max_episode_steps: int | None, overrides: dict):
+        """``task`` with the constructor's keyword overrides (the task's own field names) and
+        ``max_episode_steps`` as its episode length, checked."""
+        if max_episode_steps is not None:
+            overrides["episode_length"] = max_episode_steps
+        if overrides:
+            task = task.replace(**overrides)
+        task.validate()
+        return task
+
     def _launch_step(self) -> None:
         raise NotImplementedError
 

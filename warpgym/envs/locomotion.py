@@ -61,13 +61,7 @@ class LocomotionVecEnv(GraphVecEnv):
         render_size: tuple[int, int] = (640, 480),
         **task_overrides,
     ):
-        task = get_task(task)
-        if max_episode_steps is not None:
-            task_overrides["episode_length"] = max_episode_steps
-        if task_overrides:
-            task = task.replace(**task_overrides)
-        task.validate()
-        self.task = task
+        self.task = task = self.configured(get_task(task), max_episode_steps, task_overrides)
         self.render_mode = render_mode
         self._view = None
         if render_mode is not None:

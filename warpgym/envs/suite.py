@@ -62,13 +62,7 @@ class SuiteVecEnv(GraphVecEnv):
     def __init__(self, task: str | GymTask = "Hopper-v5", num_envs: int = 1, device: str | None = None, seed: int = 0,
                  max_episode_steps: int | None = None, render_mode: str | None = None, render_robots: int = 1,
                  render_size: tuple[int, int] = (480, 480), unit_actions: bool = False, **kwargs):
-        task = get_suite_task(task)
-        if max_episode_steps is not None:
-            kwargs["episode_length"] = max_episode_steps
-        if kwargs:
-            task = task.replace(**kwargs)
-        task.validate()
-        self.task = task
+        self.task = task = self.configured(get_suite_task(task), max_episode_steps, kwargs)
         self.render_mode = render_mode
         self._view = None
         if render_mode is not None:
