@@ -42,3 +42,17 @@ def test_importing_warpgym_loads_no_learner_and_no_command():
     code = "import sys, warpgym; print(sorted(m for m in sys.modules if m.split('.')[0] == 'agents' or m.startswith('warpgym.cli')))"
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, check=True)
     assert done.stdout.strip() == "[]", done.stdout
+
+
+def test_the_wheel_lists_every_package():
+    """pyproject.toml names its packages one by one: a new sub-package missing there installs from a
+    checkout (editable) and is absent from the wheel."""
+    import tomllib
+
+    listed = set(tomllib.load(open(os.path.join(ROOT, "pyproject.toml"), "rb"))["tool"]["setuptools"]["packages"])
+    found = set()
+    for top in ("warpgym", "kernels", "agents"):
+        for folder, _, files in os.walk(os.path.join(ROOT, top)):
+            if "__init__.py" in files and "__pycache__" not in folder:
+                found.add(os.path.relpath(folder, ROOT).replace(os.sep, "."))
+    assert found == listed, (sorted(found - listed), sorted(listed - found))
