@@ -82,6 +82,7 @@ def main(argv=None) -> int:
         ap.error("--out OUT.json is required (or --report JSON)")
     if args.episodes < 8:
         ap.error(f"--episodes {args.episodes}: a distribution test needs at least 8, e.g. --episodes 64")
+    from warpgym.cli import write_json  # noqa: PLC0415
     from warpgym.tasks.suite import SUITE  # noqa: PLC0415
 
     tasks = args.tasks or list(SUITE)
@@ -98,9 +99,7 @@ def main(argv=None) -> int:
     for name in tasks:
         rows.append(measure(name, samples, args.episodes, args.seed))
         print(json.dumps(rows[-1]), flush=True)
-        with open(args.out + ".tmp", "w") as f:
-            json.dump({"meta": meta, "rows": rows}, f, indent=1)
-        os.replace(args.out + ".tmp", args.out)
+        write_json(args.out, {"meta": meta, "rows": rows})
     print(table(rows))
     return 0
 

@@ -145,6 +145,7 @@ def main(argv=None) -> int:
         ap.error(f"--scale {args.scale} / --eval-episodes {args.eval_episodes}: both must be positive")
     import torch  # noqa: PLC0415
 
+    from warpgym.cli import write_json  # noqa: PLC0415
     from warpgym.tasks.suite import SUITE  # noqa: PLC0415
 
     tasks = args.tasks or list(SUITE)
@@ -160,9 +161,7 @@ def main(argv=None) -> int:
                             "command": " ".join(["benchmarks/suite_learning.py"] + (argv or sys.argv[1:]))},
                    "run": run}
             path = os.path.join(args.out, f"{task}-seed{seed}.json")
-            with open(path + ".tmp", "w") as f:
-                json.dump(doc, f, indent=1)
-            os.replace(path + ".tmp", path)
+            write_json(path, doc)
             print(json.dumps(run)[:400], flush=True)
     return report([args.out])
 

@@ -125,6 +125,7 @@ def main(argv=None) -> int:
         ap.error("--out OUT.json is required (or --report JSON...)")
     import torch  # noqa: PLC0415
 
+    from warpgym.cli import write_json  # noqa: PLC0415
     from warpgym.cli.bench import gpu_memory_used, timed  # noqa: PLC0415
     from warpgym.cli.bench_suite import bench_suite_task  # noqa: PLC0415
     from warpgym.tasks.suite import SUITE  # noqa: PLC0415
@@ -141,9 +142,7 @@ def main(argv=None) -> int:
     out = {"meta": meta, "gpu": [], "cpu": {}}
 
     def save():
-        with open(args.out + ".tmp", "w") as f:
-            json.dump(out, f, indent=1)
-        os.replace(args.out + ".tmp", args.out)
+        write_json(args.out, out)
 
     for name in tasks:
         if not args.skip_gpu:

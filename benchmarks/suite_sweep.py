@@ -108,6 +108,7 @@ def main(argv=None) -> int:
         return 0
     if not (args.out and args.task):
         ap.error("--out OUT and --task NAME are required (or --report JSON)")
+    from warpgym.cli import write_json  # noqa: PLC0415
     from warpgym.tasks.suite import SUITE  # noqa: PLC0415
 
     if args.task not in SUITE:
@@ -131,9 +132,7 @@ def main(argv=None) -> int:
         doc["rows"].append(run_combo(args.task, dict(zip(names, values)), args.seeds, args.seconds, args.out,
                                      args.device, args.eval_episodes))
         print(json.dumps(doc["rows"][-1])[:300], flush=True)
-        with open(path + ".tmp", "w") as f:
-            json.dump(doc, f, indent=1)
-        os.replace(path + ".tmp", path)
+        write_json(path, doc)
     print(table(doc))
     return 0
 

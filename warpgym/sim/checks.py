@@ -2,7 +2,15 @@
 
 from __future__ import annotations
 
+import numpy as np
 import torch
+
+
+def check_positive_int(name: str, value, fix: str) -> int:
+    """Accept a positive integer (not a bool); the error names the value and ``fix``."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise ValueError(f"{name}={value!r} must be a positive integer: {fix}")
+    return int(value)
 
 
 def check_float_tensor(name: str, t, device: torch.device, shapes: list[tuple[int, ...]]) -> torch.Tensor:

@@ -21,17 +21,11 @@ import warp as wp
 
 from kernels.solver_load import track_solver_load
 from warpgym.compile.preload import compile_ahead
-from warpgym.sim.checks import check_env_ids, check_float_tensor
+from warpgym.sim.checks import check_env_ids, check_float_tensor, check_positive_int
 from warpgym.sim.device import resolve_device
 from warpgym.sim.gym_model import CompiledModel, compile_model
 from warpgym.sim.mjw_internals import mujoco_contact_frames
 from warpgym.sim.streams import CapturedLaunches, StreamOrder
-
-
-def _positive_int(name: str, value, fix: str) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-        raise ValueError(f"{name}={value!r} must be a positive integer: {fix}")
-    return int(value)
 
 
 class MjwSim(CapturedLaunches):
@@ -54,10 +48,10 @@ class MjwSim(CapturedLaunches):
 
         self.compiled = model if isinstance(model, CompiledModel) else compile_model(model)
         self.mjm = mjm = self.compiled.mjm
-        self.num_envs = _positive_int("num_envs", num_envs, "pass num_envs >= 1")
-        self.frame_skip = _positive_int("frame_skip", frame_skip, "pass frame_skip >= 1 (the task's, e.g. 5)")
-        self.nconmax = _positive_int("nconmax", nconmax, "pass e.g. 32")
-        self.njmax = _positive_int("njmax", njmax, "pass e.g. 128")
+        self.num_envs = check_positive_int("num_envs", num_envs, "pass num_envs >= 1")
+        self.frame_skip = check_positive_int("frame_skip", frame_skip, "pass frame_skip >= 1 (the task's, e.g. 5)")
+        self.nconmax = check_positive_int("nconmax", nconmax, "pass e.g. 32")
+        self.njmax = check_positive_int("njmax", njmax, "pass e.g. 128")
         self.device = resolve_device(device)
         self.torch_device = torch.device(self.device)
         self.contact_forces = bool(contact_forces)
@@ -181,7 +175,6 @@ class MjwSim(CapturedLaunches):
         qpos = check_float_tensor("qpos", qpos, self.torch_device, [(rows, self.nq)])
         qvel = check_float_tensor("qvel", qvel, self.torch_device, [(rows, self.nv)])
         warm = self.to_torch(self.d.qacc_warmstart)
-        self._order.warp_waits_for_torch()
         if ids is None:
             self.dof_pos.copy_(qpos), self.dof_vel.copy_(qvel), warm.zero_()
         else:

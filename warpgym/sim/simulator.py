@@ -19,17 +19,12 @@ from kernels import tensor_api as k_api
 from kernels.solver_load import track_solver_load
 from warpgym.compile.preload import Preload, compile_ahead
 from warpgym.sim import newton_internals
+from warpgym.sim.checks import check_positive_int
 from warpgym.sim.device import resolve_device
 from warpgym.sim.physics import Physics, exact_damping_scale, motor_damping
 from warpgym.sim.robots import RobotSpec, hinge_joint_names, mjcf_path, motor_gears, robot_spec
 from warpgym.sim.streams import CapturedLaunches, StreamOrder
 from warpgym.sim.tensor_api import TensorAPI
-
-
-def _check_positive_int(name: str, value, fix: str) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-        raise ValueError(f"{name}={value!r} must be a positive integer: {fix}")
-    return int(value)
 
 
 def _leaf(label: str) -> str:
@@ -85,13 +80,13 @@ class Sim(TensorAPI, CapturedLaunches):
         check_inputs: bool = True,
     ):
         self.spec: RobotSpec = robot_spec(robot)
-        self.num_envs = _check_positive_int("num_envs", num_envs, "pass num_envs >= 1")
-        self.substeps = _check_positive_int("substeps", substeps, "pass substeps >= 1 (2 is the default)")
+        self.num_envs = check_positive_int("num_envs", num_envs, "pass num_envs >= 1")
+        self.substeps = check_positive_int("substeps", substeps, "pass substeps >= 1 (2 is the default)")
         if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0):
             raise ValueError(f"dt={dt!r} must be a positive number of seconds, e.g. 1/60")
         self.physics = physics if isinstance(physics, Physics) else Physics.from_dict(physics)
-        self.njmax = self.spec.njmax if njmax is None else _check_positive_int("njmax", njmax, "pass e.g. 128")
-        self.nconmax = self.spec.nconmax if nconmax is None else _check_positive_int("nconmax", nconmax, "pass e.g. 48")
+        self.njmax = self.spec.njmax if njmax is None else check_positive_int("njmax", njmax, "pass e.g. 128")
+        self.nconmax = self.spec.nconmax if nconmax is None else check_positive_int("nconmax", nconmax, "pass e.g. 48")
         self.device = resolve_device(device)
         self.torch_device = torch.device(self.device)
         self.seed = int(seed)
