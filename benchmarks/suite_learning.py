@@ -42,10 +42,9 @@ def marks_of(task: str, scale: float) -> tuple[float, ...]:
     return tuple(m * scale for m in MARKS["short" if task in SHORT else "long"])
 
 
-def run_one(task: str, seed: int, out: str, scale: float, device: str | None, eval_episodes: int) -> dict:
-    """Train, keep the policies at the marks, score each in Gymnasium's env; the row for the JSON."""
+def train_one(task: str, seed: int, out: str, scale: float, device: str | None) -> dict:
+    """Train, keeping the policies at the marks; the run's row for the JSON, not yet scored."""
     from agents.logger import first_reaching, read_metrics  # noqa: PLC0415
-    from warpgym.cli import eval as eval_command  # noqa: PLC0415
 
     marks = marks_of(task, scale)
     run_dir = os.path.join(out, "runs", f"{task}-seed{seed}")
@@ -60,27 +59,59 @@ def run_one(task: str, seed: int, out: str, scale: float, device: str | None, ev
         return {"task": task, "seed": seed, "error": f"warpgym train exited {code}: see {run_dir}/train.log"}
     summary = json.load(open(os.path.join(run_dir, "summary.json")))
     rows = read_metrics(run_dir)
-    scored = []
-    for kept in summary.get("kept_checkpoints", []):
-        result_path = kept["path"] + ".eval.json"
-        eval_command.main([kept["path"], "--episodes", str(eval_episodes), "--seeds", "0", "--json", result_path])
-        result = json.load(open(result_path))
-        scored.append({"mark_s": kept["mark_s"], "time_s": kept["time_s"], "samples": kept["samples"],
-                       "gymnasium_return": result["gymnasium_return"], "warpgym_return": result["warpgym_return"],
-                       "gymnasium_over_warpgym": result["gymnasium_over_warpgym"]})
     target = REFERENCE.get(task)
     reach = {}
     if target is not None:
-        for name, value in (("target", target), ("half", half(target))):
-            hit = first_reaching(rows, "eval/return", value)
-            reach[name] = hit
-    return {"task": task, "seed": seed, "budget_s": marks[-1], "marks_s": list(marks), "scored": scored,
+        reach = {name: first_reaching(rows, "eval/return", value) for name, value in (("target", target),
+                                                                                     ("half", half(target)))}
+    # one iteration can pass several marks: its checkpoint stands for each
+    kept = [{"mark_s": m, "time_s": k["time_s"], "samples": k["samples"], "checkpoint": os.path.basename(k["path"])}
+            for k in summary.get("kept_checkpoints", []) for m in k.get("marks_s", [k["mark_s"]])]
+    return {"task": task, "seed": seed, "budget_s": marks[-1], "marks_s": list(marks), "kept": kept, "scored": [],
             "samples": rows[-1]["samples"] if rows else 0, "num_envs": summary.get("num_envs"),
             "samples_per_s": summary.get("steady_samples_per_s_median"), "reference": target,
-            "first_eval_reaching": reach, "device": summary.get("device")}
+            "first_eval_reaching": reach, "device": summary.get("device"),
+            "curve": thin([(r["time_s"], r["samples"], r["return"]) for r in rows if r.get("return") is not None]),
+            "evals": [{"time_s": r["time_s"], "samples": r["samples"], "eval/return": r["eval/return"]}
+                      for r in rows if r.get("eval/return") is not None]}
 
 
-def table(runs: list[dict]) -> str:
+def score_run(run: dict, out: str, episodes: int, device: str | None) -> dict:
+    """Score each kept policy of ``run`` (trained under ``out``) by ``warpgym eval`` in Gymnasium's env."""
+    from warpgym.cli import eval as eval_command  # noqa: PLC0415
+
+    run_dir = os.path.join(out, "runs", f"{run['task']}-seed{run['seed']}")
+    scored, results = [], {}
+    for kept in run["kept"]:
+        path = os.path.join(run_dir, kept["checkpoint"])
+        if path not in results:
+            eval_command.main([path, "--episodes", str(episodes), "--seeds", "0", "--json", path + ".eval.json"]
+                              + (["--device", device] if device else []))
+            with open(path + ".eval.json") as f:
+                results[path] = json.load(f)
+        result = results[path]
+        scored.append({"mark_s": kept["mark_s"], "time_s": kept["time_s"], "samples": kept["samples"],
+                       "gymnasium_return": result["gymnasium_return"], "warpgym_return": result["warpgym_return"],
+                       "gymnasium_over_warpgym": result["gymnasium_over_warpgym"]})
+    return {**run, "scored": scored}
+
+
+def thin(rows: list, at_most: int = 300) -> list:
+    """Every k-th row, and the last, so that at most about ``at_most`` remain."""
+    if len(rows) <= at_most:
+        return [list(r) for r in rows]
+    k = -(-len(rows) // at_most)
+    keep = rows[::k] + ([rows[-1]] if (len(rows) - 1) % k else [])
+    return [list(r) for r in keep]
+
+
+def _mean(values: list[float]) -> float:
+    return sum(values) / len(values)
+
+
+def table(runs: list[dict], peer: bool = False) -> str:
+    """One row per task: the marks' returns in Gymnasium's env (mean of seeds) and the rest of the issue's
+    columns. ``peer``: runs of a learner that trains in Gymnasium's env itself (no ratio to show)."""
     by_task: dict[str, list[dict]] = {}
     for r in runs:
         if "error" not in r:
@@ -88,64 +119,170 @@ def table(runs: list[dict]) -> str:
     lines = ["| task | seeds | Gymnasium's env: return at each mark (mean of seeds) | reference | minutes to it "
              "(to half) | samples | samples/s | Gymnasium / warpgym, lowest |", "|---|---:|---|---:|---|---:|---:|---:|"]
     for task, rs in by_task.items():
-        marks = rs[0]["marks_s"]
         cells = []
-        for m in marks:
+        for m in rs[0]["marks_s"]:
             vals = [s["gymnasium_return"] for r in rs for s in r["scored"] if abs(s["mark_s"] - m) < 1e-6]
-            cells.append(f"{m / 60:g} min: {sum(vals) / len(vals):.0f}" if vals else f"{m / 60:g} min: -")
+            cells.append(f"{m / 60:g} min: {_mean(vals):.0f}" if vals else f"{m / 60:g} min: -")
 
         def minutes(key):
             hits = [r["first_eval_reaching"].get(key) for r in rs]
             done = [h["time_s"] / 60 for h in hits if h]
-            return f"{sum(done) / len(done):.1f} ({len(done)}/{len(rs)})" if done else f"not reached (0/{len(rs)})"
+            return f"{_mean(done):.1f} ({len(done)}/{len(rs)})" if done else f"not reached (0/{len(rs)})"
 
         ref = rs[0]["reference"]
-        ratio = min((s["gymnasium_over_warpgym"] for r in rs for s in r["scored"]), default=float("nan"))
-        lines.append(f"| {task} | {len(rs)} | {'; '.join(cells)} | {ref if ref is not None else '-'} | "
-                     f"{minutes('target') if ref is not None else '-'} ({minutes('half') if ref is not None else '-'}) | "
-                     f"{sum(r['samples'] for r in rs) / len(rs) / 1e6:.1f} M | "
-                     f"{sum(r['samples_per_s'] or 0 for r in rs) / len(rs) / 1e6:.2f} M | {ratio:.3f} |")
+        ratios = [] if peer else [s["gymnasium_over_warpgym"] for r in rs for s in r["scored"]]
+        ratio = "-" if peer else (f"{min(ratios):.3f}" if ratios else "not scored")
+        sps, samples = _mean([r["samples_per_s"] or 0 for r in rs]), _mean([r["samples"] for r in rs])
+        # a CPU learner's few thousand samples per second would read 0.00 M
+        speed = f"{samples / 1e6:.1f} M | {sps / 1e6:.2f} M" if sps >= 1e4 else f"{samples / 1e6:.2f} M | {sps:.0f}"
+        reach = f"{minutes('target')} ({minutes('half')})" if ref is not None else "-"
+        lines.append(f"| {task} | {len(rs)} | {'; '.join(cells)} | {ref if ref is not None else '-'} | {reach} | "
+                     f"{speed} | {ratio} |")
     return "\n".join(lines)
 
 
-def report(folders: list[str]) -> int:
+def load_runs(folders: list[str], prefix: str) -> tuple[list[dict], set]:
+    """The runs of ``<prefix><task>-seed<k>.json`` files under ``folders`` and how each was made."""
     runs, made = [], set()
     for folder in folders:
-        for path in sorted(glob.glob(os.path.join(folder, "*-seed*.json"))):
+        for path in sorted(glob.glob(os.path.join(folder, f"{prefix}*-seed*.json"))):
+            if not prefix and os.path.basename(path).startswith("sb3-"):
+                continue
             doc = json.load(open(path))
-            made.add((doc["meta"]["gpu"], doc["meta"]["scale"]))
+            made.add((doc["meta"].get("gpu") or doc["meta"].get("cpu"), doc["meta"]["scale"]))
             runs.append(doc["run"])
-    if len(made) > 1:
-        raise SystemExit(f"--report: these runs were made differently ({sorted(made)}: GPU, budget scale); "
-                         "report runs of one kind together")
-    if not runs:
-        raise SystemExit(f"--report: no <task>-seed<k>.json under {folders}")
-    gpu, scale = made.pop()
-    print(f"{gpu}; budgets x{scale:g}; returns of the deterministic policy in gymnasium.make's env")
-    print(table(runs))
+    return runs, made
+
+
+def report(folders: list[str], figure: str | None = None) -> int:
+    runs, made = load_runs(folders, "")
+    peers, peers_made = load_runs(folders, "sb3-")
+    for kind, m in (("warpgym's", made), ("SB3's", peers_made)):
+        if len(m) > 1:
+            raise SystemExit(f"--report: {kind} runs were made differently ({sorted(m)}: machine, budget scale); "
+                             "report runs of one kind together")
+    if not runs and not peers:
+        raise SystemExit(f"--report: no <task>-seed<k>.json or sb3-<task>-seed<k>.json under {folders}")
+    if runs:
+        gpu, scale = next(iter(made))
+        print(f"warpgym PPO, {gpu}; budgets x{scale:g}; returns of the deterministic policy in gymnasium.make's env")
+        print(table(runs))
+    if peers:
+        cpu, scale = next(iter(peers_made))
+        print(f"\nStable-Baselines3 PPO (RL Zoo hyperparameters), one core per run on {cpu}; budgets x{scale:g}; "
+              "returns of the deterministic policy in gymnasium.make's env")
+        print(table(peers, peer=True))
+    if figure:
+        draw(runs, peers, figure)
     return 0
+
+
+def _band(runs: list[dict], x: int, smooth: int):
+    """The seeds' training-return curves on one grid: x, mean, lowest, highest (seeds shaded)."""
+    import numpy as np  # noqa: PLC0415
+
+    curves = []
+    for r in runs:
+        c = np.array(r["curve"], dtype=float).reshape(-1, 3)
+        if len(c) == 0:
+            continue
+        y = c[:, 2]
+        if smooth > 1:  # a peer's curve holds single episodes: their running mean
+            y = np.convolve(y, np.ones(smooth) / smooth, mode="full")[: len(y)] / np.minimum(
+                np.arange(1, len(y) + 1) / smooth, 1.0)
+        curves.append((c[:, x] / (60.0 if x == 0 else 1.0), y))
+    if not curves:
+        return None
+    hi = min(c[0][-1] for c in curves)
+    grid = np.linspace(0.0, hi, 200)
+    ys = np.array([np.interp(grid, cx, cy, left=np.nan) for cx, cy in curves])
+    return grid, np.nanmean(ys, axis=0), np.nanmin(ys, axis=0), np.nanmax(ys, axis=0)
+
+
+def draw(runs: list[dict], peers: list[dict], path: str) -> None:
+    """Two grids of every task's curves, return against minutes and against samples: warpgym beside SB3,
+    seeds shaded, the Gymnasium-env scores of the kept policies as dots. ``path`` is the first figure's
+    file; the second gets ``-samples`` before the extension."""
+    import warnings  # noqa: PLC0415
+
+    import matplotlib  # noqa: PLC0415
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt  # noqa: PLC0415
+
+    tasks = list(dict.fromkeys([r["task"] for r in runs + peers if "error" not in r]))
+    stem, ext = os.path.splitext(path)
+    for x, name, out in ((0, "minutes of training", path), (1, "samples", f"{stem}-samples{ext or '.png'}")):
+        cols = min(4, len(tasks))
+        rows = -(-len(tasks) // cols)
+        fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.2 * rows), squeeze=False)
+        for ax, task in zip(axes.flat, tasks):
+            for label, group, color, smooth in (("warpgym PPO (GPU)", runs, "tab:blue", 1),
+                                                ("SB3 PPO (1 CPU core)", peers, "tab:orange", 20)):
+                mine = [r for r in group if r.get("task") == task and "error" not in r]
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN columns past a seed's end
+                    band = _band(mine, x, smooth)
+                if band is None:
+                    continue
+                gx, mean, lo, hi = band
+                ax.plot(gx, mean, color=color, label=label)
+                ax.fill_between(gx, lo, hi, color=color, alpha=0.25, linewidth=0)
+                dots = [(s["time_s"] / 60.0 if x == 0 else s["samples"], s["gymnasium_return"])
+                        for r in mine for s in r["scored"]]
+                if dots:
+                    ax.scatter(*zip(*dots), color=color, edgecolor="black", s=18, zorder=3)
+            ref = REFERENCE.get(task)
+            if ref is not None:
+                ax.axhline(ref, color="gray", linestyle="--", linewidth=1)
+            if x == 1:
+                ax.set_xscale("log")
+            ax.set_title(task, fontsize=10)
+            ax.set_xlabel(name, fontsize=8)
+            ax.tick_params(labelsize=7)
+        for ax in list(axes.flat)[len(tasks):]:
+            ax.axis("off")
+        axes.flat[0].legend(fontsize=7, loc="lower right")
+        fig.suptitle("Return of training episodes (lines: mean of seeds, band: lowest to highest); dots: the kept "
+                     "policies in gymnasium.make's env; dashed: Tianshou's SAC figure", fontsize=9)
+        fig.tight_layout()
+        fig.savefig(out, dpi=110)
+        plt.close(fig)
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", help="folder for the runs and their JSON")
     ap.add_argument("--report", nargs="+", metavar="OUT")
+    ap.add_argument("--figure", metavar="PNG", help="with --report: also draw the curves")
     ap.add_argument("--tasks", nargs="+", default=None)
     ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1])
     ap.add_argument("--device", default=None)
     ap.add_argument("--eval-episodes", type=int, default=10)
     ap.add_argument("--scale", type=float, default=1.0,
                     help="budgets and marks times this (a CPU check: --scale 0.1); reports refuse to mix scales")
+    ap.add_argument("--no-score", action="store_true",
+                    help="train only (keep the GPU for training); score later with --score OUT on any machine")
+    ap.add_argument("--score", metavar="OUT", help="score the kept policies of the runs under OUT not yet scored")
     args = ap.parse_args(argv)
     if args.report:
-        return report(args.report)
+        return report(args.report, args.figure)
+    from warpgym.cli import write_json  # noqa: PLC0415
+
+    if args.score:
+        for path in sorted(glob.glob(os.path.join(args.score, "*-seed*.json"))):
+            doc = json.load(open(path))
+            if os.path.basename(path).startswith("sb3-") or "error" in doc["run"] or doc["run"]["scored"]:
+                continue
+            doc["run"] = score_run(doc["run"], args.score, args.eval_episodes, args.device)
+            write_json(path, doc)
+        return report([args.score])
     if not args.out:
-        ap.error("--out OUT is required (or --report OUT...)")
+        ap.error("--out OUT is required (or --report OUT... or --score OUT)")
     if not args.scale > 0 or args.eval_episodes < 1:
         ap.error(f"--scale {args.scale} / --eval-episodes {args.eval_episodes}: both must be positive")
     import torch  # noqa: PLC0415
 
-    from warpgym.cli import write_json  # noqa: PLC0415
     from warpgym.tasks.suite import SUITE  # noqa: PLC0415
 
     tasks = args.tasks or list(SUITE)
@@ -156,13 +293,14 @@ def main(argv=None) -> int:
     gpu = torch.cuda.get_device_name(0) if torch.cuda.is_available() and args.device != "cpu" else "cpu"
     for task in tasks:
         for seed in args.seeds:
-            run = run_one(task, seed, args.out, args.scale, args.device, args.eval_episodes)
+            run = train_one(task, seed, args.out, args.scale, args.device)
+            if "error" not in run and not args.no_score:
+                run = score_run(run, args.out, args.eval_episodes, args.device)
             doc = {"meta": {"gpu": gpu, "scale": args.scale, "date": time.strftime("%Y-%m-%d"),
                             "command": " ".join(["benchmarks/suite_learning.py"] + (argv or sys.argv[1:]))},
                    "run": run}
-            path = os.path.join(args.out, f"{task}-seed{seed}.json")
-            write_json(path, doc)
-            print(json.dumps(run)[:400], flush=True)
+            write_json(os.path.join(args.out, f"{task}-seed{seed}.json"), doc)
+            print(json.dumps({k: v for k, v in run.items() if k not in ("curve", "evals")})[:400], flush=True)
     return report([args.out])
 
 

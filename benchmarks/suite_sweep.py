@@ -66,7 +66,8 @@ def run_combo(task: str, combo: dict, seeds: list[int], seconds: float, out: str
             continue
         summary = json.load(open(os.path.join(run_dir, "summary.json")))
         scored = os.path.join(run_dir, "eval.json")
-        eval_command.main([run_dir, "--episodes", str(episodes), "--seeds", "0", "--json", scored])
+        eval_command.main([run_dir, "--episodes", str(episodes), "--seeds", "0", "--json", scored]
+                          + (["--device", device] if device else []))
         result = json.load(open(scored))
         runs.append({"seed": seed, "run_dir": run_dir, "gymnasium_return": result["gymnasium_return"],
                      "ratio": result["gymnasium_over_warpgym"], "samples": summary["final"]["samples"],
