@@ -2,9 +2,9 @@
 
 For every task and seed: ``warpgym train`` for the task's budget (10 minutes for the locomotion tasks,
 3 for the four small ones), keeping the policies at the marks (1, 2, 5, 10 minutes; 1, 2, 3), each
-then scored by ``warpgym eval`` (10 episodes in ``gymnasium.make``'s env, beside warpgym's own). One JSON
-per run (``OUT/<task>-seed<k>.json``); ``--report`` builds one table from several outputs, refusing
-runs made on different GPUs or with different budgets.
+then scored by ``warpgym eval`` (30 episodes in ``gymnasium.make``'s env, 10 from each of 3 seeds, beside
+as many in warpgym's own). One JSON per run (``OUT/<task>-seed<k>.json``); ``--report`` builds one table
+from several outputs, refusing runs made on different GPUs or with different budgets.
 
     python benchmarks/suite_learning.py --out OUT --tasks Hopper-v5 Walker2d-v5 --seeds 0 1
     python benchmarks/suite_learning.py --report OUT OUT2 ...
@@ -76,6 +76,17 @@ def train_one(task: str, seed: int, out: str, scale: float, device: str | None) 
                       for r in rows if r.get("eval/return") is not None]}
 
 
+def warm_up(task: str, out: str, device: str | None) -> None:
+    """A short training of ``task`` that fills Warp's kernel cache, so that each timed run starts as a
+    user's second run does (the first compiles the task's kernels: 10-50 s on an H100)."""
+    run_dir = os.path.join(out, "runs", f"{task}-warm-up")
+    cmd = [sys.executable, "-m", "warpgym", "train", "--task", task, "--time-limit", "1", "--run-dir", run_dir,
+           "--no-plots"] + (["--device", device] if device else [])
+    os.makedirs(run_dir, exist_ok=True)
+    with open(os.path.join(run_dir, "train.log"), "w") as log:
+        subprocess.run(cmd, cwd=ROOT, stdout=log, stderr=subprocess.STDOUT, check=True)
+
+
 def score_run(run: dict, out: str, episodes: int, device: str | None) -> dict:
     """Score each kept policy of ``run`` (trained under ``out``) by ``warpgym eval`` in Gymnasium's env."""
     from warpgym.cli import eval as eval_command  # noqa: PLC0415
@@ -85,8 +96,9 @@ def score_run(run: dict, out: str, episodes: int, device: str | None) -> dict:
     for kept in run["kept"]:
         path = os.path.join(run_dir, kept["checkpoint"])
         if path not in results:
-            eval_command.main([path, "--episodes", str(episodes), "--seeds", "0", "--json", path + ".eval.json"]
-                              + (["--device", device] if device else []))
+            # 3 x episodes: a closed loop makes each episode's return a draw from a distribution
+            eval_command.main([path, "--episodes", str(episodes), "--seeds", "0", "1", "2", "--json",
+                               path + ".eval.json"] + (["--device", device] if device else []))
             with open(path + ".eval.json") as f:
                 results[path] = json.load(f)
         result = results[path]
@@ -99,10 +111,9 @@ def score_run(run: dict, out: str, episodes: int, device: str | None) -> dict:
 def thin(rows: list, at_most: int = 300) -> list:
     """Every k-th row, and the last, so that at most about ``at_most`` remain."""
     if len(rows) <= at_most:
-        return [list(r) for r in rows]
+        return list(rows)
     k = -(-len(rows) // at_most)
-    keep = rows[::k] + ([rows[-1]] if (len(rows) - 1) % k else [])
-    return [list(r) for r in keep]
+    return rows[::k] + ([rows[-1]] if (len(rows) - 1) % k else [])
 
 
 def _mean(values: list[float]) -> float:
@@ -149,7 +160,8 @@ def load_runs(folders: list[str], prefix: str) -> tuple[list[dict], set]:
             if not prefix and os.path.basename(path).startswith("sb3-"):
                 continue
             doc = json.load(open(path))
-            made.add((doc["meta"].get("gpu") or doc["meta"].get("cpu"), doc["meta"]["scale"]))
+            meta = doc["meta"]
+            made.add((meta.get("gpu") or meta.get("cpu"), meta["scale"], meta.get("kernel_cache")))
             runs.append(doc["run"])
     return runs, made
 
@@ -159,16 +171,18 @@ def report(folders: list[str], figure: str | None = None) -> int:
     peers, peers_made = load_runs(folders, "sb3-")
     for kind, m in (("warpgym's", made), ("SB3's", peers_made)):
         if len(m) > 1:
-            raise SystemExit(f"--report: {kind} runs were made differently ({sorted(m)}: machine, budget scale); "
+            raise SystemExit(f"--report: {kind} runs were made differently ({sorted(m, key=str)}: machine, budget "
+                             "scale, kernel cache); "
                              "report runs of one kind together")
     if not runs and not peers:
         raise SystemExit(f"--report: no <task>-seed<k>.json or sb3-<task>-seed<k>.json under {folders}")
     if runs:
-        gpu, scale = next(iter(made))
-        print(f"warpgym PPO, {gpu}; budgets x{scale:g}; returns of the deterministic policy in gymnasium.make's env")
+        gpu, scale, cache = next(iter(made))
+        print(f"warpgym PPO, {gpu}; budgets x{scale:g}; kernel cache {cache or 'not recorded'}; returns of the "
+              "deterministic policy in gymnasium.make's env")
         print(table(runs))
     if peers:
-        cpu, scale = next(iter(peers_made))
+        cpu, scale, _ = next(iter(peers_made))
         print(f"\nStable-Baselines3 PPO (RL Zoo hyperparameters), one core per run on {cpu}; budgets x{scale:g}; "
               "returns of the deterministic policy in gymnasium.make's env")
         print(table(peers, peer=True))
@@ -203,6 +217,7 @@ def draw(runs: list[dict], peers: list[dict], path: str) -> None:
     """Two grids of every task's curves, return against minutes and against samples: warpgym beside SB3,
     seeds shaded, the Gymnasium-env scores of the kept policies as dots. ``path`` is the first figure's
     file; the second gets ``-samples`` before the extension."""
+    import textwrap  # noqa: PLC0415
     import warnings  # noqa: PLC0415
 
     import matplotlib  # noqa: PLC0415
@@ -243,8 +258,9 @@ def draw(runs: list[dict], peers: list[dict], path: str) -> None:
         for ax in list(axes.flat)[len(tasks):]:
             ax.axis("off")
         axes.flat[0].legend(fontsize=7, loc="lower right")
-        fig.suptitle("Return of training episodes (lines: mean of seeds, band: lowest to highest); dots: the kept "
-                     "policies in gymnasium.make's env; dashed: Tianshou's SAC figure", fontsize=9)
+        fig.suptitle(textwrap.fill("Return of training episodes (line: mean of seeds, band: lowest to highest); "
+                                   "dots: the kept policies in gymnasium.make's env; dashed: Tianshou's SAC figure",
+                                   width=55 * cols), fontsize=8)
         fig.tight_layout()
         fig.savefig(out, dpi=110)
         plt.close(fig)
@@ -258,12 +274,14 @@ def main(argv=None) -> int:
     ap.add_argument("--tasks", nargs="+", default=None)
     ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1])
     ap.add_argument("--device", default=None)
-    ap.add_argument("--eval-episodes", type=int, default=10)
+    ap.add_argument("--eval-episodes", type=int, default=10, help="episodes per seed of 3 (default 10)")
     ap.add_argument("--scale", type=float, default=1.0,
                     help="budgets and marks times this (a CPU check: --scale 0.1); reports refuse to mix scales")
     ap.add_argument("--no-score", action="store_true",
                     help="train only (keep the GPU for training); score later with --score OUT on any machine")
     ap.add_argument("--score", metavar="OUT", help="score the kept policies of the runs under OUT not yet scored")
+    ap.add_argument("--no-warm-up", action="store_true",
+                    help="time each task's first run from an empty kernel cache (default: a short run fills it first)")
     args = ap.parse_args(argv)
     if args.report:
         return report(args.report, args.figure)
@@ -292,11 +310,14 @@ def main(argv=None) -> int:
     os.makedirs(args.out, exist_ok=True)
     gpu = torch.cuda.get_device_name(0) if torch.cuda.is_available() and args.device != "cpu" else "cpu"
     for task in tasks:
+        if not args.no_warm_up:
+            warm_up(task, args.out, args.device)
         for seed in args.seeds:
             run = train_one(task, seed, args.out, args.scale, args.device)
             if "error" not in run and not args.no_score:
                 run = score_run(run, args.out, args.eval_episodes, args.device)
             doc = {"meta": {"gpu": gpu, "scale": args.scale, "date": time.strftime("%Y-%m-%d"),
+                            "kernel_cache": "empty at the first run" if args.no_warm_up else "warm",
                             "command": " ".join(["benchmarks/suite_learning.py"] + (argv or sys.argv[1:]))},
                    "run": run}
             write_json(os.path.join(args.out, f"{task}-seed{seed}.json"), doc)

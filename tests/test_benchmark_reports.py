@@ -75,6 +75,50 @@ def test_suite_learning_report_merges_runs_made_alike_and_refuses_others(tmp_pat
     assert sl.half(-2.6) == -5.2 and sl.half(5850.0) == 2925.0
 
 
+def test_suite_learning_report_sets_sb3_beside_warpgym_and_draws_both(tmp_path, capsys):
+    """SB3's runs (suite_sb3.py's JSON) get their own table, with no Gymnasium / warpgym ratio, and
+    their curves join warpgym's in both figures."""
+    import suite_learning as sl
+
+    marks = list(sl.MARKS["long"])
+
+    def run(seed, curve, speed):
+        return {"task": "Ant-v5", "seed": seed, "budget_s": 600.0, "marks_s": marks, "samples": curve[-1][1],
+                "samples_per_s": speed, "reference": 5850.0, "first_eval_reaching": {"target": None, "half": None},
+                "curve": curve, "scored": [{"mark_s": m, "time_s": m, "samples": 1e3 * m, "gymnasium_return": m,
+                                            "warpgym_return": m, "gymnasium_over_warpgym": 1.0} for m in marks]}
+
+    for name, meta, speed in (("Ant-v5-seed0.json", {"gpu": "NVIDIA H100 80GB HBM3"}, 2.6e5),
+                              ("sb3-Ant-v5-seed0.json", {"cpu": "Intel Xeon"}, 550.0)):
+        r = run(0, [[t, 1000 * t, t / 10] for t in range(1, 600, 7)], speed)
+        if name.startswith("sb3"):
+            for s in r["scored"]:
+                del s["warpgym_return"], s["gymnasium_over_warpgym"]
+        with open(tmp_path / name, "w") as f:
+            json.dump({"meta": {**meta, "scale": 1.0}, "run": r}, f)
+    figure = str(tmp_path / "curves.png")
+    assert sl.report([str(tmp_path)], figure) == 0
+    out = capsys.readouterr().out
+    warpgym_table, sb3_table = out.split("Stable-Baselines3")
+    assert "| Ant-v5 | 1 | 1 min: 60; 2 min: 120; 5 min: 300; 10 min: 600 |" in warpgym_table
+    assert warpgym_table.rstrip().endswith("| 0.26 M | 1.000 |")
+    assert "Intel Xeon" in sb3_table and sb3_table.rstrip().endswith("| 550 | - |")  # samples/s, no ratio
+    assert os.path.getsize(figure) > 10_000 and os.path.getsize(str(tmp_path / "curves-samples.png")) > 10_000
+
+
+def test_suite_sb3_takes_the_zoos_hyperparameters_as_sb3_does():
+    import suite_sb3 as sb
+    import torch
+
+    kw, n_envs = sb.hyperparameters("HalfCheetah-v5")
+    assert n_envs == 1 and kw["n_steps"] == 512 and kw["policy_kwargs"]["activation_fn"] is torch.nn.ReLU
+    assert sb.ZOO["HalfCheetah-v5"]["policy_kwargs"]["activation_fn"] == "relu"  # the table itself stays as written
+    assert sb.hyperparameters("Swimmer-v5")[1] == 4 and sb.hyperparameters("Ant-v5") == ({}, 1)
+    with pytest.raises(ValueError, match="no RL Zoo hyperparameters for 'Pusher-v5'"):
+        sb.hyperparameters("Pusher-v5")
+    assert sb.thin(list(range(1000)), 100)[-1] == 999 and len(sb.thin(list(range(1000)), 100)) <= 101
+
+
 def test_suite_sweep_ranks_combinations_by_their_return_in_gymnasiums_env():
     import suite_sweep as sw
 

@@ -217,6 +217,28 @@ def test_inverted_pendulum_trains_to_900_in_gymnasiums_own_env(tmp_path, capsys)
     assert result["episodes"] == 10 and [s["seed"] for s in result["per_seed"]] == [0, 1]
     assert result["gymnasium_return"] >= 900, result
     assert 0.95 <= result["gymnasium_over_warpgym"] <= 1.05, result
+    pytest.importorskip("PIL")
+    from PIL import Image
+
+    from warpgym.cli import play
+
+    gif = str(tmp_path / "ip.gif")
+    assert play.main([run, "--gif", gif, "--steps", "50", "--device", DEVICE]) == 0
+    with Image.open(gif) as im:  # 50 steps of 40 ms in real time, however many frames a GIF merges
+        shown = 0
+        for i in range(im.n_frames):
+            im.seek(i)
+            shown += im.info["duration"]
+    assert shown == 51 * 40
+
+
+def test_how_much_of_a_return_holds_reads_alike_for_rewards_and_costs():
+    from warpgym.cli.eval import holds
+
+    assert holds(900.0, 1000.0) == pytest.approx(0.9) and holds(1100.0, 1000.0) == pytest.approx(1.1)
+    # Reacher's cost: -4.3 in Gymnasium's env for -3.24 in warpgym's is worse, so below 1
+    assert holds(-4.3, -3.24) == pytest.approx(3.24 / 4.3) and holds(-3.0, -3.24) > 1.0
+    assert holds(5.0, -1.0) == 1.0 and holds(-1.0, 0.0) == 0.0
 
 
 def test_eval_refuses_a_policy_of_warpgyms_own_tasks(tmp_path):
@@ -363,3 +385,17 @@ def test_bench_times_the_task_step_beside_mujoco_warps_from_the_same_states():
     assert row["env_steps_per_s"] > 0 and row["mjwarp_steps_per_s"] > 0
     assert len(row["env_seconds"]) == len(row["mjwarp_seconds"]) == 2
     assert row["faults"] == {"nan_actions": 0, "diverged_resets": 0, "solver_overflows": 0}
+
+
+def test_one_action_sequence_ends_where_gymnasiums_does_after_1000_steps(suite_envs):
+    """A long-horizon check the one-step gaps cannot make: Swimmer's 1000-step return under a fixed
+    swimming stroke (no feedback, so no closed loop to part the float32 and float64 trajectories), from
+    Gymnasium's own reset states, agrees with Gymnasium's episode by episode."""
+    from warpgym.envs.conformance import open_loop_returns
+
+    env = suite_envs("Swimmer-v5")
+    steps = np.arange(1000)[:, None]
+    stroke = 0.9 * np.sin(2 * np.pi * steps / 25.0 + 1.3 * np.arange(2)[None])  # a travelling wave, 1 s
+    gym_returns, ours = open_loop_returns(env, stroke, seeds=list(range(6)))
+    assert gym_returns.min() > 20.0  # it swims: the check is not of a robot lying still
+    np.testing.assert_allclose(ours, gym_returns, rtol=0.01)

@@ -211,3 +211,39 @@ def test_human_rendering_without_a_display_fails_in_one_line(monkeypatch):
         gym.make("warpgym/Ant-v0", render_mode="human")
     with pytest.raises(ValueError, match=r"render_mode='video': choose one of \['rgb_array', 'human'\]"):
         gym.make_vec("warpgym/Ant-v0", num_envs=2, device="cpu", render_mode="video")
+
+
+def test_a_suite_clip_plays_in_real_time_and_follows_the_runner(tmp_path):
+    """Gymnasium's camera stays where the robot started; a clip's camera follows its root body, and its
+    frames keep the task's time (Hopper's 8 ms control step: every 6th step, 50 ms a frame)."""
+    from PIL import Image
+
+    from warpgym.media.render import SuiteView
+    from warpgym.media.video import render_suite_clip, suite_strides
+    from warpgym.tasks.suite import SUITE
+
+    assert suite_strides(0.008, 20, gif=True) == (6, 20, 50)
+    assert suite_strides(0.05, 20, gif=True) == (1, 20, 50) and suite_strides(0.05, 60, gif=False) == (1, 20, None)
+    hopper = SUITE["Hopper-v5"]
+    steps = 60
+    qpos = np.tile(np.array([0.0, 1.25, 0.0, 0.0, 0.0, 0.0]), (steps, 1, 1))
+    qpos[:, 0, 0] = np.linspace(0.0, 6.0, steps)  # runs 6 m
+    qpos[:, 0, 3] = 0.5 * np.sin(np.arange(steps))  # no two frames alike
+    gif = str(tmp_path / "hopper.gif")
+    assert render_suite_clip(hopper, {"dof_pos": qpos, "dof_vel": np.zeros((steps, 1, 6))}, {gif: {"fps": 20}},
+                             0.008, 160, 120) == {gif: 10}
+    with Image.open(gif) as im:
+        shown_ms = 0
+        for i in range(im.n_frames):
+            im.seek(i)
+            shown_ms += im.info["duration"]
+    assert abs(shown_ms / 1000 - steps * 0.008) < 0.05  # 0.50 s shown for 0.48 s simulated
+
+    far, hidden = qpos[-1], qpos[-1].copy()
+    hidden[0, 1] = -50.0  # under the opaque floor: what the camera sees without the robot
+    for follow, robot_in_view in ((True, True), (False, False)):
+        view = SuiteView(hopper, "rgb_array", 1, 160, 120, follow=follow)
+        seen, empty = (view.render(q, np.zeros((1, 6)))[0].astype(int) for q in (far, hidden))
+        view.close()
+        assert (np.abs(seen - empty).sum(axis=2) > 30).mean() > 0.01 if robot_in_view else \
+            (np.abs(seen - empty).sum(axis=2) > 30).mean() < 0.001

@@ -7,7 +7,8 @@ The checkpoint's deterministic policy (the mean action, its observation normalis
 ``gymnasium.make("<Name>-v5")``: native MuJoCo in float64, the task's constructor arguments and time
 limit as trained, the policy's actions in [-1, 1] mapped onto the control ranges as in training. The
 same policy's first episodes in warpgym's env, as many as Gymnasium's, stand beside them, and the ratio
-of the two mean returns says whether what was learnt on the GPU holds where it is scored.
+of the two mean returns says whether what was learnt on the GPU holds where it is scored (below 1:
+worse in Gymnasium's env; for the negative returns of Reacher and Pusher, warpgym's over Gymnasium's).
 """
 
 from __future__ import annotations
@@ -15,6 +16,17 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+
+
+def holds(gymnasium_return: float, warpgym_return: float) -> float:
+    """How much of warpgym's return holds in Gymnasium's env: their ratio, 1 when equal, below 1 when
+    Gymnasium's is worse. For costs (negative returns: Reacher, Pusher) the ratio turns over, so that
+    below 1 still means worse."""
+    if warpgym_return > 0:
+        return gymnasium_return / warpgym_return
+    if warpgym_return < 0 and gymnasium_return < 0:
+        return warpgym_return / gymnasium_return
+    return 1.0 if gymnasium_return >= warpgym_return else 0.0  # signs differ, or warpgym's is 0
 
 
 def parse_args(argv=None):
@@ -74,7 +86,7 @@ def main(argv=None) -> int:
         returns += r.tolist()
         lengths += n.tolist()
     gym_return = float(np.mean(returns))
-    ratio = gym_return / ours["eval/return"] if ours["eval/return"] else float("nan")
+    ratio = holds(gym_return, ours["eval/return"])
     result = {"task": name, "checkpoint": path, "iteration": ckpt["iteration"], "samples": ckpt["samples"],
               "episodes": episodes, "gymnasium_return": gym_return, "gymnasium_return_std": float(np.std(returns)),
               "gymnasium_length": float(np.mean(lengths)), "per_seed": per_seed,
@@ -87,7 +99,7 @@ def main(argv=None) -> int:
           + ", ".join(f"{s['seed']}: {s['return']:.1f}" for s in per_seed))
     print(f"  warpgym's env (float32, {device}):          return {ours['eval/return']:.1f}, "
           f"length {ours['eval/length']:.0f}")
-    print(f"  Gymnasium / warpgym: {ratio:.3f}")
+    print(f"  held in Gymnasium's env (Gymnasium / warpgym; for costs warpgym / Gymnasium): {ratio:.3f}")
     print(json.dumps(result))
     if args.json:
         write_json(args.json, result)

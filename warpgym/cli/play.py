@@ -87,9 +87,9 @@ def main(argv=None) -> int:
     n = args.num_envs or (1 if filming else 64 if device.startswith("cuda") else 4)
     # the trained task as it was trained (episode length, substeps, physics), on this device
     if task in SUITE:
-        if filming:
-            raise SystemExit(f"--video / --gif draw warpgym's own robots only so far, not {task}: drop them (a suite "
-                             "env draws its worlds with render_mode='rgb_array')")
+        if filming and n > 1:
+            print(f"note: a clip of {task} draws its first world, with Gymnasium's own renderer; --num-envs {n} "
+                  "plays the others unseen")
         env = make_vec_env(**{**env_args, "num_envs": n, "device": device, "seed": args.seed})
     else:
         env = LocomotionVecEnv(**{**env_args, "physics": recorded(env_args.get("physics")), "num_envs": n,
@@ -100,7 +100,9 @@ def main(argv=None) -> int:
     if filming:
         from warpgym.media.clips import StateRecorder  # noqa: PLC0415
 
-        recorder = StateRecorder(steps + 1, copies=n)  # the reset state, then one per step
+        # the reset state, then one per step; for Gymnasium's tasks MuJoCo's qpos and qvel, as its renderer takes
+        recorder = (StateRecorder(steps + 1, copies=1, keys=("dof_pos", "dof_vel")) if task in SUITE
+                    else StateRecorder(steps + 1, copies=n))
     result = evaluate(env, policy, normalize, steps, recorder)
     result = {"task": task, "checkpoint": path, "iteration": ckpt["iteration"], "samples": ckpt["samples"],
               "episodes": n, **result}
@@ -109,20 +111,24 @@ def main(argv=None) -> int:
           f"length {result['eval/length']:.0f} steps (means)")
     if filming:
         from warpgym.media.clips import clip_forward_speed  # noqa: PLC0415
-        from warpgym.media.video import render_clip  # noqa: PLC0415
+        from warpgym.media.video import render_clip, render_suite_clip  # noqa: PLC0415
 
         states = recorder.states()
-        shown = states["root_pose"].shape[0] - 1  # steps after the first frame
-        result["clip/forward_speed"] = float(clip_forward_speed(env.task, states).mean())
-        print(f"clip: {shown} steps ({shown * env.task.dt:.1f} s) of {n} robot(s): forward speed "
-              f"{result['clip/forward_speed']:.2f} m/s")
-
         outputs = {}
         if args.video:
             outputs[args.video] = {"fps": args.fps}
         if args.gif:
             outputs[args.gif] = {"fps": args.gif_fps, "width": min(args.gif_width, args.width)}
-        frames = render_clip(env.task, states, outputs, args.width, args.height)
+        if task in SUITE:
+            shown = states["dof_pos"].shape[0] - 1
+            print(f"clip: {shown} steps ({shown * env.sim.dt:.1f} s) of the first world")
+            frames = render_suite_clip(env.task, states, outputs, env.sim.dt, args.width, args.height)
+        else:
+            shown = states["root_pose"].shape[0] - 1  # steps after the first frame
+            result["clip/forward_speed"] = float(clip_forward_speed(env.task, states).mean())
+            print(f"clip: {shown} steps ({shown * env.task.dt:.1f} s) of {n} robot(s): forward speed "
+                  f"{result['clip/forward_speed']:.2f} m/s")
+            frames = render_clip(env.task, states, outputs, args.width, args.height)
         for out, count in frames.items():
             print(f"wrote {out}: {count} frames, {os.path.getsize(out) / 1e6:.2f} MB")
         result["videos"] = frames

@@ -111,27 +111,35 @@ class StepGaps:
     obs_by_entry: np.ndarray | None = None  # the largest difference of each observation entry
 
 
+def put_states(env: SuiteVecEnv, states: list[tuple]) -> None:
+    """Put Gymnasium's states into the first worlds of ``env``, as its next ``step`` reads them: each
+    ``(qpos, qvel, before, warm_start)`` (``before``: ``reference_position``; ``warm_start`` None: none),
+    their episodes starting there."""
+    sim = env.sim
+    qpos, qvel = sim.dof_pos.clone(), sim.dof_vel.clone()
+    for i, (qp, qv, _, _) in enumerate(states):
+        qpos[i] = torch.as_tensor(qp, dtype=torch.float32)
+        qvel[i] = torch.as_tensor(qv, dtype=torch.float32)
+    sim.set_state(qpos, qvel)  # clears the warm starts
+    warm, before = sim.to_torch(sim.d.qacc_warmstart), sim.to_torch(env._episodes.before)
+    for i, (_, _, ref, warm_start) in enumerate(states):
+        before[i] = torch.as_tensor(ref, dtype=torch.float32)
+        if warm_start is not None:
+            warm[i] = torch.as_tensor(warm_start, dtype=torch.float32)
+    env.episode_steps.zero_()
+
+
 def compare_steps(env: SuiteVecEnv, samples: list[Sample]) -> StepGaps:
     """Put each sample's state into one world of ``env``, step every world once with the samples'
     actions, and measure the differences. ``env.num_envs`` must be at least ``len(samples)``."""
     n = len(samples)
     if env.num_envs < n:
         raise ValueError(f"{n} samples need num_envs >= {n}, got {env.num_envs}")
-    sim, dev = env.sim, env.device
-    qpos = sim.dof_pos.clone()
-    qvel = sim.dof_vel.clone()
-    warm = sim.to_torch(sim.d.qacc_warmstart)
-    before = sim.to_torch(env._episodes.before)
+    dev = env.device
     actions = torch.zeros(env.num_envs, env.num_actions, device=dev)
     for i, s in enumerate(samples):
-        qpos[i] = torch.as_tensor(s.qpos, dtype=torch.float32)
-        qvel[i] = torch.as_tensor(s.qvel, dtype=torch.float32)
         actions[i] = torch.as_tensor(s.action)
-    sim.set_state(qpos, qvel)
-    for i, s in enumerate(samples):
-        warm[i] = torch.as_tensor(s.warm_start, dtype=torch.float32)
-        before[i] = torch.as_tensor(s.before, dtype=torch.float32)
-    env.episode_steps.zero_()
+    put_states(env, [(s.qpos, s.qvel, s.before, s.warm_start) for s in samples])
     obs, reward, terminated, truncated, info = env.step(actions)
     done = (terminated | truncated).cpu().numpy()
     obs = torch.where(torch.as_tensor(done, device=dev)[:, None], info["final_obs"], obs).cpu().numpy().astype(np.float64)
@@ -203,6 +211,40 @@ def warpgym_episodes(env: SuiteVecEnv, seed: int = 0) -> tuple[np.ndarray, np.nd
         if bool(ended.all()):
             break
     return returns.cpu().numpy().astype(np.float64), lengths.cpu().numpy()
+
+
+# ---------------------------------------------------------------------- whole episodes, one action sequence
+def open_loop_returns(env: SuiteVecEnv, actions: np.ndarray, seeds: list[int]) -> tuple[np.ndarray, np.ndarray]:
+    """Returns of one fixed action sequence (``actions``: (steps, U), in the task's units), played from
+    Gymnasium's reset states of ``seeds`` in Gymnasium's env and, from the same states, in the first
+    worlds of ``env`` (built with ``unit_actions=False``). Without feedback the two can be compared
+    episode by episode: a policy's closed loop can part trajectories after any tiny difference (float32
+    against float64), as a 1e-7 change to the start does in Gymnasium's own env."""
+    gym_env = gymnasium_env(env.task)
+    starts, gym_returns = [], []
+    for seed in seeds:
+        gym_env.reset(seed=seed)
+        data = gym_env.unwrapped.data
+        starts.append((data.qpos.copy(), data.qvel.copy(), reference_position(env.task, gym_env), None))
+        total = 0.0
+        for a in actions:
+            _, reward, terminated, truncated, _ = gym_env.step(a)
+            total += float(reward)
+            if terminated or truncated:
+                break
+        gym_returns.append(total)
+    gym_env.close()
+    env.reset(seed=0)
+    put_states(env, starts)
+    n = len(seeds)
+    returns = torch.zeros(n, device=env.device)
+    live = torch.ones(n, dtype=torch.bool, device=env.device)
+    for a in actions:
+        _, reward, terminated, truncated, _ = env.step(torch.as_tensor(a, dtype=torch.float32, device=env.device)
+                                                       .expand(env.num_envs, -1))
+        returns += torch.where(live, reward[:n], torch.zeros_like(reward[:n]))
+        live &= ~(terminated[:n] | truncated[:n])
+    return np.array(gym_returns), returns.cpu().numpy().astype(np.float64)
 
 
 # ---------------------------------------------------------------------- a policy in Gymnasium's env

@@ -29,10 +29,10 @@ class StateRecorder:
     """The states of the first ``copies`` envs at each of ``steps`` control steps (the reset state
     first), kept on the env's device until ``states()`` reads them."""
 
-    def __init__(self, steps: int, copies: int = 1):
+    def __init__(self, steps: int, copies: int = 1, keys: tuple[str, ...] = STATE_KEYS):
         if not isinstance(steps, int) or steps < 1 or not isinstance(copies, int) or copies < 1:
             raise ValueError(f"steps={steps!r} and copies={copies!r} must be positive integers")
-        self.steps, self.copies = steps, copies
+        self.steps, self.copies, self.keys = steps, copies, tuple(keys)
         self._buffers: dict[str, torch.Tensor] | None = None
         self.count = 0
         self.task = None
@@ -46,7 +46,7 @@ class StateRecorder:
             self.task = env.task
             # views of the sim's persistent state, made once (each Tensor API property builds a new view),
             # and each robot's step count in its episode, which tells a reset apart from a stride
-            self._sources = {k: getattr(env.sim, k)[: self.copies] for k in STATE_KEYS}
+            self._sources = {k: getattr(env.sim, k)[: self.copies] for k in self.keys}
             self._sources["episode_steps"] = env.episode_steps[: self.copies]
             self._buffers = {k: torch.empty((self.steps, *v.shape), dtype=v.dtype, device=env.device)
                              for k, v in self._sources.items()}

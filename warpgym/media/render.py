@@ -254,9 +254,13 @@ class SuiteView:
     drawn by Gymnasium's own env (its renderer, cameras and frame size), their states copied into it.
 
     ``"rgb_array"``: a tuple of (height, width, 3) frames, one per world for the first ``robots``;
-    ``"human"``: Gymnasium's viewer window on the first world (needs a display)."""
+    ``"human"``: Gymnasium's viewer window on the first world (needs a display).
 
-    def __init__(self, task, mode: str, robots: int = 1, width: int = 640, height: int = 480):
+    ``follow``: keep the root body in the middle of the frame. Gymnasium's camera stays where the
+    robot started, so a runner leaves its frames within seconds; clips of the locomotion tasks follow."""
+
+    def __init__(self, task, mode: str, robots: int = 1, width: int = 640, height: int = 480,
+                 follow: bool = False):
         if mode not in RENDER_MODES:
             raise ValueError(f"render_mode={mode!r}: choose one of {list(RENDER_MODES)} or None")
         if isinstance(robots, bool) or not isinstance(robots, int) or robots < 1:
@@ -274,7 +278,7 @@ class SuiteView:
         import gymnasium  # noqa: PLC0415
 
         args = {name: getattr(task, name) for name in task.argument_names()}
-        self.robots, self.mode = robots, mode
+        self.robots, self.mode, self.follow = robots, mode, follow
         self._env = gymnasium.make(task.name, render_mode=mode, width=width, height=height, **args).unwrapped
         # closed at exit before mujoco's own exit hook ends EGL, as EnvView's renderer (the hook holds the env,
         # not the view)
@@ -291,6 +295,10 @@ class SuiteView:
             env.data.qpos[:] = qpos[i]
             env.data.qvel[:] = qvel[i]
             mujoco.mj_forward(env.model, env.data)
+            if self.follow:
+                if env.mujoco_renderer.viewer is None:
+                    env.render()  # Gymnasium makes its viewer, and sets its camera, on the first frame
+                env.mujoco_renderer.viewer.cam.lookat[:2] = env.data.xpos[1, :2]  # body 1: the root
             frames.append(env.render())
         return None if self.mode == "human" else tuple(frames)
 

@@ -60,14 +60,19 @@ class VideoWriter:
         fps: frames per second of the file. GIF stores frame times in hundredths of a second, so
             its rates are those that divide 100 (20 fps: 50 ms a frame).
         width: resize frames to this width (height in proportion); default: as rendered.
+        frame_ms: a GIF's frame time instead of 1000 / fps (a multiple of 10 ms): for a control rate
+            that no GIF rate divides.
     """
 
-    def __init__(self, path: str, fps: int, width: int | None = None):
+    def __init__(self, path: str, fps: int, width: int | None = None, frame_ms: int | None = None):
         self.path, self.fps, self.width = path, int(fps), width
+        self.frame_ms = frame_ms
         self.kind = os.path.splitext(path)[1].lower()
         if self.kind not in (".mp4", ".gif"):
             raise ValueError(f"video path {path!r} must end in .mp4 or .gif")
-        if self.fps < 1 or (self.kind == ".gif" and 100 % self.fps):
+        if frame_ms is not None and (self.kind != ".gif" or frame_ms < 10 or frame_ms % 10):
+            raise ValueError(f"frame_ms={frame_ms!r}: a GIF's frame time, a multiple of 10 ms (GIFs only)")
+        if self.fps < 1 or (self.kind == ".gif" and frame_ms is None and 100 % self.fps):
             raise ValueError(f"fps={fps!r} for {path}: a GIF's rate must divide 100 (10, 20, 25 or 50)")
         if width is not None and (width < 2 or width % 2):
             raise ValueError(f"width={width!r} must be an even number of pixels")
@@ -125,7 +130,8 @@ class VideoWriter:
         else:
             os.makedirs(os.path.dirname(os.path.abspath(self.path)), exist_ok=True)
             first, *rest = self._gif
-            first.save(self._tmp, format="GIF", save_all=True, append_images=rest, duration=1000 // self.fps, loop=0)
+            first.save(self._tmp, format="GIF", save_all=True, append_images=rest, duration=self.frame_ms or 1000 // self.fps,
+                       loop=0)
             self._gif = []
         os.replace(self._tmp, self.path)
         return self.path
@@ -173,13 +179,19 @@ def render_clip(task, states: dict, outputs: dict[str, dict], width: int = 640, 
         raise ValueError(f"copies={copies!r}: the states hold {have} robots")
     strides = {path: frame_stride(int(opt["fps"])) for path, opt in outputs.items()}
     writers = [VideoWriter(path, int(opt["fps"]), opt.get("width")) for path, opt in outputs.items()]
+    with RobotRenderer(task, copies=copies, width=width, height=height) as renderer:
+        return _write_clip(writers, strides, steps,
+                           lambda t: renderer.render(*(np.asarray(states[k][t, :copies]) for k in STATE_KEYS)))
+
+
+def _write_clip(writers: list[VideoWriter], strides: dict[str, int], steps: int, draw) -> dict[str, int]:
+    """Each writer gets ``draw(t)`` of every ``strides[path]``-th step; all files are finished, or none
+    is left behind. Returns path -> frames written."""
     try:
-        with RobotRenderer(task, copies=copies, width=width, height=height) as renderer:
-            for t in range(steps):
-                due = [w for w in writers if t % strides[w.path] == 0]
-                if not due:
-                    continue
-                frame = renderer.render(*(np.asarray(states[k][t, :copies]) for k in STATE_KEYS))
+        for t in range(steps):
+            due = [w for w in writers if t % strides[w.path] == 0]
+            if due:
+                frame = draw(t)
                 for w in due:
                     w.write(frame)
         for w in writers:
@@ -189,3 +201,36 @@ def render_clip(task, states: dict, outputs: dict[str, dict], width: int = 640, 
             w.abort()
         raise
     return {w.path: w.frames for w in writers}
+
+
+def suite_strides(dt: float, fps: int, gif: bool) -> tuple[int, int, int | None]:
+    """For a clip of one of Gymnasium's tasks, whose control step lasts ``dt`` seconds (0.008 s for Hopper,
+    0.05 s for Ant): every how many steps a frame is kept, the file's frame rate and a GIF's frame time
+    (ms), so that the clip plays in real time at about ``fps``."""
+    stride = max(1, round(1.0 / (fps * dt)))
+    if gif:  # GIFs count time in hundredths of a second
+        frame_ms = max(10, round(stride * dt * 100) * 10)
+        return stride, max(1, round(1000 / frame_ms)), frame_ms
+    return stride, max(1, round(1.0 / (stride * dt))), None
+
+
+def render_suite_clip(task, states: dict, outputs: dict[str, dict], dt: float, width: int = 640,
+                      height: int = 480) -> dict[str, int]:
+    """Draw the first world of a stored clip of one of Gymnasium's tasks (``dof_pos``, ``dof_vel``: MuJoCo's
+    qpos and qvel, (steps, worlds, n)) with Gymnasium's own renderer of the task, into each output
+    (path -> ``{"fps": ..., "width": ...}``), in real time, the camera following a runner. Returns
+    path -> frames written."""
+    from warpgym.media.render import SuiteView  # noqa: PLC0415
+
+    missing = [k for k in ("dof_pos", "dof_vel") if k not in states]
+    if missing:
+        raise ValueError(f"states lack {missing}: a clip of a suite task needs MuJoCo's qpos and qvel")
+    plans = {path: suite_strides(dt, int(opt["fps"]), path.lower().endswith(".gif")) for path, opt in outputs.items()}
+    writers = [VideoWriter(path, plans[path][1], opt.get("width"), plans[path][2]) for path, opt in outputs.items()]
+    view = SuiteView(task, "rgb_array", 1, width, height, follow=task.has_speed)
+    try:
+        return _write_clip(writers, {p: plan[0] for p, plan in plans.items()}, np.asarray(states["dof_pos"]).shape[0],
+                           lambda t: view.render(np.asarray(states["dof_pos"][t], dtype=np.float64),
+                                                 np.asarray(states["dof_vel"][t], dtype=np.float64))[0])
+    finally:
+        view.close()
