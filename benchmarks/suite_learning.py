@@ -11,7 +11,9 @@ from several outputs, refusing runs made on different GPUs or with different bud
 
 The reference figures (``REFERENCE``) are Tianshou's MuJoCo benchmark for SAC: the best return, averaged
 over 10 seeds, within the first 1 M steps, on gym's v3 tasks (v2 for Reacher and the two pendulums),
-from its examples/mujoco README. "Half" is half of the figure, or twice the cost where it is negative.
+from its examples/mujoco README; Tianshou has no Pusher or HumanoidStandup, whose figures are SLM-Lab's
+SAC on the v5 tasks themselves (its docs/BENCHMARKS.md: the moving average of training returns over 4
+sessions, 1 M frames). "Half" is half of the figure, or twice the cost where it is negative.
 """
 
 from __future__ import annotations
@@ -29,7 +31,9 @@ sys.path.insert(0, ROOT)
 
 REFERENCE = {"Ant-v5": 5850.0, "HalfCheetah-v5": 12139.0, "Hopper-v5": 3542.0, "Walker2d-v5": 5007.0,
              "Swimmer-v5": 44.0, "Humanoid-v5": 5489.0, "Reacher-v5": -2.6, "InvertedPendulum-v5": 1000.0,
-             "InvertedDoublePendulum-v5": 9360.0}
+             "InvertedDoublePendulum-v5": 9360.0, "Pusher-v5": -42.6, "HumanoidStandup-v5": 138222.0}
+REFERENCE_SOURCE = {task: "Tianshou SAC" for task in REFERENCE} | {"Pusher-v5": "SLM-Lab SAC",
+                                                                  "HumanoidStandup-v5": "SLM-Lab SAC"}
 SHORT = ("InvertedPendulum-v5", "InvertedDoublePendulum-v5", "Reacher-v5", "Pusher-v5")
 MARKS = {"long": (60.0, 120.0, 300.0, 600.0), "short": (60.0, 120.0, 180.0)}
 
@@ -181,6 +185,7 @@ def report(folders: list[str], figure: str | None = None) -> int:
         print(f"warpgym PPO, {gpu}; budgets x{scale:g}; kernel cache {cache or 'not recorded'}; returns of the "
               "deterministic policy in gymnasium.make's env")
         print(table(runs))
+        print("References: SAC's best within 1 M steps, Tianshou's (SLM-Lab's on v5 for Pusher and HumanoidStandup).")
     if peers:
         cpu, scale, _ = next(iter(peers_made))
         print(f"\nStable-Baselines3 PPO (RL Zoo hyperparameters), one core per run on {cpu}; budgets x{scale:g}; "
@@ -259,7 +264,8 @@ def draw(runs: list[dict], peers: list[dict], path: str) -> None:
             ax.axis("off")
         axes.flat[0].legend(fontsize=7, loc="lower right")
         fig.suptitle(textwrap.fill("Return of training episodes (line: mean of seeds, band: lowest to highest); "
-                                   "dots: the kept policies in gymnasium.make's env; dashed: Tianshou's SAC figure",
+                                   "dots: the kept policies in gymnasium.make's env; dashed: the reference "
+                                   "(SAC: Tianshou's; SLM-Lab's for Pusher and HumanoidStandup)",
                                    width=55 * cols), fontsize=8)
         fig.tight_layout()
         fig.savefig(out, dpi=110)

@@ -130,8 +130,8 @@ class VideoWriter:
         else:
             os.makedirs(os.path.dirname(os.path.abspath(self.path)), exist_ok=True)
             first, *rest = self._gif
-            first.save(self._tmp, format="GIF", save_all=True, append_images=rest, duration=self.frame_ms or 1000 // self.fps,
-                       loop=0)
+            first.save(self._tmp, format="GIF", save_all=True, append_images=rest,
+                       duration=self.frame_ms or 1000 // self.fps, loop=0)
             self._gif = []
         os.replace(self._tmp, self.path)
         return self.path
