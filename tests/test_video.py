@@ -241,9 +241,9 @@ def test_a_suite_clip_plays_in_real_time_and_follows_the_runner(tmp_path):
 
     far, hidden = qpos[-1], qpos[-1].copy()
     hidden[0, 1] = -50.0  # under the opaque floor: what the camera sees without the robot
-    for follow, robot_in_view in ((True, True), (False, False)):
-        view = SuiteView(hopper, "rgb_array", 1, 160, 120, follow=follow)
-        seen, empty = (view.render(q, np.zeros((1, 6)))[0].astype(int) for q in (far, hidden))
-        view.close()
-        assert (np.abs(seen - empty).sum(axis=2) > 30).mean() > 0.01 if robot_in_view else \
-            (np.abs(seen - empty).sum(axis=2) > 30).mean() < 0.001
+    view = SuiteView(hopper, "rgb_array", 1, 160, 120, follow=True)
+    seen, empty = (view.render(q, np.zeros((1, 6)))[0].astype(int) for q in (far, hidden))
+    view.close()
+    # 6 m from its start the robot is still in view (Gymnasium 1.4's own camera has lost it there; 1.2's
+    # tracks the model's "track" camera, which follows too)
+    assert (np.abs(seen - empty).sum(axis=2) > 30).mean() > 0.01

@@ -256,8 +256,9 @@ class SuiteView:
     ``"rgb_array"``: a tuple of (height, width, 3) frames, one per world for the first ``robots``;
     ``"human"``: Gymnasium's viewer window on the first world (needs a display).
 
-    ``follow``: keep the root body in the middle of the frame. Gymnasium's camera stays where the
-    robot started, so a runner leaves its frames within seconds; clips of the locomotion tasks follow."""
+    ``follow``: keep the root body in the middle of the frame. Gymnasium 1.4's free camera stays where
+    the robot started, so a runner leaves its frames within seconds; clips of the locomotion tasks follow.
+    (Gymnasium 1.2 draws from the model's tracking camera, where a file has one, and follows anyway.)"""
 
     def __init__(self, task, mode: str, robots: int = 1, width: int = 640, height: int = 480,
                  follow: bool = False):
