@@ -108,7 +108,7 @@ def score_run(run: dict, out: str, episodes: int, device: str | None) -> dict:
         result = results[path]
         scored.append({"mark_s": kept["mark_s"], "time_s": kept["time_s"], "samples": kept["samples"],
                        "gymnasium_return": result["gymnasium_return"], "warpgym_return": result["warpgym_return"],
-                       "gymnasium_over_warpgym": result["gymnasium_over_warpgym"]})
+                       "gymnasium_over_warpgym": result["gymnasium_over_warpgym"], "episodes": result["episodes"]})
     return {**run, "scored": scored}
 
 

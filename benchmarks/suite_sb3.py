@@ -2,12 +2,13 @@
 
 Each task and seed trains ``stable_baselines3.PPO`` for --minutes on ``gymnasium.make("<Name>-v5")`` with
 the RL Baselines3 Zoo's hyperparameters for the task (``ZOO``: its hyperparams/ppo.yml, tuned on the v4
-tasks, which v5 keeps; VecNormalize on observations and rewards, as its ``normalize: true``). The Zoo runs
+tasks, whose v5 versions change some observations, Ant's contact forces among them; VecNormalize on observations and rewards, as its ``normalize: true``). The Zoo runs
 these with one env, one process: so does this script, each run pinned to one core with one torch thread,
 --parallel runs at once. Its policies at the marks (1, 2, 5, 10 minutes of training) are kept in memory
-and scored after training as ``warpgym eval`` scores warpgym's: the deterministic policy, 10 episodes in
-``gymnasium.make``'s env. Every 30 s of training a deterministic 5-episode evaluation gives the curve and
-the minutes to the reference; its time, and the snapshots', is kept off the training clock.
+and scored after training as suite_learning.py scores warpgym's: the deterministic policy, 10 episodes
+from each of 3 seeds in ``gymnasium.make``'s env. Every 30 s of training a deterministic 5-episode
+evaluation gives the minutes to the reference; its time, and the snapshots', is kept off the training
+clock.
 
 One JSON per run (``OUT/sb3-<task>-seed<k>.json``), in suite_learning.py's form, which its ``--report``
 sets beside warpgym's runs.
@@ -48,6 +49,7 @@ ZOO: dict[str, dict] = {
     "Swimmer-v5": dict(gamma=0.9999, n_steps=1024, batch_size=256, learning_rate=6e-4, gae_lambda=0.98, n_envs=4),
 }
 EVAL_GAP_S = 30.0
+EVAL_SEEDS = (0, 1, 2)  # as suite_learning.py scores warpgym's policies
 
 
 def hyperparameters(task: str) -> tuple[dict, int]:
@@ -145,9 +147,11 @@ def train_one(task: str, seed: int, minutes: float, marks: tuple[float, ...], ev
     for k in kept:
         state, mean, var = k.pop("snap")
         model.policy.load_state_dict(state)
-        r, _ = gymnasium_policy_episodes(task, _deterministic_act(model, mean, var, venv.clip_obs), eval_episodes,
-                                         seed=0, unit_actions=False)
-        scored.append({**k, "gymnasium_return": float(np.mean(r))})
+        act = _deterministic_act(model, mean, var, venv.clip_obs)
+        # the episodes warpgym eval --seeds 0 1 2 plays: resets seeded 0.., 1000.., 2000..
+        r = np.concatenate([gymnasium_policy_episodes(task, act, eval_episodes, seed=1000 * s, unit_actions=False)[0]
+                            for s in EVAL_SEEDS])
+        scored.append({**k, "gymnasium_return": float(np.mean(r)), "episodes": int(r.size)})
     venv.close()
     return {"task": task, "seed": seed, "budget_s": budget, "marks_s": list(marks), "scored": scored,
             "samples": samples, "samples_per_s": samples / train_s,
@@ -182,7 +186,7 @@ def main(argv=None) -> int:
     ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1])
     ap.add_argument("--minutes", type=float, default=10.0)
     ap.add_argument("--parallel", type=int, default=1, help="runs at once, one core each")
-    ap.add_argument("--eval-episodes", type=int, default=10)
+    ap.add_argument("--eval-episodes", type=int, default=10, help="episodes per seed of 3 (default 10)")
     ap.add_argument("--one", nargs=2, metavar=("TASK", "SEED"), help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     unknown = [t for t in args.tasks if t not in ZOO]
