@@ -13,7 +13,7 @@ The reference figures (``REFERENCE``) are Tianshou's MuJoCo benchmark for SAC: t
 over 10 seeds, within the first 1 M steps, on gym's v3 tasks (v2 for Reacher and the two pendulums),
 from its examples/mujoco README; Tianshou has no Pusher or HumanoidStandup, whose figures are SLM-Lab's
 SAC on the v5 tasks themselves (its docs/BENCHMARKS.md: the moving average of training returns over 4
-sessions, 1 M frames). "Half" is half of the figure, or twice the cost where it is negative.
+runs of 1 M frames each). "Half" is half of the figure, or twice the cost where it is negative.
 """
 
 from __future__ import annotations

@@ -159,14 +159,13 @@ def train_one(task: str, seed: int, minutes: float, marks: tuple[float, ...], ev
 
 
 def with_reach(run: dict) -> dict:
-    target = REFERENCE.get(run["task"])
-    run["reference"] = target
-    run["first_eval_reaching"] = {}
-    if target is not None:
-        for name, value in (("target", target), ("half", half(target))):
-            hit = next((e for e in run["evals"] if e["eval/return"] >= value), None)
-            run["first_eval_reaching"][name] = None if hit is None else {"time_s": hit["time_s"],
-                                                                         "samples": hit["samples"]}
+    """The run with its reference and when its evaluations first reached it (and half of it)."""
+    from agents.logger import first_reaching  # noqa: PLC0415
+
+    target = run["reference"] = REFERENCE.get(run["task"])
+    run["first_eval_reaching"] = {} if target is None else {
+        name: first_reaching(run["evals"], "eval/return", value) for name, value in (("target", target),
+                                                                                   ("half", half(target)))}
     return run
 
 

@@ -10,13 +10,15 @@ import torch
 import warp as wp
 from gymnasium.vector import VectorEnv
 
+from kernels.buffers import StepOutputs
 from kernels.locomotion import advance_rng
 from warpgym.sim.checks import check_float_tensor
 
 
 class GraphVecEnv(VectorEnv):
-    # Set by the subclass: sim (with launch/capture), num_envs, num_actions, device, obs, reward,
-    # terminated, truncated, info, _actions_in_t, _rng_state, _graph, _fault_views.
+    # Set by the subclass before _alloc_common and _expose: sim (with launch/capture), num_envs,
+    # num_actions, device.
+    FAULTS = ("nan_actions", "diverged_resets", "solver_overflows")  # fault_counters' names, in _fault_totals' order
 
     @staticmethod
     def configured(task, max_episode_steps: int | None, overrides: dict):
@@ -28,6 +30,43 @@ class GraphVecEnv(VectorEnv):
             task = task.replace(**overrides)
         task.validate()
         return task
+
+    def _alloc_common(self, n: int, num_obs: int, num_actions: int, seed: int) -> StepOutputs:
+        """The buffers every env's step uses alike: the actions coming in, the step's outputs, the fault
+        counts (non-finite actions per world; totals of non-finite actions, diverged worlds and
+        overflowed substeps) and the reset noise's random state. Returns the outputs (``self._out``)."""
+        dev = self.sim.device
+
+        def buf(shape, dtype=float):
+            return wp.zeros(shape, dtype=dtype, device=dev)
+
+        self._actions_in = buf((n, num_actions))
+        self._nan_count = buf(n, wp.int32)
+        self._fault_totals = buf(3, wp.int64)
+        self._rng_state = wp.array(np.array([seed, 0], np.int32), dtype=wp.int32, device=dev)
+        self._out = out = StepOutputs()
+        out.obs, out.final_obs, out.reward = buf((n, num_obs)), buf((n, num_obs)), buf(n)
+        out.terminated, out.truncated = buf(n, wp.bool), buf(n, wp.bool)
+        out.done, out.diverged = buf(n, wp.bool), buf(n, wp.bool)
+        return out
+
+    def _expose(self, info: dict) -> None:
+        """Make the torch views every step hands out (the task's ``info`` entries, then the final
+        observations and the fault entries every env reports), compile every kernel a step launches side
+        by side rather than one by one inside the first step (warpgym.compile.preload; a warm cache
+        makes this a quick check), and reset every world."""
+        t, out = self.sim.to_torch, self._out
+        self._actions_in_t = t(self._actions_in)
+        self.obs, self.reward = t(out.obs), t(out.reward)
+        self.terminated, self.truncated = t(out.terminated), t(out.truncated)
+        self.info = {**info, "final_obs": t(out.final_obs), "_final_obs": t(out.done),
+                     "nan_actions": t(self._nan_count), "diverged": t(out.diverged),
+                     "solver_overflows": t(self.sim.solver_overflows)}
+        totals = t(self._fault_totals)
+        self._fault_views = {name: totals[i] for i, name in enumerate(self.FAULTS)}
+        self._graph = None
+        self.sim.compile_ahead(self._launch_step)
+        self._reset_all()
 
     def _launch_step(self) -> None:
         raise NotImplementedError

@@ -15,7 +15,7 @@ from gymnasium.vector import AutoresetMode
 from gymnasium.vector.utils import batch_space
 
 from kernels.actions import apply_actions
-from kernels.buffers import EpisodeBuffers, RobotView, StepOutputs
+from kernels.buffers import EpisodeBuffers, RobotView
 from kernels.locomotion import advance_rng, locomotion_step
 from kernels.resets import reset_finished_envs
 from kernels.solver_load import count_faults
@@ -86,14 +86,11 @@ class LocomotionVecEnv(GraphVecEnv):
         gear = sim.motor_gear_np
         self.params = task.to_warp(sim.spec.start_height)
         self._torque_scale = wp.array(gear * task.power_scale, dtype=float, device=dev)
-        self._rng_state = wp.array(np.array([seed, 0], np.int32), dtype=wp.int32, device=dev)
+        out = self._alloc_common(n, o, a, seed)
 
         def buf(shape, dtype=float):
             return wp.zeros(shape, dtype=dtype, device=dev)
 
-        self._actions_in = buf((n, a))
-        self._nan_count = buf(n, wp.int32)
-        self._fault_totals = buf(3, wp.int64)  # non-finite actions, diverged worlds, overflowed substeps
         if task.contact_force_scale != 0.0:
             sim.enable_contact_forces()
 
@@ -112,45 +109,19 @@ class LocomotionVecEnv(GraphVecEnv):
         ep.potential, ep.length, ep.total_return, ep.speed = buf(n), buf(n, wp.int32), buf(n), buf(n)
         ep.ended_return, ep.ended_length, ep.ended_speed = buf(n), buf(n, wp.int32), buf(n)
 
-        self._out = out = StepOutputs()
-        out.obs, out.final_obs, out.reward = buf((n, o)), buf((n, o)), buf(n)
-        out.terminated, out.truncated = buf(n, wp.bool), buf(n, wp.bool)
-        out.done, out.diverged = buf(n, wp.bool), buf(n, wp.bool)
-
         t = sim.to_torch
-        self._actions_in_t = t(self._actions_in)
-        self.obs, self.reward = t(out.obs), t(out.reward)
-        self.terminated, self.truncated = t(out.terminated), t(out.truncated)
         self.actions = t(robot.actions)
         # steps into each env's episode (int32); writable, e.g. to spread the first episodes' ends
         self.episode_steps = t(ep.length)
         done = t(out.done)
-        self.info = {
-            "final_obs": t(out.final_obs),
-            "_final_obs": done,
-            "episode": {
-                "r": t(ep.ended_return),
-                "l": t(ep.ended_length),
-                "s": t(ep.ended_speed),
-                "_r": done,
-                "_l": done,
-                "_s": done,
-            },
+        self._expose({
+            "episode": {"r": t(ep.ended_return), "l": t(ep.ended_length), "s": t(ep.ended_speed),
+                        "_r": done, "_l": done, "_s": done},
             "_episode": done,
             # the episode in progress after this step (a fresh one where the step reset the env):
             # what an evaluation cut short reports (agents.evaluate)
             "episode_so_far": {"r": t(ep.total_return), "l": t(ep.length), "s": t(ep.speed)},
-            "nan_actions": t(self._nan_count),
-            "diverged": t(out.diverged),
-            "solver_overflows": t(sim.solver_overflows),
-        }
-        totals = t(self._fault_totals)
-        self._fault_views = {name: totals[i] for i, name in enumerate(self.FAULTS)}
-        self._graph = None
-        # Every kernel a step launches, compiled here and side by side rather than one by one
-        # inside the first step (warpgym.compile.preload); a warm cache makes this a quick check.
-        sim.compile_ahead(self._launch_step)
-        self._reset_all()
+        })
 
     # ------------------------------------------------------------------ device work
     def _launch_step(self) -> None:
@@ -174,7 +145,6 @@ class LocomotionVecEnv(GraphVecEnv):
                   device=self.sim.device)
 
     # ------------------------------------------------------------------ Gymnasium API (GraphVecEnv: reset, step)
-    FAULTS = ("nan_actions", "diverged_resets", "solver_overflows")
     FAULT_HELP = {
         "nan_actions": "the policy sent NaN/inf actions; they were applied as 0",
         "diverged_resets": "a world's physics blew up (NaN or beyond max_speed); it was reset with reward 0",

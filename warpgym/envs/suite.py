@@ -15,7 +15,6 @@ from gymnasium import spaces
 from gymnasium.vector import AutoresetMode
 from gymnasium.vector.utils import batch_space
 
-from kernels.buffers import StepOutputs
 from kernels.gym_params import GymEpisodes, MjView
 from kernels.gym_resets import reset_gym_worlds
 from kernels.gym_step import apply_gym_actions, gym_step, write_reset_observation
@@ -51,7 +50,6 @@ class SuiteVecEnv(GraphVecEnv):
 
     metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": ["rgb_array", "human"]}
     graph_capturable = True
-    FAULTS = ("nan_actions", "diverged_resets", "solver_overflows")
     FAULT_HELP = {
         "nan_actions": "the policy sent NaN/inf actions; they were applied as 0",
         "diverged_resets": "a world's state stopped being finite; it ended with reward 0 and was reset",
@@ -108,22 +106,11 @@ class SuiteVecEnv(GraphVecEnv):
         ep.ended_return, ep.ended_length, ep.ended_speed = buf(n), buf(n, wp.int32), buf(n)
         ep.terms, ep.actions = buf((n, MAX_TERMS)), buf((n, a))
 
-        self._out = out = StepOutputs()
-        out.obs, out.final_obs, out.reward = buf((n, o)), buf((n, o)), buf(n)
-        out.terminated, out.truncated = buf(n, wp.bool), buf(n, wp.bool)
-        out.done, out.diverged = buf(n, wp.bool), buf(n, wp.bool)
-
-        self._actions_in = buf((n, a))
+        out = self._alloc_common(n, o, a, seed)
         self._ctrl_low = wp.array(low, dtype=float, device=dev)
         self._ctrl_high = wp.array(high, dtype=float, device=dev)
-        self._nan_count = buf(n, wp.int32)
-        self._fault_totals = buf(3, wp.int64)
-        self._rng_state = wp.array(np.array([seed, 0], np.int32), dtype=wp.int32, device=dev)
 
         t = sim.to_torch
-        self._actions_in_t = t(self._actions_in)
-        self.obs, self.reward = t(out.obs), t(out.reward)
-        self.terminated, self.truncated = t(out.terminated), t(out.truncated)
         self.actions = t(ep.actions)
         self.episode_steps = t(ep.length)
         done = t(out.done)
@@ -133,18 +120,8 @@ class SuiteVecEnv(GraphVecEnv):
         if task.has_speed:
             episode.update(s=t(ep.ended_speed), _s=done)
             so_far["s"] = t(ep.speed)
-        self.info = {
-            **{key: terms[:, col] for key, col in task.term_columns().items()},
-            "final_obs": t(out.final_obs), "_final_obs": done,
-            "episode": episode, "_episode": done, "episode_so_far": so_far,
-            "nan_actions": t(self._nan_count), "diverged": t(out.diverged),
-            "solver_overflows": t(sim.solver_overflows),
-        }
-        totals = t(self._fault_totals)
-        self._fault_views = {name: totals[i] for i, name in enumerate(self.FAULTS)}
-        self._graph = None
-        sim.compile_ahead(self._launch_step)
-        self._reset_all()
+        self._expose({**{key: terms[:, col] for key, col in task.term_columns().items()},
+                      "episode": episode, "_episode": done, "episode_so_far": so_far})
 
     # ------------------------------------------------------------------ device work
     def _launch_step(self) -> None:
