@@ -12,6 +12,7 @@ from gymnasium.vector import VectorEnv
 
 from kernels.buffers import StepOutputs
 from kernels.locomotion import advance_rng
+from kernels.solver_load import count_faults
 from warpgym.sim.checks import check_float_tensor
 
 
@@ -70,6 +71,15 @@ class GraphVecEnv(VectorEnv):
 
     def _launch_step(self) -> None:
         raise NotImplementedError
+
+    def _finish_step(self) -> None:
+        """The end of every env's step, after its task kernel: reset the worlds that finished, add this
+        step's faults to the totals, and move the reset noise's random state on."""
+        sim, n = self.sim, self.num_envs
+        self._launch_reset(force_all=0)
+        wp.launch(count_faults, dim=n, inputs=[self._nan_count, self._out.diverged, sim.solver_overflows],
+                  outputs=[self._fault_totals], device=sim.device)
+        wp.launch(advance_rng, dim=1, inputs=[self._rng_state], device=sim.device)
 
     def _launch_reset(self, force_all: int) -> None:
         raise NotImplementedError

@@ -16,9 +16,8 @@ from gymnasium.vector.utils import batch_space
 
 from kernels.actions import apply_actions
 from kernels.buffers import EpisodeBuffers, RobotView
-from kernels.locomotion import advance_rng, locomotion_step
+from kernels.locomotion import locomotion_step
 from kernels.resets import reset_finished_envs
-from kernels.solver_load import count_faults
 from warpgym.envs.graph_env import GraphVecEnv
 from warpgym.sim.simulator import Sim
 from warpgym.tasks import LocomotionTask, get_task
@@ -134,10 +133,7 @@ class LocomotionVecEnv(GraphVecEnv):
         if self.task.observe_dof_forces:
             sim.compute_dof_forces()
         wp.launch(locomotion_step, dim=n, inputs=[self.params, self._robot, self._episodes, self._out], device=dev)
-        self._launch_reset(force_all=0)
-        wp.launch(count_faults, dim=n, inputs=[self._nan_count, self._out.diverged, sim.solver_overflows],
-                  outputs=[self._fault_totals], device=dev)
-        wp.launch(advance_rng, dim=1, inputs=[self._rng_state], device=dev)
+        self._finish_step()
 
     def _launch_reset(self, force_all: int) -> None:
         wp.launch(reset_finished_envs, dim=self.num_envs,

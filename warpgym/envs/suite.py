@@ -18,8 +18,6 @@ from gymnasium.vector.utils import batch_space
 from kernels.gym_params import GymEpisodes, MjView
 from kernels.gym_resets import reset_gym_worlds
 from kernels.gym_step import apply_gym_actions, gym_step, write_reset_observation
-from kernels.locomotion import advance_rng
-from kernels.solver_load import count_faults
 from warpgym.envs.graph_env import GraphVecEnv
 from warpgym.sim.mjw_sim import MjwSim
 from warpgym.tasks.suite import GymTask, get_suite_task
@@ -131,10 +129,7 @@ class SuiteVecEnv(GraphVecEnv):
                   outputs=[sim.d.ctrl, self._episodes.actions, self._nan_count], device=dev)
         sim.simulate()
         wp.launch(gym_step, dim=n, inputs=[self.params, self._mj, self._episodes, self._out], device=dev)
-        self._launch_reset(force_all=0)
-        wp.launch(count_faults, dim=n, inputs=[self._nan_count, self._out.diverged, sim.solver_overflows],
-                  outputs=[self._fault_totals], device=dev)
-        wp.launch(advance_rng, dim=1, inputs=[self._rng_state], device=dev)
+        self._finish_step()
 
     def _launch_reset(self, force_all: int) -> None:
         dev = self.sim.device
