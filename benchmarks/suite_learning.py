@@ -7,6 +7,7 @@ as many in warpgym's own). One JSON per run (``OUT/<task>-seed<k>.json``); ``--r
 from several outputs, refusing runs made on different GPUs or with different budgets.
 
     python benchmarks/suite_learning.py --out OUT --tasks Hopper-v5 Walker2d-v5 --seeds 0 1
+    python benchmarks/suite_learning.py --out OUT --seeds 0 1 --gpus 2    # one seed per GPU, at once
     python benchmarks/suite_learning.py --report OUT OUT2 ...
 
 The reference figures (``REFERENCE``) are Tianshou's MuJoCo benchmark for SAC: the best return, averaged
@@ -272,6 +273,47 @@ def draw(runs: list[dict], peers: list[dict], path: str) -> None:
         plt.close(fig)
 
 
+def without(argv: list[str], options: tuple[str, ...]) -> list[str]:
+    """``argv`` less ``options`` and their values (in the ``--name v...`` or ``--name=v`` forms)."""
+    kept, dropping = [], False
+    for a in argv:
+        if a.split("=", 1)[0] in options:
+            dropping = "=" not in a
+            continue
+        if dropping and not a.startswith("--"):
+            continue
+        dropping = False
+        kept.append(a)
+    return kept
+
+
+def spread_seeds(args, argv: list[str]) -> int:
+    """Run each seed in its own process on its own GPU (``--gpus N``, seeds over GPUs in turn), each process
+    pinned to its share of the host's cores, so that one GPU's run does not take another's CPU; a run's
+    clock is then what a one-GPU machine with that many cores gives."""
+    cores = sorted(os.sched_getaffinity(0))
+    share = len(cores) // args.gpus
+    if share < 1:
+        raise SystemExit(f"--gpus {args.gpus}: more GPUs than the {len(cores)} cores this process may use")
+    rest = without(argv, ("--gpus", "--seeds"))
+    waves = [args.seeds[i:i + args.gpus] for i in range(0, len(args.seeds), args.gpus)]
+    failed = 0
+    for wave in waves:
+        procs = []
+        for gpu, seed in enumerate(wave):
+            mine = set(cores[gpu * share:(gpu + 1) * share])
+            env = dict(os.environ, CUDA_VISIBLE_DEVICES=str(gpu))
+            log = open(os.path.join(args.out, f"seed{seed}.log"), "w")
+            procs.append(subprocess.Popen([sys.executable, os.path.abspath(__file__), *rest, "--seeds", str(seed),
+                                           "--runs-at-once", str(len(wave))],
+                                          env=env, stdout=log, stderr=subprocess.STDOUT,
+                                          preexec_fn=lambda mine=mine: os.sched_setaffinity(0, mine)))
+        failed += sum(p.wait() != 0 for p in procs)
+    if failed:
+        print(f"{failed} seed process(es) failed: see {args.out}/seed<k>.log", file=sys.stderr)
+    return report([args.out]) if glob.glob(os.path.join(args.out, "*-seed*.json")) else 1
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", help="folder for the runs and their JSON")
@@ -286,6 +328,9 @@ def main(argv=None) -> int:
     ap.add_argument("--no-score", action="store_true",
                     help="train only (keep the GPU for training); score later with --score OUT on any machine")
     ap.add_argument("--score", metavar="OUT", help="score the kept policies of the runs under OUT not yet scored")
+    ap.add_argument("--gpus", type=int, default=1,
+                    help="seeds at once, one process per GPU with an equal share of the cores (default 1)")
+    ap.add_argument("--runs-at-once", type=int, default=1, help=argparse.SUPPRESS)  # set by --gpus for its children
     ap.add_argument("--no-warm-up", action="store_true",
                     help="time each task's first run from an empty kernel cache (default: a short run fills it first)")
     args = ap.parse_args(argv)
@@ -303,8 +348,9 @@ def main(argv=None) -> int:
         return report([args.score])
     if not args.out:
         ap.error("--out OUT is required (or --report OUT... or --score OUT)")
-    if not args.scale > 0 or args.eval_episodes < 1:
-        ap.error(f"--scale {args.scale} / --eval-episodes {args.eval_episodes}: both must be positive")
+    if not args.scale > 0 or args.eval_episodes < 1 or args.gpus < 1:
+        ap.error(f"--scale {args.scale} / --eval-episodes {args.eval_episodes} / --gpus {args.gpus}: "
+                 "all must be positive")
     import torch  # noqa: PLC0415
 
     from warpgym.tasks.suite import SUITE  # noqa: PLC0415
@@ -314,6 +360,10 @@ def main(argv=None) -> int:
     if unknown:
         ap.error(f"--tasks {unknown}: choose from {list(SUITE)}")
     os.makedirs(args.out, exist_ok=True)
+    if args.gpus > 1:
+        if torch.cuda.device_count() < args.gpus:
+            ap.error(f"--gpus {args.gpus}: this machine shows {torch.cuda.device_count()} GPU(s)")
+        return spread_seeds(args, list(argv if argv is not None else sys.argv[1:]))
     gpu = torch.cuda.get_device_name(0) if torch.cuda.is_available() and args.device != "cpu" else "cpu"
     for task in tasks:
         if not args.no_warm_up:
@@ -324,6 +374,7 @@ def main(argv=None) -> int:
                 run = score_run(run, args.out, args.eval_episodes, args.device)
             doc = {"meta": {"gpu": gpu, "scale": args.scale, "date": time.strftime("%Y-%m-%d"),
                             "kernel_cache": "empty at the first run" if args.no_warm_up else "warm",
+                            "cores": len(os.sched_getaffinity(0)), "runs_at_once": args.runs_at_once,
                             "command": " ".join(["benchmarks/suite_learning.py"] + (argv or sys.argv[1:]))},
                    "run": run}
             write_json(os.path.join(args.out, f"{task}-seed{seed}.json"), doc)

@@ -76,6 +76,16 @@ def test_suite_learning_report_merges_runs_made_alike_and_refuses_others(tmp_pat
     assert sl.half(-2.6) == -5.2 and sl.half(5850.0) == 2925.0
 
 
+def test_suite_learning_gives_each_gpus_process_the_arguments_less_the_spread():
+    """--gpus N starts one process per seed: each gets every argument but --gpus and --seeds (its own seed is
+    added), whichever form they were written in."""
+    import suite_learning as sl
+
+    argv = ["--out", "O", "--seeds", "0", "1", "--tasks", "Ant-v5", "Hopper-v5", "--gpus=2", "--no-score"]
+    assert sl.without(argv, ("--gpus", "--seeds")) == ["--out", "O", "--tasks", "Ant-v5", "Hopper-v5", "--no-score"]
+    assert sl.without(["--gpus", "2", "--seeds=3", "--out", "O"], ("--gpus", "--seeds")) == ["--out", "O"]
+
+
 def test_suite_learning_report_sets_sb3_beside_warpgym_and_draws_both(tmp_path, capsys):
     """SB3's runs (suite_sb3.py's JSON) get their own table, with no Gymnasium / warpgym ratio, and
     their curves join warpgym's in both figures."""
