@@ -67,6 +67,9 @@ class Config:
     bounds_coef: float = 1e-4  # keeps the action mean near [-1, 1], where the env clips
     max_grad_norm: float = 1.0
     desired_kl: float = 0.008  # 0 disables the adaptive learning rate
+    # the learning rate (with desired_kl, the one the KL rule picks) times 1 - progress through the run's
+    # budget (its time limit, samples or iterations, whichever ends first): SB3's and CleanRL's linear decay
+    anneal_lr: bool = False
     reward_scale: float = 1.0
     normalize_obs: bool = True
     tf32: bool = True  # on CUDA, let matmuls use TF32 tensor cores
@@ -121,7 +124,7 @@ class Config:
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
                 raise ValueError(f"{name}={v!r} must be a non-negative number")
-        for name in ("overlap", "compile_update", "normalize_obs", "tf32", "keep_checkpoints"):
+        for name in ("overlap", "compile_update", "normalize_obs", "tf32", "keep_checkpoints", "anneal_lr"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name}={getattr(self, name)!r} must be True or False")
         if self.activation not in ("elu", "relu", "tanh"):

@@ -81,6 +81,10 @@ class PPO:
         self.cfg = cfg
         self.device = device
         self.lr = torch.tensor(cfg.learning_rate, dtype=torch.float32, device=device)
+        # Config.anneal_lr: the rate before the decay (the KL rule adapts this one) and the decay's factor,
+        # which the runner sets before each update; the captured step reads both by address
+        self.lr_free = self.lr.clone()
+        self.lr_scale = torch.ones((), dtype=torch.float32, device=device)
         is_cuda = device.type == "cuda"
         self.optimizer = torch.optim.Adam(policy.parameters(), lr=self.lr, fused=True, capturable=is_cuda)
         # Across several processes the captured step holds its NCCL all-reduce (tests/test_cuda.py
@@ -132,7 +136,11 @@ class PPO:
         loss.backward()
         # one collective per mini-batch: every process's gradients and KL, averaged
         (kl,) = self.workers.mean_grads_(policy.parameters(), terms[3])
-        if cfg.desired_kl > 0:
+        if cfg.anneal_lr:
+            if cfg.desired_kl > 0:
+                self.lr_free.copy_(adapted_lr(self.lr_free, kl, cfg.desired_kl))
+            self.lr.copy_(self.lr_free * self.lr_scale)
+        elif cfg.desired_kl > 0:
             self.lr.copy_(adapted_lr(self.lr, kl, cfg.desired_kl))
         torch.nn.utils.clip_grad_norm_(policy.parameters(), cfg.max_grad_norm, foreach=True)
         self.optimizer.step()

@@ -243,6 +243,8 @@ class OnPolicyRunner:
             while not stop and (last_iter is None or self.iteration < last_iter):
                 finished = False
                 self.clock.mark("idle")  # the GPU waited this long for the host to queue the iteration
+                if self.cfg.anneal_lr:
+                    self.ppo.lr_scale.fill_(1.0 - self._progress(last_iter, time_limit))
                 stats = self.iterate()
                 self.clock.mark("update")
                 self.timer.lap("PPO update")
@@ -277,6 +279,13 @@ class OnPolicyRunner:
             if self.run_dir and finished and self._logged_through == self.iteration:
                 self.save()
         return self.history
+
+    def _progress(self, last_iter: int | None, time_limit: float | None) -> float:
+        """How far through its budget the run is, in [0, 1]: the furthest of its iterations (from the
+        iteration or sample goal) and its time limit, both counted from the run's start, resumes included."""
+        done = [self.iteration / last_iter if last_iter else 0.0,
+                self.elapsed() / time_limit if time_limit else 0.0]
+        return min(max(done), 1.0)
 
     def log(self, stats: dict, last_iter: int | None, wants_stop: bool) -> bool:
         """Queue this iteration's row to the host and log the previous one, which arrived long ago:
@@ -370,7 +379,7 @@ class OnPolicyRunner:
         return {
             "iteration": self.iteration, "samples": self.samples, "elapsed_s": self.elapsed(),
             "policy": self.policy.state_dict(), "normalizer": self.normalizer.state_dict(),
-            "optimizer": self.ppo.optimizer.state_dict(), "lr": self.ppo.lr.item(),
+            "optimizer": self.ppo.optimizer.state_dict(), "lr": self.ppo.lr.item(), "lr_free": self.ppo.lr_free.item(),
             "rng": rng_state(self.device), "config": self.cfg.to_dict(),
             "spec": {"num_obs": self.spec.num_obs, "num_actions": self.spec.num_actions},
         }
@@ -414,6 +423,7 @@ class OnPolicyRunner:
         if resume:
             self.ppo.optimizer.load_state_dict(ckpt["optimizer"])
             self.ppo.lr.fill_(ckpt["lr"])
+            self.ppo.lr_free.fill_(ckpt.get("lr_free", ckpt["lr"]))
             self.iteration, self.samples = ckpt["iteration"], ckpt["samples"]
             self.elapsed_before = ckpt["elapsed_s"]
             self._marks_after = self.elapsed_before

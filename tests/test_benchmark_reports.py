@@ -67,13 +67,28 @@ def test_suite_learning_report_merges_runs_made_alike_and_refuses_others(tmp_pat
     assert sl.report([str(tmp_path / "a"), str(tmp_path / "b")]) == 0
     table = capsys.readouterr().out
     # both seeds in one row: the marks' mean returns, the reference reached by one seed of two, the lowest ratio
-    assert "| Hopper-v5 | 2 | 1 min: 1000; 2 min: 2000; 5 min: 3000; 10 min: 4000 | 3542.0 | 7.0 (1/2) (3.0 (2/2)) |" in table
+    assert "| Hopper-v5 | 2 | 1 min: 1000; 2 min: 2000; 5 min: 3000; 10 min: 4000 | 3542.2 | 7.0 (1/2) (3.0 (2/2)) |" in table
     assert next(line for line in table.splitlines() if line.startswith("| Hopper-v5")).endswith("| 0.970 |")
     assert "SLM-Lab's on v5 for Pusher and HumanoidStandup" in table  # where the two figures not Tianshou's come from
     doc(tmp_path / "c", "Hopper-v5", 2, scale=0.1)
     with pytest.raises(SystemExit, match="made differently"):
         sl.report([str(tmp_path / "a"), str(tmp_path / "c")])
     assert sl.half(-2.6) == -5.2 and sl.half(5850.0) == 2925.0
+
+
+def test_suite_learning_reads_minutes_to_the_reference_from_the_runs_evaluations():
+    """A run keeps its evaluations, so the table's minutes follow REFERENCE as it stands now, not the figure
+    (here a rounded 9360 that no policy can reach) the run was made with."""
+    import suite_learning as sl
+
+    evals = [{"time_s": 77.0, "samples": 1e7, "eval/return": 9068.7},
+             {"time_s": 137.0, "samples": 5e7, "eval/return": 9359.8}]
+    run = {"task": "InvertedDoublePendulum-v5", "seed": 0, "marks_s": [60.0], "samples": 8e7, "samples_per_s": 5e5,
+           "reference": 9360.0, "first_eval_reaching": {"target": None, "half": None}, "scored": [], "evals": evals}
+    row = next(line for line in sl.table([run]).splitlines() if line.startswith("| InvertedDoublePendulum"))
+    assert f"| {sl.REFERENCE['InvertedDoublePendulum-v5']} | 2.3 (1/1) (1.3 (1/1)) |" in row
+    evals[1]["eval/return"] = 9359.0  # below Tianshou's 9359.5
+    assert "not reached (0/1) (1.3 (1/1))" in sl.table([run])
 
 
 def test_suite_learning_gives_each_gpus_process_the_arguments_less_the_spread():
