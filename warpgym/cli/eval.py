@@ -6,9 +6,11 @@
 The checkpoint's deterministic policy (the mean action, its observation normaliser as trained) runs in
 ``gymnasium.make("<Name>-v5")``: native MuJoCo in float64, the task's constructor arguments and time
 limit as trained, the policy's actions in [-1, 1] mapped onto the control ranges as in training. The
-same policy's first episodes in warpgym's env, as many as Gymnasium's, stand beside them, and the ratio
-of the two mean returns says whether what was learnt on the GPU holds where it is scored (below 1:
-worse in Gymnasium's env; for the negative returns of Reacher and Pusher, warpgym's over Gymnasium's).
+same episodes in warpgym's env stand beside them, each world started in the state (and with the first
+observation) of one of Gymnasium's episodes, and the ratio of the two mean returns says whether what was
+learnt on the GPU holds where it is scored (below 1: worse in Gymnasium's env; for the negative returns
+of Reacher and Pusher, warpgym's over Gymnasium's). With the same starts the ratio measures the two
+simulators, not the luck of the draw: Reacher's return, for one, is mostly its target's distance.
 """
 
 from __future__ import annotations
@@ -51,10 +53,9 @@ def main(argv=None) -> int:
     import torch  # noqa: PLC0415
 
     from agents.checkpoint import load_for_command, policy_from_checkpoint  # noqa: PLC0415
-    from agents.evaluate import evaluate  # noqa: PLC0415
     from warpgym.cli import write_json  # noqa: PLC0415
     from warpgym.envs import make_vec_env  # noqa: PLC0415
-    from warpgym.envs.conformance import gymnasium_policy_episodes  # noqa: PLC0415
+    from warpgym.envs.conformance import gymnasium_policy_episodes, warpgym_policy_episodes  # noqa: PLC0415
     from warpgym.sim.device import resolve_device  # noqa: PLC0415
     from warpgym.tasks.suite import SUITE  # noqa: PLC0415
 
@@ -73,31 +74,34 @@ def main(argv=None) -> int:
     env = make_vec_env(name, num_envs=episodes, device=device, seed=args.seeds[0], unit_actions=unit,
                        max_episode_steps=task.episode_length)
     policy, normalize = policy_from_checkpoint(ckpt, env.num_obs, env.num_actions, torch.device(device))
-    ours = evaluate(env, policy, normalize, task.episode_length)
-    env.close()
 
     def act(obs):
         return policy.act_deterministic(normalize(obs.to(device))).cpu()
 
-    per_seed, returns, lengths = [], [], []
+    per_seed, returns, lengths, starts = [], [], [], []
     for seed in args.seeds:
-        r, n = gymnasium_policy_episodes(task, act, args.episodes, seed=1000 * seed, unit_actions=unit)
+        r, n = gymnasium_policy_episodes(task, act, args.episodes, seed=1000 * seed, unit_actions=unit, starts=starts)
         per_seed.append({"seed": seed, "return": float(r.mean()), "length": float(n.mean())})
         returns += r.tolist()
         lengths += n.tolist()
+    # the same episodes in warpgym: each world starts where one of Gymnasium's episodes started
+    ours_r, ours_n = warpgym_policy_episodes(env, lambda obs: policy.act_deterministic(normalize(obs)), starts)
+    env.close()
+    ours = {"eval/return": float(ours_r.mean()), "eval/length": float(ours_n.mean())}
     gym_return = float(np.mean(returns))
     ratio = holds(gym_return, ours["eval/return"])
     result = {"task": name, "checkpoint": path, "iteration": ckpt["iteration"], "samples": ckpt["samples"],
               "episodes": episodes, "gymnasium_return": gym_return, "gymnasium_return_std": float(np.std(returns)),
               "gymnasium_length": float(np.mean(lengths)), "per_seed": per_seed,
               "warpgym_return": ours["eval/return"], "warpgym_length": ours["eval/length"],
+              "warpgym_return_std": float(np.std(ours_r)), "same_starts": True,
               "gymnasium_over_warpgym": ratio}
     print(f"{name}, policy of iteration {ckpt['iteration']} ({ckpt['samples'] / 1e6:.2f} M samples), deterministic, "
           f"{episodes} episodes each:")
     print(f"  Gymnasium's env (gymnasium.make, float64): return {gym_return:.1f} ± {np.std(returns):.1f}, "
           f"length {np.mean(lengths):.0f}   per seed: "
           + ", ".join(f"{s['seed']}: {s['return']:.1f}" for s in per_seed))
-    print(f"  warpgym's env (float32, {device}):          return {ours['eval/return']:.1f}, "
+    print(f"  warpgym's env (float32, {device}), the same starts: return {ours['eval/return']:.1f} ± {np.std(ours_r):.1f}, "
           f"length {ours['eval/length']:.0f}")
     print(f"  held in Gymnasium's env (Gymnasium / warpgym; for costs warpgym / Gymnasium): {ratio:.3f}")
     print(json.dumps(result))

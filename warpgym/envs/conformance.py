@@ -248,17 +248,24 @@ def open_loop_returns(env: SuiteVecEnv, actions: np.ndarray, seeds: list[int]) -
 
 
 # ---------------------------------------------------------------------- a policy in Gymnasium's env
-def gymnasium_policy_episodes(task: str | GymTask, act, episodes: int, seed: int = 0, unit_actions: bool = True):
+def gymnasium_policy_episodes(task: str | GymTask, act, episodes: int, seed: int = 0, unit_actions: bool = True,
+                              starts: list | None = None):
     """Returns and lengths of ``episodes`` episodes of ``act`` (a float32 observation batch (1, O) ->
-    action batch (1, U), torch, on the CPU) in ``gymnasium.make`` of the task: native MuJoCo, float64.
-    ``unit_actions``: the policy acts in [-1, 1], clipped and mapped onto the control range, as
-    ``SuiteVecEnv(unit_actions=True)`` trains it."""
+    action batch (1, U), torch, on the CPU) in ``gymnasium.make`` of the task: native MuJoCo, float64,
+    episode e reset with seed ``seed + e``. ``unit_actions``: the policy acts in [-1, 1], clipped and
+    mapped onto the control range, as ``SuiteVecEnv(unit_actions=True)`` trains it. ``starts``: a list
+    that gets each episode's start (its state in put_states' form and its first observation), for
+    ``warpgym_policy_episodes`` to play the same episodes."""
+    task = get_suite_task(task)
     env = gymnasium_env(task)
     low, high = env.action_space.low.astype(np.float64), env.action_space.high.astype(np.float64)
     returns, lengths = [], []
     with torch.no_grad():
         for e in range(episodes):
             obs, _ = env.reset(seed=seed + e)
+            if starts is not None:
+                data = env.unwrapped.data
+                starts.append(((data.qpos.copy(), data.qvel.copy(), reference_position(task, env), None), obs.copy()))
             total, steps, done = 0.0, 0, False
             while not done:
                 a = act(torch.as_tensor(obs, dtype=torch.float32)[None])[0].double().numpy()
@@ -270,3 +277,26 @@ def gymnasium_policy_episodes(task: str | GymTask, act, episodes: int, seed: int
             lengths.append(steps)
     env.close()
     return np.array(returns), np.array(lengths)
+
+
+def warpgym_policy_episodes(env: SuiteVecEnv, act, starts: list) -> tuple[np.ndarray, np.ndarray]:
+    """Returns and lengths of the episodes of ``starts`` (``gymnasium_policy_episodes``'s) played by ``act``
+    (observation batch -> action batch, on ``env``'s device) in the first worlds of ``env``: the same
+    episodes as in Gymnasium's env, so that the two envs' returns differ by the simulators alone and not
+    by which starts each drew (Reacher's return, for one, is mostly its target's distance)."""
+    n = len(starts)
+    if env.num_envs < n:
+        raise ValueError(f"{n} episodes need num_envs >= {n}, got {env.num_envs}")
+    env.reset(seed=0)
+    put_states(env, [state for state, _ in starts])
+    obs = torch.zeros(env.num_envs, env.num_obs, device=env.device)
+    obs[:n] = torch.as_tensor(np.stack([o for _, o in starts]), dtype=torch.float32, device=env.device)
+    returns, lengths = torch.zeros(n, device=env.device), torch.zeros(n, device=env.device)
+    live = torch.ones(n, dtype=torch.bool, device=env.device)
+    with torch.no_grad():
+        while bool(live.any()):
+            obs, reward, terminated, truncated, _ = env.step(act(obs))
+            returns += torch.where(live, reward[:n], torch.zeros_like(reward[:n]))
+            lengths += live.float()
+            live &= ~(terminated[:n] | truncated[:n])
+    return returns.cpu().numpy().astype(np.float64), lengths.cpu().numpy().astype(np.float64)
