@@ -230,6 +230,11 @@ def _band(runs: list[dict], x: int, smooth: int):
     return grid, np.nanmean(ys, axis=0), np.nanmin(ys, axis=0), np.nanmax(ys, axis=0)
 
 
+def figure_tasks(runs: list[dict], peers: list[dict]) -> list[str]:
+    """The panels: the tasks warpgym ran (a peer's other tasks would stand alone), or the peer's if none."""
+    return list(dict.fromkeys([r["task"] for r in (runs or peers) if "error" not in r]))
+
+
 def draw(runs: list[dict], peers: list[dict], path: str) -> None:
     """Two grids of every task's curves, return against minutes and against samples: warpgym beside SB3,
     seeds shaded, the Gymnasium-env scores of the kept policies as dots. ``path`` is the first figure's
@@ -242,7 +247,7 @@ def draw(runs: list[dict], peers: list[dict], path: str) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt  # noqa: PLC0415
 
-    tasks = list(dict.fromkeys([r["task"] for r in runs + peers if "error" not in r]))
+    tasks = figure_tasks(runs, peers)
     stem, ext = os.path.splitext(path)
     for x, name, out in ((0, "minutes of training", path), (1, "samples", f"{stem}-samples{ext or '.png'}")):
         cols = min(4, len(tasks))
