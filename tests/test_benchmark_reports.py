@@ -89,6 +89,11 @@ def test_suite_learning_reads_minutes_to_the_reference_from_the_runs_evaluations
     assert f"| {sl.REFERENCE['InvertedDoublePendulum-v5']} | 2.3 (1/1) (1.3 (1/1)) |" in row
     evals[1]["eval/return"] = 9359.0  # below Tianshou's 9359.5
     assert "not reached (0/1) (1.3 (1/1))" in sl.table([run])
+    # the lowest ratio, and where its policy was also played from nudged starts, Gymnasium against itself
+    run["scored"] = [{"mark_s": 60.0, "gymnasium_return": 940.2, "gymnasium_over_warpgym": 0.9402, "nudge": 1e-9,
+                      "gymnasium_over_gymnasium_nudged": 0.9402},
+                     {"mark_s": 120.0, "gymnasium_return": 9000.0, "gymnasium_over_warpgym": 0.99}]
+    assert sl.table([run]).endswith("| 0.940 (Gymnasium / itself 1e-09 apart: 0.940) |")
 
 
 def test_suite_learning_gives_each_gpus_process_the_arguments_less_the_spread():
@@ -126,7 +131,7 @@ def test_suite_learning_report_sets_sb3_beside_warpgym_and_draws_both(tmp_path, 
     assert sl.report([str(tmp_path)], figure) == 0
     out = capsys.readouterr().out
     warpgym_table, sb3_table = out.split("Stable-Baselines3")
-    assert "| Ant-v5 | 1 | 1 min: 60; 2 min: 120; 5 min: 300; 10 min: 600 |" in warpgym_table
+    assert "| Ant-v5 | 1 | 1 min: 60.0; 2 min: 120; 5 min: 300; 10 min: 600 |" in warpgym_table
     ant_row = next(line for line in warpgym_table.splitlines() if line.startswith("| Ant-v5"))
     assert ant_row.endswith("| 0.26 M | 1.000 |")
     assert "Intel Xeon" in sb3_table and sb3_table.rstrip().endswith("| 550 | - |")  # samples/s, no ratio

@@ -211,12 +211,13 @@ def test_inverted_pendulum_trains_to_900_in_gymnasiums_own_env(tmp_path, capsys)
     assert train.main(["--task", "InvertedPendulum-v5", "--device", DEVICE, "--max-iterations", "60", "--run-dir",
                        run, "--no-plots", "--seed", "1"]) == 0
     out = str(tmp_path / "eval.json")
-    assert eval_command.main([run, "--episodes", "5", "--seeds", "0", "1", "--json", out]) == 0
+    assert eval_command.main([run, "--episodes", "5", "--seeds", "0", "1", "--json", out, "--nudge", "1e-9"]) == 0
     print(capsys.readouterr().out[-600:])
     result = json.load(open(out))
     assert result["episodes"] == 10 and [s["seed"] for s in result["per_seed"]] == [0, 1]
     assert result["gymnasium_return"] >= 900, result
     assert 0.95 <= result["gymnasium_over_warpgym"] <= 1.05, result
+    assert result["nudge"] == 1e-9 and 0.95 <= result["gymnasium_over_gymnasium_nudged"] <= 1.05, result
     pytest.importorskip("PIL")
     from PIL import Image
 
@@ -422,3 +423,23 @@ def test_a_policy_plays_the_same_episodes_in_both_envs_from_gymnasiums_starts(su
     # float32 against float64 over a 50-step loop: 3e-7 apart on the CPU, 2026-11-25
     np.testing.assert_allclose(ours, gym_returns, rtol=1e-4)
     assert np.std(gym_returns) > 0.1 * abs(np.mean(gym_returns))  # the starts matter: pairing is what agrees
+
+
+def test_nudged_starts_move_every_coordinate_and_nothing_else():
+    """``gymnasium_policy_episodes(nudge=...)``: Gymnasium's reset states moved by exactly the nudge in
+    every qpos coordinate, the velocities and the first observation as drawn; Reacher's return moves
+    with its start, and no further than the move's size suggests."""
+    from warpgym.envs.conformance import gymnasium_policy_episodes
+
+    def act(obs):
+        return 0.1 * torch.tanh(obs[:, :2])
+
+    plain, moved = [], []
+    r0, _ = gymnasium_policy_episodes("Reacher-v5", act, 3, seed=5, unit_actions=False, starts=plain)
+    r1, _ = gymnasium_policy_episodes("Reacher-v5", act, 3, seed=5, unit_actions=False, starts=moved, nudge=1e-6)
+    for ((qp0, qv0, _, _), obs0), ((qp1, qv1, _, _), obs1) in zip(plain, moved):
+        np.testing.assert_allclose(qp1 - qp0, 1e-6, rtol=1e-6)
+        np.testing.assert_array_equal(qv1, qv0)
+        np.testing.assert_array_equal(obs1, obs0)
+    assert not np.array_equal(r0, r1)
+    np.testing.assert_allclose(r1, r0, rtol=1e-4)

@@ -39,7 +39,13 @@ def parse_args(argv=None):
     ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2], help="reset seeds (default 0 1 2)")
     ap.add_argument("--device", default="cpu", help="where the policy and warpgym's env run (default cpu)")
     ap.add_argument("--json", default=None, metavar="OUT", help="also write the result as JSON")
+    ap.add_argument("--nudge", type=float, default=0.0, metavar="EPS",
+                    help="also play Gymnasium's episodes from starts moved by EPS (e.g. 1e-9) and compare "
+                         "Gymnasium with itself: how far a policy's return moves under a change no simulator "
+                         "difference is smaller than")
     args = ap.parse_args(argv)
+    if not (args.nudge >= 0.0 and args.nudge < 1e-3):
+        ap.error(f"--nudge {args.nudge}: a tiny non-negative number, e.g. --nudge 1e-9 (0: not played)")
     if args.episodes < 1:
         ap.error(f"--episodes {args.episodes}: must be a positive integer, e.g. --episodes 10")
     if any(s < 0 for s in args.seeds):
@@ -90,12 +96,18 @@ def main(argv=None) -> int:
     ours = {"eval/return": float(ours_r.mean()), "eval/length": float(ours_n.mean())}
     gym_return = float(np.mean(returns))
     ratio = holds(gym_return, ours["eval/return"])
+    nudged = {}
+    if args.nudge:
+        moved = np.concatenate([gymnasium_policy_episodes(task, act, args.episodes, seed=1000 * seed, unit_actions=unit,
+                                                          nudge=args.nudge)[0] for seed in args.seeds])
+        nudged = {"nudge": args.nudge, "gymnasium_nudged_return": float(moved.mean()),
+                  "gymnasium_over_gymnasium_nudged": holds(gym_return, float(moved.mean()))}
     result = {"task": name, "checkpoint": path, "iteration": ckpt["iteration"], "samples": ckpt["samples"],
               "episodes": episodes, "gymnasium_return": gym_return, "gymnasium_return_std": float(np.std(returns)),
               "gymnasium_length": float(np.mean(lengths)), "per_seed": per_seed,
               "warpgym_return": ours["eval/return"], "warpgym_length": ours["eval/length"],
               "warpgym_return_std": float(np.std(ours_r)), "same_starts": True,
-              "gymnasium_over_warpgym": ratio}
+              "gymnasium_over_warpgym": ratio, **nudged}
     print(f"{name}, policy of iteration {ckpt['iteration']} ({ckpt['samples'] / 1e6:.2f} M samples), deterministic, "
           f"{episodes} episodes each:")
     print(f"  Gymnasium's env (gymnasium.make, float64): return {gym_return:.1f} ± {np.std(returns):.1f}, "
@@ -104,6 +116,9 @@ def main(argv=None) -> int:
     print(f"  warpgym's env (float32, {device}), the same starts: return {ours['eval/return']:.1f} ± {np.std(ours_r):.1f}, "
           f"length {ours['eval/length']:.0f}")
     print(f"  held in Gymnasium's env (Gymnasium / warpgym; for costs warpgym / Gymnasium): {ratio:.3f}")
+    if nudged:
+        print(f"  Gymnasium's env, every start moved by {args.nudge:g}: return {nudged['gymnasium_nudged_return']:.1f}; "
+              f"Gymnasium / itself so moved: {nudged['gymnasium_over_gymnasium_nudged']:.3f}")
     print(json.dumps(result))
     if args.json:
         write_json(args.json, result)

@@ -249,13 +249,15 @@ def open_loop_returns(env: SuiteVecEnv, actions: np.ndarray, seeds: list[int]) -
 
 # ---------------------------------------------------------------------- a policy in Gymnasium's env
 def gymnasium_policy_episodes(task: str | GymTask, act, episodes: int, seed: int = 0, unit_actions: bool = True,
-                              starts: list | None = None):
+                              starts: list | None = None, nudge: float = 0.0):
     """Returns and lengths of ``episodes`` episodes of ``act`` (a float32 observation batch (1, O) ->
     action batch (1, U), torch, on the CPU) in ``gymnasium.make`` of the task: native MuJoCo, float64,
     episode e reset with seed ``seed + e``. ``unit_actions``: the policy acts in [-1, 1], clipped and
     mapped onto the control range, as ``SuiteVecEnv(unit_actions=True)`` trains it. ``starts``: a list
     that gets each episode's start (its state in put_states' form and its first observation), for
-    ``warpgym_policy_episodes`` to play the same episodes."""
+    ``warpgym_policy_episodes`` to play the same episodes. ``nudge``: every start's qpos moved by this much
+    (the first action still sees the unmoved observation), to see how far Gymnasium's own returns move
+    under a change far below float32's resolution."""
     task = get_suite_task(task)
     env = gymnasium_env(task)
     low, high = env.action_space.low.astype(np.float64), env.action_space.high.astype(np.float64)
@@ -263,6 +265,9 @@ def gymnasium_policy_episodes(task: str | GymTask, act, episodes: int, seed: int
     with torch.no_grad():
         for e in range(episodes):
             obs, _ = env.reset(seed=seed + e)
+            if nudge:
+                data = env.unwrapped.data
+                env.unwrapped.set_state(data.qpos + nudge, data.qvel.copy())
             if starts is not None:
                 data = env.unwrapped.data
                 starts.append(((data.qpos.copy(), data.qvel.copy(), reference_position(task, env), None), obs.copy()))
