@@ -4,8 +4,9 @@ For every task and seed: ``warpgym train`` for the task's budget (10 minutes for
 3 for the four small ones), keeping the policies at the marks (1, 2, 5, 10 minutes; 1, 2, 3), each
 then scored by ``warpgym eval`` (30 episodes in ``gymnasium.make``'s env, 10 from each of 3 seeds, and the
 same episodes in warpgym's, started from Gymnasium's states; a policy that holds less than 0.95 there is
-also played from starts moved by 1e-9, Gymnasium against itself). One JSON per run (``OUT/<task>-seed<k>.json``); ``--report`` builds one table
-from several outputs, refusing runs made on different GPUs or with different budgets.
+also played from starts moved by 1e-9, Gymnasium against itself). One JSON per run
+(``OUT/<task>-seed<k>.json``); ``--report`` builds one table from several outputs, refusing runs made
+on different GPUs or with different budgets.
 
     python benchmarks/suite_learning.py --out OUT --tasks Hopper-v5 Walker2d-v5 --seeds 0 1
     python benchmarks/suite_learning.py --out OUT --seeds 0 1 --gpus 2    # one seed per GPU, at once

@@ -88,7 +88,8 @@ def test_an_annealed_learning_rate_falls_linearly_to_zero_over_the_budget_and_re
                            print_fn=lambda s: None)
     first = fixed.learn(max_iterations=4)
     assert [r["policy/lr"] for r in first] == pytest.approx([1e-3, 7.5e-4, 5e-4, 2.5e-4])
-    resumed = OnPolicyRunner(PointMassVecEnv(8), Config(**base, desired_kl=0.0, anneal_lr=True), print_fn=lambda s: None)
+    resumed = OnPolicyRunner(PointMassVecEnv(8), Config(**base, desired_kl=0.0, anneal_lr=True),
+                             print_fn=lambda s: None)
     resumed.load(str(tmp_path / "checkpoint.pt"))
     assert [r["policy/lr"] for r in resumed.learn(max_iterations=8)] == pytest.approx([5e-4, 3.75e-4, 2.5e-4, 1.25e-4])
 

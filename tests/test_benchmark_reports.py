@@ -138,7 +138,8 @@ def test_suite_learning_report_sets_sb3_beside_warpgym_and_draws_both(tmp_path, 
     assert os.path.getsize(figure) > 10_000 and os.path.getsize(str(tmp_path / "curves-samples.png")) > 10_000
     # SB3's tasks that warpgym's runs lack get no panel of their own; alone, SB3's runs are drawn
     hopper = {"task": "Hopper-v5"}
-    assert sl.figure_tasks([r], [r, hopper]) == ["Ant-v5"] and sl.figure_tasks([], [r, hopper]) == ["Ant-v5", "Hopper-v5"]
+    assert sl.figure_tasks([r], [r, hopper]) == ["Ant-v5"]
+    assert sl.figure_tasks([], [r, hopper]) == ["Ant-v5", "Hopper-v5"]
 
 
 def test_suite_sb3_takes_the_zoos_hyperparameters_as_sb3_does():

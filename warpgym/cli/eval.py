@@ -113,11 +113,13 @@ def main(argv=None) -> int:
     print(f"  Gymnasium's env (gymnasium.make, float64): return {gym_return:.1f} ± {np.std(returns):.1f}, "
           f"length {np.mean(lengths):.0f}   per seed: "
           + ", ".join(f"{s['seed']}: {s['return']:.1f}" for s in per_seed))
-    print(f"  warpgym's env (float32, {device}), the same starts: return {ours['eval/return']:.1f} ± {np.std(ours_r):.1f}, "
+    print(f"  warpgym's env (float32, {device}), the same starts: return {ours['eval/return']:.1f} "
+          f"± {np.std(ours_r):.1f}, "
           f"length {ours['eval/length']:.0f}")
     print(f"  held in Gymnasium's env (Gymnasium / warpgym; for costs warpgym / Gymnasium): {ratio:.3f}")
     if nudged:
-        print(f"  Gymnasium's env, every start moved by {args.nudge:g}: return {nudged['gymnasium_nudged_return']:.1f}; "
+        print(f"  Gymnasium's env, every start moved by {args.nudge:g}: "
+              f"return {nudged['gymnasium_nudged_return']:.1f}; "
               f"Gymnasium / itself so moved: {nudged['gymnasium_over_gymnasium_nudged']:.3f}")
     print(json.dumps(result))
     if args.json:
