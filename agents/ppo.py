@@ -81,8 +81,8 @@ class PPO:
         self.cfg = cfg
         self.device = device
         self.lr = torch.tensor(cfg.learning_rate, dtype=torch.float32, device=device)
-        # Config.anneal_lr: the rate before the decay (the KL rule adapts this one) and the decay's factor,
-        # which the runner sets before each update; the captured step reads both by address
+        # the rate the KL rule adapts (or the fixed one) and Config.anneal_lr's decay factor (1 without it),
+        # which the runner sets before each update; the captured step reads both by address, lr = their product
         self.lr_free = self.lr.clone()
         self.lr_scale = torch.ones((), dtype=torch.float32, device=device)
         is_cuda = device.type == "cuda"
@@ -136,12 +136,9 @@ class PPO:
         loss.backward()
         # one collective per mini-batch: every process's gradients and KL, averaged
         (kl,) = self.workers.mean_grads_(policy.parameters(), terms[3])
-        if cfg.anneal_lr:
-            if cfg.desired_kl > 0:
-                self.lr_free.copy_(adapted_lr(self.lr_free, kl, cfg.desired_kl))
-            self.lr.copy_(self.lr_free * self.lr_scale)
-        elif cfg.desired_kl > 0:
-            self.lr.copy_(adapted_lr(self.lr, kl, cfg.desired_kl))
+        if cfg.desired_kl > 0:
+            self.lr_free.copy_(adapted_lr(self.lr_free, kl, cfg.desired_kl))
+        self.lr.copy_(self.lr_free * self.lr_scale)
         torch.nn.utils.clip_grad_norm_(policy.parameters(), cfg.max_grad_norm, foreach=True)
         self.optimizer.step()
         self._sums += torch.stack([terms[0], terms[1], terms[2], kl, terms[4]])

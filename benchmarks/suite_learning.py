@@ -62,19 +62,23 @@ def reaching(rows: list[dict], target: float | None) -> dict:
                                                                                 ("half", half(target)))}
 
 
+def run_train(args: list[str], run_dir: str, device: str | None) -> int:
+    """``warpgym train ARGS --run-dir RUN_DIR --no-plots``, its output in RUN_DIR/train.log; its exit code."""
+    cmd = [sys.executable, "-m", "warpgym", "train", *args, "--run-dir", run_dir, "--no-plots"]
+    os.makedirs(run_dir, exist_ok=True)
+    with open(os.path.join(run_dir, "train.log"), "w") as log:
+        return subprocess.run(cmd + (["--device", device] if device else []), cwd=ROOT, stdout=log,
+                              stderr=subprocess.STDOUT, check=False).returncode
+
+
 def train_one(task: str, seed: int, out: str, scale: float, device: str | None) -> dict:
     """Train, keeping the policies at the marks; the run's row for the JSON, not yet scored."""
     from agents.logger import read_metrics  # noqa: PLC0415
 
     marks = marks_of(task, scale)
     run_dir = os.path.join(out, "runs", f"{task}-seed{seed}")
-    cmd = [sys.executable, "-m", "warpgym", "train", "--task", task, "--seed", str(seed), "--time-limit",
-           str(marks[-1]), "--save-at", *[str(m) for m in marks], "--run-dir", run_dir, "--no-plots"]
-    if device:
-        cmd += ["--device", device]
-    os.makedirs(run_dir, exist_ok=True)
-    with open(os.path.join(run_dir, "train.log"), "w") as log:
-        code = subprocess.run(cmd, cwd=ROOT, stdout=log, stderr=subprocess.STDOUT).returncode
+    code = run_train(["--task", task, "--seed", str(seed), "--time-limit", str(marks[-1]), "--save-at",
+                      *[str(m) for m in marks]], run_dir, device)
     if code != 0:
         return {"task": task, "seed": seed, "error": f"warpgym train exited {code}: see {run_dir}/train.log"}
     summary = json.load(open(os.path.join(run_dir, "summary.json")))
@@ -97,11 +101,9 @@ def warm_up(task: str, out: str, device: str | None) -> None:
     """A short training of ``task`` that fills Warp's kernel cache, so that each timed run starts as a
     user's second run does (the first compiles the task's kernels: 10-50 s on an H100)."""
     run_dir = os.path.join(out, "runs", f"{task}-warm-up")
-    cmd = [sys.executable, "-m", "warpgym", "train", "--task", task, "--time-limit", "1", "--run-dir", run_dir,
-           "--no-plots"] + (["--device", device] if device else [])
-    os.makedirs(run_dir, exist_ok=True)
-    with open(os.path.join(run_dir, "train.log"), "w") as log:
-        subprocess.run(cmd, cwd=ROOT, stdout=log, stderr=subprocess.STDOUT, check=True)
+    code = run_train(["--task", task, "--time-limit", "1"], run_dir, device)
+    if code != 0:
+        raise SystemExit(f"the warm-up of {task} failed (exit {code}): see {run_dir}/train.log")
 
 
 def score_run(run: dict, out: str, episodes: int, device: str | None) -> dict:
@@ -333,16 +335,18 @@ def spread_seeds(args, argv: list[str]) -> int:
     waves = [args.seeds[i:i + args.gpus] for i in range(0, len(args.seeds), args.gpus)]
     failed = 0
     for wave in waves:
-        procs = []
+        procs, logs = [], []
         for gpu, seed in enumerate(wave):
             mine = set(cores[gpu * share:(gpu + 1) * share])
             env = dict(os.environ, CUDA_VISIBLE_DEVICES=str(gpu))
-            log = open(os.path.join(args.out, f"seed{seed}.log"), "w")
+            logs.append(open(os.path.join(args.out, f"seed{seed}.log"), "w"))  # noqa: SIM115 (closed below)
             procs.append(subprocess.Popen([sys.executable, os.path.abspath(__file__), *rest, "--seeds", str(seed),
                                            "--runs-at-once", str(len(wave))],
-                                          env=env, stdout=log, stderr=subprocess.STDOUT,
+                                          env=env, stdout=logs[-1], stderr=subprocess.STDOUT,
                                           preexec_fn=lambda mine=mine: os.sched_setaffinity(0, mine)))
         failed += sum(p.wait() != 0 for p in procs)
+        for log in logs:
+            log.close()
     if failed:
         print(f"{failed} seed process(es) failed: see {args.out}/seed<k>.log", file=sys.stderr)
     return report([args.out]) if glob.glob(os.path.join(args.out, "*-seed*.json")) else 1

@@ -214,6 +214,13 @@ def warpgym_episodes(env: SuiteVecEnv, seed: int = 0) -> tuple[np.ndarray, np.nd
 
 
 # ---------------------------------------------------------------------- whole episodes, one action sequence
+def start_of(task: GymTask, gym_env, obs: np.ndarray) -> tuple:
+    """An episode's start in Gymnasium's env, just after its reset: its state in put_states' form (no warm
+    start: a reset has none) and its first observation."""
+    data = gym_env.unwrapped.data
+    return (data.qpos.copy(), data.qvel.copy(), reference_position(task, gym_env), None), obs.copy()
+
+
 def open_loop_returns(env: SuiteVecEnv, actions: np.ndarray, seeds: list[int]) -> tuple[np.ndarray, np.ndarray]:
     """Returns of one fixed action sequence (``actions``: (steps, U), in the task's units), played from
     Gymnasium's reset states of ``seeds`` in Gymnasium's env and, from the same states, in the first
@@ -223,9 +230,8 @@ def open_loop_returns(env: SuiteVecEnv, actions: np.ndarray, seeds: list[int]) -
     gym_env = gymnasium_env(env.task)
     starts, gym_returns = [], []
     for seed in seeds:
-        gym_env.reset(seed=seed)
-        data = gym_env.unwrapped.data
-        starts.append((data.qpos.copy(), data.qvel.copy(), reference_position(env.task, gym_env), None))
+        obs, _ = gym_env.reset(seed=seed)
+        starts.append(start_of(env.task, gym_env, obs))
         total = 0.0
         for a in actions:
             _, reward, terminated, truncated, _ = gym_env.step(a)
@@ -234,17 +240,10 @@ def open_loop_returns(env: SuiteVecEnv, actions: np.ndarray, seeds: list[int]) -
                 break
         gym_returns.append(total)
     gym_env.close()
-    env.reset(seed=0)
-    put_states(env, starts)
-    n = len(seeds)
-    returns = torch.zeros(n, device=env.device)
-    live = torch.ones(n, dtype=torch.bool, device=env.device)
-    for a in actions:
-        _, reward, terminated, truncated, _ = env.step(torch.as_tensor(a, dtype=torch.float32, device=env.device)
-                                                       .expand(env.num_envs, -1))
-        returns += torch.where(live, reward[:n], torch.zeros_like(reward[:n]))
-        live &= ~(terminated[:n] | truncated[:n])
-    return np.array(gym_returns), returns.cpu().numpy().astype(np.float64)
+    played = iter(torch.as_tensor(np.asarray(actions), dtype=torch.float32, device=env.device))
+    ours, _ = warpgym_policy_episodes(env, lambda obs: next(played).expand(env.num_envs, -1), starts,
+                                      max_steps=len(actions))
+    return np.array(gym_returns), ours
 
 
 # ---------------------------------------------------------------------- a policy in Gymnasium's env
@@ -269,8 +268,7 @@ def gymnasium_policy_episodes(task: str | GymTask, act, episodes: int, seed: int
                 data = env.unwrapped.data
                 env.unwrapped.set_state(data.qpos + nudge, data.qvel.copy())
             if starts is not None:
-                data = env.unwrapped.data
-                starts.append(((data.qpos.copy(), data.qvel.copy(), reference_position(task, env), None), obs.copy()))
+                starts.append(start_of(task, env, obs))
             total, steps, done = 0.0, 0, False
             while not done:
                 a = act(torch.as_tensor(obs, dtype=torch.float32)[None])[0].double().numpy()
@@ -284,11 +282,13 @@ def gymnasium_policy_episodes(task: str | GymTask, act, episodes: int, seed: int
     return np.array(returns), np.array(lengths)
 
 
-def warpgym_policy_episodes(env: SuiteVecEnv, act, starts: list) -> tuple[np.ndarray, np.ndarray]:
-    """Returns and lengths of the episodes of ``starts`` (``gymnasium_policy_episodes``'s) played by ``act``
-    (observation batch -> action batch, on ``env``'s device) in the first worlds of ``env``: the same
-    episodes as in Gymnasium's env, so that the two envs' returns differ by the simulators alone and not
-    by which starts each drew (Reacher's return, for one, is mostly its target's distance)."""
+def warpgym_policy_episodes(env: SuiteVecEnv, act, starts: list, max_steps: int | None = None
+                            ) -> tuple[np.ndarray, np.ndarray]:
+    """Returns and lengths of the episodes of ``starts`` (``start_of``'s, as ``gymnasium_policy_episodes``
+    collects them) played by ``act`` (observation batch -> action batch, on ``env``'s device) in the first
+    worlds of ``env``: the same episodes as in Gymnasium's env, so that the two envs' returns differ by the
+    simulators alone and not by which starts each drew (Reacher's return, for one, is mostly its target's
+    distance). ``max_steps``: stop there, episodes still running counting what they have."""
     n = len(starts)
     if env.num_envs < n:
         raise ValueError(f"{n} episodes need num_envs >= {n}, got {env.num_envs}")
@@ -299,7 +299,9 @@ def warpgym_policy_episodes(env: SuiteVecEnv, act, starts: list) -> tuple[np.nda
     returns, lengths = torch.zeros(n, device=env.device), torch.zeros(n, device=env.device)
     live = torch.ones(n, dtype=torch.bool, device=env.device)
     with torch.no_grad():
-        while bool(live.any()):
+        steps = 0
+        while bool(live.any()) and (max_steps is None or steps < max_steps):
+            steps += 1
             obs, reward, terminated, truncated, _ = env.step(act(obs))
             returns += torch.where(live, reward[:n], torch.zeros_like(reward[:n]))
             lengths += live.float()
