@@ -22,16 +22,17 @@ class EpisodeTracker:
         # since the last read: episodes, sum of returns, lengths, speeds, episodes with a speed
         self.sums = torch.zeros(5, dtype=torch.float64, device=device)
 
-    def record(self, t: int, reward: torch.Tensor, done: torch.Tensor, info: dict) -> None:
+    def record(self, t: torch.Tensor, reward: torch.Tensor, done: torch.Tensor, info: dict) -> None:
+        """The episodes ending at step ``t`` (a one-element index tensor on the device) of the rollout."""
         ep = info.get("episode") if isinstance(info, dict) else None
         if ep is not None and "r" in ep and "l" in ep:
             self.has_speed = "s" in ep
             speed = ep["s"] if self.has_speed else torch.zeros_like(ep["r"])
-            torch.stack([ep["r"], ep["l"].float(), speed], out=self.ended[t])
+            self.ended.index_copy_(0, t, torch.stack([ep["r"], ep["l"].float(), speed])[None])
             return
         self.ret += reward
         self.length += 1
-        torch.stack([self.ret, self.length, torch.zeros_like(self.ret)], out=self.ended[t])
+        self.ended.index_copy_(0, t, torch.stack([self.ret, self.length, torch.zeros_like(self.ret)])[None])
         keep = 1.0 - done.float()
         self.ret *= keep
         self.length *= keep

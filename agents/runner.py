@@ -29,13 +29,14 @@ from agents.ppo import PPO
 from agents.profiling import PhaseTimer
 from agents.protocol import env_spec
 from agents.rollout import EpisodeTracker
+from agents.rollout_graph import ROLLOUT_GRAPHS, capture_rollout
 from agents.storage import RolloutStorage, compute_gae
 
 
 class OnPolicyRunner:
     def __init__(self, env, cfg: Config, run_dir: str | None = None, eval_env=None,
                  start_time: float | None = None, print_fn=print, profile: bool = False, cuda_graph: bool = True,
-                 rollout_graph: bool = True, eval_recorder=None):
+                 rollout_graph: str = "step", eval_recorder=None):
         self.env, self.cfg, self.eval_env = env, cfg.validated(), eval_env
         self.spec = spec = env_spec(env)
         self.device = spec.device
@@ -84,9 +85,13 @@ class OnPolicyRunner:
         self._stop_requested = False
         # Only an env that declares it (agents.protocol) is captured; the normaliser update stays
         # outside the graph, since across processes it all-reduces.
-        self.rollout_graph = rollout_graph and cuda_graph and self.device.type == "cuda" and spec.graph_capturable
-        self._rollout_graph: torch.cuda.CUDAGraph | None = None
+        if rollout_graph not in ROLLOUT_GRAPHS:
+            raise ValueError(f"rollout_graph={rollout_graph!r}: choose one of {ROLLOUT_GRAPHS} (agents.rollout_graph)")
+        capturable = cuda_graph and self.device.type == "cuda" and spec.graph_capturable
+        self.rollout_graph = rollout_graph if capturable else "off"
+        self._rollout_graph = None  # agents.rollout_graph: one CUDAGraph, or StepGraphs
         self._rollouts_eager = 0
+        self._step_index = torch.zeros(1, dtype=torch.long, device=self.device)  # the rollout's step, on the device
         self._in_flight: StagedRow | None = None  # an iteration's row on its way to the host (log())
         self._logged_through = 0  # the last iteration whose row is logged: only such a state is saved on an error
 
@@ -106,9 +111,9 @@ class OnPolicyRunner:
     def collect(self) -> None:
         """One rollout of ``horizon_len`` steps, then the observation normaliser learns from it.
 
-        On CUDA the second rollout is captured as one CUDA graph (policy, env step, storage,
-        bootstrap and GAE, ``horizon_len`` times over) and every later rollout replays it; the
-        first runs eagerly and warms up every kernel the capture will record."""
+        On CUDA the second rollout is captured (agents.rollout_graph: one step's graph replayed
+        ``horizon_len`` times, or the whole rollout as one graph) and every later rollout replays it;
+        the first runs eagerly and warms up every kernel the capture will record."""
         if self.last_raw_obs is None:
             obs, _ = self.env.reset()
             self.last_raw_obs = obs.clone()
@@ -119,7 +124,7 @@ class OnPolicyRunner:
         if self._rollout_graph is not None:
             self._rollout_graph.replay()
             timer.lap("collect: rollout graph (policy, env step, storage, GAE)")
-        elif self.rollout_graph and self._rollouts_eager > 0:
+        elif self.rollout_graph != "off" and self._rollouts_eager > 0:
             self._rollout_graph = self._capture_rollout()
             if self._rollout_graph is not None:
                 self._rollout_graph.replay()
@@ -138,42 +143,46 @@ class OnPolicyRunner:
         self.clock.mark("normalizer")
         self.timer.lap("normaliser update")
 
-    def _capture_rollout(self) -> torch.cuda.CUDAGraph | None:
-        graph = torch.cuda.CUDAGraph()
+    def _capture_rollout(self):
+        timer = PhaseTimer(self.device)  # never synchronises: a synchronisation would break the capture
         try:
-            with torch.cuda.device(self.device), torch.cuda.graph(graph, capture_error_mode="thread_local"):
-                self._rollout(PhaseTimer(self.device))  # a synchronisation would break the capture
+            return capture_rollout(self.rollout_graph, lambda: self._rollout_step(timer),
+                                   lambda: self._rollout_finish(timer), self.cfg.horizon_len, self.device)
         except RuntimeError as e:
             # Nothing ran during the failed capture; the rollouts go on eagerly, a little slower.
-            self.rollout_graph = False
+            self.rollout_graph = "off"
             self.print(f"warning: capturing the rollout as a CUDA graph failed ({e}); collecting eagerly")
             return None
-        return graph
 
     def _rollout(self, timer: PhaseTimer) -> None:
         """The rollout's device work. The normaliser is frozen during it; truncated episodes are
         bootstrapped from the value of their final observation in one batched pass at the end."""
-        cfg, s, env, policy = self.cfg, self.storage, self.env, self.acting_policy
-        s.raw_obs[0].copy_(self.last_raw_obs)
-        for t in range(cfg.horizon_len):
-            obs = self.normalize(s.raw_obs[t])
-            actions, log_prob, value, mean = policy.act(obs)
-            timer.lap("collect: policy inference")
-            next_obs, reward, terminated, truncated, info = env.step(actions)
-            timer.lap("collect: env step (physics + task kernels)")
-            s.obs[t].copy_(obs)
-            s.actions[t].copy_(actions)
-            s.log_probs[t].copy_(log_prob)
-            s.values[t].copy_(value)
-            s.means[t].copy_(mean)
-            s.rewards[t].copy_(reward)
-            done = terminated | truncated
-            s.dones[t].copy_(done)
-            s.truncated[t].copy_(truncated)
-            s.final_obs[t].copy_(info["final_obs"])
-            self.episodes.record(t, reward, done, info)
-            (s.raw_obs[t + 1] if t + 1 < cfg.horizon_len else self.last_raw_obs).copy_(next_obs)
-            timer.lap("collect: storage and statistics")
+        for _ in range(self.cfg.horizon_len):
+            self._rollout_step(timer)
+        self._rollout_finish(timer)
+
+    def _rollout_step(self, timer: PhaseTimer) -> None:
+        """One env step into the storage at the device-held step index, which it advances: the same
+        launches at every step, so one captured step replays as any of them."""
+        s, t, raw = self.storage, self._step_index, self.last_raw_obs
+        s.raw_obs.index_copy_(0, t, raw[None])
+        obs = self.normalize(raw)
+        actions, log_prob, value, mean = self.acting_policy.act(obs)
+        timer.lap("collect: policy inference")
+        next_obs, reward, terminated, truncated, info = self.env.step(actions)
+        timer.lap("collect: env step (physics + task kernels)")
+        done = terminated | truncated
+        for buffer, value_t in ((s.obs, obs), (s.actions, actions), (s.log_probs, log_prob), (s.values, value),
+                                (s.means, mean), (s.rewards, reward), (s.dones, done), (s.truncated, truncated),
+                                (s.final_obs, info["final_obs"])):
+            buffer.index_copy_(0, t, value_t.to(buffer.dtype)[None])
+        self.episodes.record(t, reward, done, info)
+        raw.copy_(next_obs)  # last: with normalize_obs off, obs is this very buffer
+        t += 1
+        timer.lap("collect: storage and statistics")
+
+    def _rollout_finish(self, timer: PhaseTimer) -> None:
+        cfg, s, policy = self.cfg, self.storage, self.acting_policy
         last_values = policy.value(self.normalize(self.last_raw_obs))
         final_values = policy.value(self.normalize(s.final_obs.flatten(0, 1))).view_as(s.rewards)
         rewards = s.rewards * cfg.reward_scale + cfg.gamma * final_values * s.truncated
@@ -183,6 +192,7 @@ class OnPolicyRunner:
         # once per rollout, over its whole buffer: cheaper than a check per step
         self._nonfinite += (~torch.isfinite(s.raw_obs)).sum() + (~torch.isfinite(s.rewards)).sum()
         self.episodes.end_rollout(s.dones)
+        self._step_index.zero_()
         timer.lap("bootstrap, GAE")
 
     def update(self) -> dict:

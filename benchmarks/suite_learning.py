@@ -154,7 +154,8 @@ def table(runs: list[dict], peer: bool = False) -> str:
         if "error" not in r:
             by_task.setdefault(r["task"], []).append(r)
     lines = ["| task | seeds | Gymnasium's env: return at each mark (mean of seeds) | reference | minutes to it "
-             "(to half) | samples | samples/s | Gymnasium / warpgym, lowest |", "|---|---:|---|---:|---|---:|---:|---:|"]
+             "(to half) | first iteration | samples | samples/s | Gymnasium / warpgym, lowest |",
+             "|---|---:|---|---:|---|---:|---:|---:|---:|"]
     for task, rs in by_task.items():
         cells = []
         for m in rs[0]["marks_s"]:
@@ -183,8 +184,11 @@ def table(runs: list[dict], peer: bool = False) -> str:
         # a CPU learner's few thousand samples per second would read 0.00 M
         speed = f"{samples / 1e6:.1f} M | {sps / 1e6:.2f} M" if sps >= 1e4 else f"{samples / 1e6:.2f} M | {sps:.0f}"
         reach = f"{minutes('target')} ({minutes('half')})" if ref is not None else "-"
+        # seconds from the process's start to its first iteration's end: imports, build, graph captures
+        starts = [r["curve"][0][0] for r in rs if r.get("curve")]
+        start = f"{_mean(starts):.0f} s" if starts and not peer else "-"
         lines.append(f"| {task} | {len(rs)} | {'; '.join(cells)} | {ref if ref is not None else '-'} | {reach} | "
-                     f"{speed} | {ratio} |")
+                     f"{start} | {speed} | {ratio} |")
     return "\n".join(lines)
 
 

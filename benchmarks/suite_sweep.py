@@ -8,6 +8,10 @@ candidate preset for agents/config.py.
     python benchmarks/suite_sweep.py --out OUT --task Hopper-v5 --seconds 120 \\
         --grid num_envs=4096,8192 --grid horizon_len=16,32 --grid gamma=0.99,0.995
     python benchmarks/suite_sweep.py --report OUT/sweep-Hopper-v5.json
+    python benchmarks/suite_sweep.py --report GPU0/sweep-Hopper-v5.json GPU1/sweep-Hopper-v5.json  # one table
+
+A grid can be split over GPUs (one sweep per GPU, each given part of the grid); ``--report`` joins their
+rows, refusing sweeps of another task, budget, seeds or GPU.
 
 Grid names: ``num_envs`` (the command's --num-envs) and any ``Config`` field ``warpgym train --config``
 takes (learning_rate, gamma, net_dims as 256x128, reward_scale, normalize_obs, ...).
@@ -91,10 +95,21 @@ def table(doc: dict) -> str:
     return "\n".join(lines)
 
 
+def merged(docs: list[dict]) -> dict:
+    """One sweep of several that ran the same task, budget and seeds on the same GPU (their rows together)."""
+    keys = ("task", "seconds", "seeds", "gpu")
+    kinds = {tuple(json.dumps(d["meta"][k]) for k in keys) for d in docs}
+    if len(kinds) > 1:
+        raise SystemExit(f"--report: these sweeps differ in {', '.join(keys)} ({sorted(kinds)}); report them apart")
+    return {"meta": {**docs[0]["meta"], "dates": sorted({d["meta"]["date"] for d in docs}),
+                     "commands": [d["meta"]["command"] for d in docs]},
+            "rows": [r for d in docs for r in d["rows"]]}
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", help="folder for the runs and sweep-<task>.json")
-    ap.add_argument("--report", metavar="JSON")
+    ap.add_argument("--report", nargs="+", metavar="JSON")
     ap.add_argument("--task")
     ap.add_argument("--grid", action="append", default=[], metavar="NAME=V1,V2")
     ap.add_argument("--seeds", type=int, nargs="+", default=[0])
@@ -103,8 +118,14 @@ def main(argv=None) -> int:
     ap.add_argument("--device", default=None)
     args = ap.parse_args(argv)
     if args.report:
-        doc = json.load(open(args.report))
-        print(f"{doc['meta']['task']}, {doc['meta']['seconds']:g} s per run, {doc['meta']['gpu']}, {doc['meta']['date']}")
+        docs = []
+        for path in args.report:
+            with open(path) as f:
+                docs.append(json.load(f))
+        doc = merged(docs)
+        meta = doc["meta"]
+        print(f"{meta['task']}, {meta['seconds']:g} s per run, seeds {meta['seeds']}, {meta['gpu']}, "
+              f"{', '.join(meta['dates'])}")
         print(table(doc))
         return 0
     if not (args.out and args.task):

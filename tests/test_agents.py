@@ -148,6 +148,46 @@ def test_ppo_learns_a_point_mass_within_seconds():
     assert history[-1]["eval/return"] > -20
 
 
+@pytest.mark.parametrize("normalize_obs", [False, True])
+def test_a_rollout_stored_at_a_device_step_index_equals_a_plain_loop_over_the_steps(normalize_obs):
+    """The runner's rollout step writes at an index held on the device (so one captured step can replay
+    as every step: agents.rollout_graph); two rollouts in a row must fill the storage as a loop indexing
+    by Python ints does, truncations crossing the rollouts' boundary included."""
+    import copy
+
+    cfg = Config(net_dims=(16,), horizon_len=4, batch_size=32, seed=2, normalize_obs=normalize_obs)
+    env = PointMassVecEnv(8, episode_length=6, seed=3)
+    twin = copy.deepcopy(env)
+    runner = OnPolicyRunner(env, cfg, print_fn=lambda s: None)
+    assert runner.rollout_graph == "off"  # on the CPU
+    with pytest.raises(ValueError, match="rollout_graph='whole'.*'step', 'rollout', 'off'"):
+        OnPolicyRunner(PointMassVecEnv(8), cfg, rollout_graph="whole")
+    names = ("raw_obs", "obs", "actions", "log_probs", "values", "means", "rewards", "dones", "truncated", "final_obs")
+    raw = None
+    for rollout in range(2):
+        rng = torch.get_rng_state()
+        frozen = copy.deepcopy(runner.normalizer)  # the normaliser learns only after the rollout
+        runner.collect()
+        torch.set_rng_state(rng)
+        if raw is None:
+            raw = twin.reset()[0]
+            frozen.update(raw, runner.workers)  # the runner's first collect learns the first observations
+        steps = {n: [] for n in names}
+        with torch.no_grad():
+            for t in range(cfg.horizon_len):
+                obs = frozen(raw) if normalize_obs else raw
+                actions, log_prob, value, mean = runner.policy.act(obs)
+                nxt, reward, terminated, truncated, info = twin.step(actions)
+                for n, x in zip(names, (raw, obs, actions, log_prob, value, mean, reward, terminated | truncated,
+                                        truncated, info["final_obs"])):
+                    steps[n].append(x.float().clone())
+                raw = nxt.clone()
+        for n in names:
+            assert torch.equal(getattr(runner.storage, n), torch.stack(steps[n])), (rollout, n)
+        assert torch.equal(runner.last_raw_obs, raw) and int(runner._step_index) == 0
+        assert runner.storage.truncated.sum() == (0 if rollout == 0 else 8)  # 6-step episodes end in the second
+
+
 def test_checkpoint_write_is_atomic_and_round_trips(tmp_path):
     path = str(tmp_path / "ck.pt")
     base = {"iteration": 1, "samples": 2, "policy": {}, "normalizer": {}, "config": {}, "spec": {}}

@@ -54,6 +54,7 @@ def test_suite_learning_report_merges_runs_made_alike_and_refuses_others(tmp_pat
         marks = list(sl.marks_of(task, scale))
         run = {"task": task, "seed": seed, "budget_s": marks[-1], "marks_s": marks, "samples": 2.4e8,
                "num_envs": 4096, "samples_per_s": 4.0e5, "reference": sl.REFERENCE.get(task), "device": "cuda:0",
+               "curve": [[30.0 + 10 * seed, 131072, 10.0], [31.0 + 10 * seed, 262144, 20.0]],
                "first_eval_reaching": {"target": {"time_s": 420.0, "samples": 1.7e8} if hit else None,
                                        "half": {"time_s": 180.0, "samples": 7e7}},
                "scored": [{"mark_s": m, "time_s": m + 1, "samples": 1e6, "gymnasium_return": 1000.0 * (i + 1),
@@ -67,7 +68,8 @@ def test_suite_learning_report_merges_runs_made_alike_and_refuses_others(tmp_pat
     assert sl.report([str(tmp_path / "a"), str(tmp_path / "b")]) == 0
     table = capsys.readouterr().out
     # both seeds in one row: the marks' mean returns, the reference reached by one seed of two, the lowest ratio
-    assert "| Hopper-v5 | 2 | 1 min: 1000; 2 min: 2000; 5 min: 3000; 10 min: 4000 | 3542.2 | 7.0 (1/2) (3.0 (2/2)) |" in table
+    assert ("| Hopper-v5 | 2 | 1 min: 1000; 2 min: 2000; 5 min: 3000; 10 min: 4000 | 3542.2 | 7.0 (1/2) (3.0 (2/2)) "
+            "| 35 s | 240.0 M |") in table
     assert next(line for line in table.splitlines() if line.startswith("| Hopper-v5")).endswith("| 0.970 |")
     assert "SLM-Lab's on v5 for Pusher and HumanoidStandup" in table  # where the two figures not Tianshou's come from
     doc(tmp_path / "c", "Hopper-v5", 2, scale=0.1)
@@ -174,3 +176,25 @@ def test_suite_sweep_ranks_combinations_by_their_return_in_gymnasiums_env():
     lines = sw.table(doc).splitlines()
     assert lines[2].startswith("| 1 | gamma=0.995 | 2400.0 |") and lines[3].startswith("| 2 | gamma=0.99 | 900.0 |")
     assert lines[4] == "| 3 | gamma=0.9 | failed | failed | - | - |"
+
+    meta = {"task": "Hopper-v5", "seconds": 180.0, "seeds": [1], "gpu": "H100", "date": "2026-11-25", "command": "c"}
+    both = sw.merged([{"meta": meta, "rows": doc["rows"][:1]}, {"meta": meta, "rows": doc["rows"][1:]}])
+    assert [r["label"] for r in both["rows"]] == ["gamma=0.99", "gamma=0.995", "gamma=0.9"]
+    with pytest.raises(SystemExit, match="differ in task, seconds, seeds, gpu"):
+        sw.merged([{"meta": meta, "rows": []}, {"meta": {**meta, "seconds": 60.0}, "rows": []}])
+
+
+def test_rollout_capture_reports_medians_of_the_rounds_against_the_whole_rollouts_graph():
+    import rollout_capture as rc
+
+    def run(ready, sps):
+        return {"ready_s": ready, "samples_per_s": sps, "iterations": 100}
+
+    doc = {"runs": {"Ant-v5": {"step": [run(20.0, 2.6e5), run(22.0, 2.7e5), run(100.0, 2.5e5)],
+                               "rollout": [run(40.0, 2.7e5), run(44.0, 2.8e5), {"error": "exit 1: x"}],
+                               "off": [run(21.0, 2.0e5)]}}}
+    lines = rc.table(doc).splitlines()
+    # medians: step 22 s and 0.26 M; rollout (its failed run left out) 42 s and 0.275 M
+    assert lines[2] == "| Ant-v5 | step (3 runs) | 22.0 | 0.260 M | 0.52 | 0.945 |"
+    assert lines[3] == "| Ant-v5 | rollout (2 runs) | 42.0 | 0.275 M | 1.00 | 1.000 |"
+    assert lines[4] == "| Ant-v5 | off (1 runs) | 21.0 | 0.200 M | 0.50 | 0.727 |"

@@ -74,15 +74,16 @@ def test_captured_update_with_nccl_in_the_graph_matches_the_eager_one_on_two_gpu
 
 
 def test_captured_rollout_matches_the_eager_one():
-    """Rollouts replayed from one CUDA graph (policy, env step with its Warp launches, storage, GAE)
-    give what the same rollouts launched step by step give: same seeds, same numbers."""
+    """Rollouts replayed from CUDA graphs (policy, env step with its Warp launches, storage, GAE), one
+    step's graph replayed horizon_len times or the whole rollout's, give what the same rollouts launched
+    step by step give: same seeds, same numbers."""
     from agents import Config, OnPolicyRunner
     from warpgym.envs import LocomotionVecEnv
 
     cfg = Config.for_task("Ant", horizon_len=8, batch_size=256)
     names = ("raw_obs", "actions", "rewards", "dones", "truncated", "final_obs", "advantages", "returns")
     runs = []
-    for graph in (False, True):
+    for graph in ("off", "step", "rollout"):
         # 12-step episodes, so truncations (and their bootstrap from final_obs) happen inside the graph
         env = LocomotionVecEnv("Ant", num_envs=32, device=DEV, seed=5, max_episode_steps=12)
         runner = OnPolicyRunner(env, cfg, print_fn=lambda s: None, rollout_graph=graph)
@@ -91,11 +92,16 @@ def test_captured_rollout_matches_the_eager_one():
             runner.collect()
             rollouts.append({n: getattr(runner.storage, n).clone() for n in names}
                             | {"norm_mean": runner.normalizer.mean.clone()})
-        assert (runner._rollout_graph is not None) == graph
+        assert (runner._rollout_graph is not None) == (graph != "off")
         runs.append((rollouts, runner.episodes.read_and_clear()))
-    (eager, eager_eps), (captured, captured_eps) = runs
-    assert eager_eps["episodes"] == captured_eps["episodes"] > 0
-    assert sum(int(r["truncated"].sum()) for r in captured[1:]) > 0  # the graph bootstrapped truncations
+    (eager, eager_eps) = runs[0]
+    for captured, captured_eps in runs[1:]:
+        assert eager_eps["episodes"] == captured_eps["episodes"] > 0
+        assert sum(int(r["truncated"].sum()) for r in captured[1:]) > 0  # the graph bootstrapped truncations
+        _assert_rollouts_close(eager, captured)
+
+
+def _assert_rollouts_close(eager, captured):
     for i, (a, b) in enumerate(zip(eager, captured)):
         for name in a:
             # MuJoCo Warp's float atomics differ run to run by ~1e-4 m after a few dozen steps; the

@@ -373,9 +373,10 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
                                      print_fn=lambda s: print(s, flush=True))
     runner = OnPolicyRunner(env, cfg, run_dir=run_dir, eval_env=eval_env, start_time=PROCESS_START,
                             print_fn=lambda s: print(s, flush=True), profile=args.profile,
-                            cuda_graph=not args.no_cuda_graph, rollout_graph=not args.no_rollout_graph,
+                            cuda_graph=not args.no_cuda_graph, rollout_graph=args.rollout_graph,
                             eval_recorder=recorder)
-    phase("policy and optimiser ready; the first iteration captures the rollout and update graphs")
+    phase("policy and optimiser ready; the first iterations capture the update graph and the rollout's "
+          f"({runner.rollout_graph}: agents.rollout_graph)")
     if live is not None:
         live["runner"] = runner
     if args.resume and has_checkpoint:

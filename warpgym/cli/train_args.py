@@ -51,8 +51,11 @@ def parse_args(argv=None, description: str | None = None):
     ap.add_argument("--no-plots", action="store_true")
     ap.add_argument("--no-cuda-graph", action="store_true",
                     help="run everything eagerly: no CUDA graph of the rollout or of the PPO update")
-    ap.add_argument("--no-rollout-graph", action="store_true",
-                    help="launch each rollout step from Python instead of replaying one captured rollout")
+    ap.add_argument("--rollout-graph", choices=("step", "rollout", "off"), default="step",
+                    help="how rollouts are captured as CUDA graphs: one env step, replayed horizon_len times "
+                         "(default: the fastest start), the whole rollout as one graph, or off (agents.rollout_graph)")
+    ap.add_argument("--no-rollout-graph", action="store_const", const="off", dest="rollout_graph",
+                    help="the same as --rollout-graph off")
     ap.add_argument("--no-mathdx", action="store_true",
                     help="compile Warp's tile Cholesky without libmathdx: a faster cold start (warpgym.compile.preload)")
     ap.add_argument("--overlap", action="store_true",
