@@ -1,10 +1,8 @@
-"""Collect rollouts and update the policy, everything on the env's device.
+"""Collect rollouts (agents.collect) and update the policy, everything on the env's device.
 
-Per environment step there is no host synchronisation and little Python: the step's tensors are
-copied into the rollout buffers, and everything that can wait (truncation bootstraps, episode
-statistics, the observation normaliser's update) runs once per rollout, batched over all steps.
-The host reads the device once per iteration, to log, one iteration late: the statistics of
-iteration k are copied out while iteration k+1 runs, so the GPU never waits on logging.
+The observation normaliser learns once per rollout, batched over all its steps. The host reads the
+device once per iteration, to log, one iteration late: the statistics of iteration k are copied out
+while iteration k+1 runs, so the GPU never waits on logging.
 """
 
 from __future__ import annotations
@@ -19,6 +17,7 @@ import torch
 from agents.actor_critic import ActorCritic
 from agents.checkpoint import load_bytes, read_checkpoint_bytes, rng_state, save_atomic, set_rng_state
 from agents.clock import IterationClock, Lap
+from agents.collect import CAPTURES, Collector
 from agents.config import Config
 from agents.distributed import Workers
 from agents.evaluate import evaluate
@@ -29,14 +28,15 @@ from agents.ppo import PPO
 from agents.profiling import PhaseTimer
 from agents.protocol import env_spec
 from agents.rollout import EpisodeTracker
-from agents.rollout_graph import ROLLOUT_GRAPHS, capture_rollout
-from agents.storage import RolloutStorage, compute_gae
+from agents.storage import RolloutStorage
 
 
 class OnPolicyRunner:
     def __init__(self, env, cfg: Config, run_dir: str | None = None, eval_env=None,
                  start_time: float | None = None, print_fn=print, profile: bool = False, cuda_graph: bool = True,
                  rollout_graph: str = "step", eval_recorder=None):
+        if rollout_graph not in CAPTURES:
+            raise ValueError(f"rollout_graph={rollout_graph!r}: choose one of {CAPTURES} (agents.collect)")
         self.env, self.cfg, self.eval_env = env, cfg.validated(), eval_env
         self.spec = spec = env_spec(env)
         self.device = spec.device
@@ -70,28 +70,22 @@ class OnPolicyRunner:
         self.history: list[dict] = []
         self.kept: list[dict] = []  # the checkpoints kept at cfg.save_at: mark, iteration, time
         self._marks_after = -1.0  # save_at marks up to this many seconds are done (by an earlier process)
-        self.last_raw_obs: torch.Tensor | None = None  # the env's latest observation, not yet acted on
         self.timer = PhaseTimer(self.device, enabled=profile)  # --profile: synchronising, per step
         self.clock = IterationClock(self.device)  # always on: events, read one iteration late
         self._stop_request = torch.zeros(1, dtype=torch.float64, device=self.device)
         # running totals of things that should never happen (agents.protocol), logged every row
         self._faults = env.fault_counters() if hasattr(env, "fault_counters") else {}
+        # Only an env that declares it (agents.protocol) is captured; the normaliser update stays
+        # outside the graph, since across processes it all-reduces.
+        capturable = cuda_graph and self.device.type == "cuda" and spec.graph_capturable
+        self.collector = Collector(env, cfg, self.acting_policy, self.normalize, self.storage, self.episodes,
+                                   self.device, rollout_graph if capturable else "off", self.print)
         # and the learner's own: non-finite observation or reward entries that reached the rollout
-        self._nonfinite = torch.zeros((), dtype=torch.int64, device=self.device)
-        self._faults = {**self._faults, "nonfinite_obs_rewards": self._nonfinite}
+        self._faults = {**self._faults, "nonfinite_obs_rewards": self.collector.nonfinite}
         self._fault_help = {**getattr(env, "FAULT_HELP", {}), "nonfinite_obs_rewards":
                             "the env returned NaN/inf observations or rewards; PPO trained on them"}
         self._faults_reported: set[str] = set()
         self._stop_requested = False
-        # Only an env that declares it (agents.protocol) is captured; the normaliser update stays
-        # outside the graph, since across processes it all-reduces.
-        if rollout_graph not in ROLLOUT_GRAPHS:
-            raise ValueError(f"rollout_graph={rollout_graph!r}: choose one of {ROLLOUT_GRAPHS} (agents.rollout_graph)")
-        capturable = cuda_graph and self.device.type == "cuda" and spec.graph_capturable
-        self.rollout_graph = rollout_graph if capturable else "off"
-        self._rollout_graph = None  # agents.rollout_graph: one CUDAGraph, or StepGraphs
-        self._rollouts_eager = 0
-        self._step_index = torch.zeros(1, dtype=torch.long, device=self.device)  # the rollout's step, on the device
         self._in_flight: StagedRow | None = None  # an iteration's row on its way to the host (log())
         self._logged_through = 0  # the last iteration whose row is logged: only such a state is saved on an error
 
@@ -109,31 +103,12 @@ class OnPolicyRunner:
 
     @torch.no_grad()
     def collect(self) -> None:
-        """One rollout of ``horizon_len`` steps, then the observation normaliser learns from it.
-
-        On CUDA the second rollout is captured (agents.rollout_graph: one step's graph replayed
-        ``horizon_len`` times, or the whole rollout as one graph) and every later rollout replays it;
-        the first runs eagerly and warms up every kernel the capture will record."""
-        if self.last_raw_obs is None:
-            obs, _ = self.env.reset()
-            self.last_raw_obs = obs.clone()
-            self.normalizer.update(obs, self.workers)
-        timer = self.timer
-        timer.start()
+        """One rollout of ``horizon_len`` steps (agents.collect), then the observation normaliser learns from it."""
+        if self.collector.last_raw_obs is None:
+            self.normalizer.update(self.collector.start(), self.workers)
+        self.timer.start()
         self._old_log_std = self.acting_policy.log_std.detach().clone()  # the noise the rollout is drawn with
-        if self._rollout_graph is not None:
-            self._rollout_graph.replay()
-            timer.lap("collect: rollout graph (policy, env step, storage, GAE)")
-        elif self.rollout_graph != "off" and self._rollouts_eager > 0:
-            self._rollout_graph = self._capture_rollout()
-            if self._rollout_graph is not None:
-                self._rollout_graph.replay()
-            else:
-                self._rollout(timer)
-            timer.lap("collect: rollout graph capture")
-        else:
-            self._rollout(timer)
-            self._rollouts_eager += 1
+        self.collector.rollout(self.timer)
         self.clock.mark("collect")
         self._learn_normalizer()
 
@@ -142,58 +117,6 @@ class OnPolicyRunner:
             self.normalizer.update(self.storage.raw_obs.flatten(0, 1), self.workers)
         self.clock.mark("normalizer")
         self.timer.lap("normaliser update")
-
-    def _capture_rollout(self):
-        timer = PhaseTimer(self.device)  # never synchronises: a synchronisation would break the capture
-        try:
-            return capture_rollout(self.rollout_graph, lambda: self._rollout_step(timer),
-                                   lambda: self._rollout_finish(timer), self.cfg.horizon_len, self.device)
-        except RuntimeError as e:
-            # Nothing ran during the failed capture; the rollouts go on eagerly, a little slower.
-            self.rollout_graph = "off"
-            self.print(f"warning: capturing the rollout as a CUDA graph failed ({e}); collecting eagerly")
-            return None
-
-    def _rollout(self, timer: PhaseTimer) -> None:
-        """The rollout's device work. The normaliser is frozen during it; truncated episodes are
-        bootstrapped from the value of their final observation in one batched pass at the end."""
-        for _ in range(self.cfg.horizon_len):
-            self._rollout_step(timer)
-        self._rollout_finish(timer)
-
-    def _rollout_step(self, timer: PhaseTimer) -> None:
-        """One env step into the storage at the device-held step index, which it advances: the same
-        launches at every step, so one captured step replays as any of them."""
-        s, t, raw = self.storage, self._step_index, self.last_raw_obs
-        s.raw_obs.index_copy_(0, t, raw[None])
-        obs = self.normalize(raw)
-        actions, log_prob, value, mean = self.acting_policy.act(obs)
-        timer.lap("collect: policy inference")
-        next_obs, reward, terminated, truncated, info = self.env.step(actions)
-        timer.lap("collect: env step (physics + task kernels)")
-        done = terminated | truncated
-        for buffer, value_t in ((s.obs, obs), (s.actions, actions), (s.log_probs, log_prob), (s.values, value),
-                                (s.means, mean), (s.rewards, reward), (s.dones, done), (s.truncated, truncated),
-                                (s.final_obs, info["final_obs"])):
-            buffer.index_copy_(0, t, value_t.to(buffer.dtype)[None])
-        self.episodes.record(t, reward, done, info)
-        raw.copy_(next_obs)  # last: with normalize_obs off, obs is this very buffer
-        t += 1
-        timer.lap("collect: storage and statistics")
-
-    def _rollout_finish(self, timer: PhaseTimer) -> None:
-        cfg, s, policy = self.cfg, self.storage, self.acting_policy
-        last_values = policy.value(self.normalize(self.last_raw_obs))
-        final_values = policy.value(self.normalize(s.final_obs.flatten(0, 1))).view_as(s.rewards)
-        rewards = s.rewards * cfg.reward_scale + cfg.gamma * final_values * s.truncated
-        adv, ret = compute_gae(rewards, s.values, s.dones, last_values, cfg.gamma, cfg.lambda_gae)
-        s.advantages.copy_(adv)
-        s.returns.copy_(ret)
-        # once per rollout, over its whole buffer: cheaper than a check per step
-        self._nonfinite += (~torch.isfinite(s.raw_obs)).sum() + (~torch.isfinite(s.rewards)).sum()
-        self.episodes.end_rollout(s.dones)
-        self._step_index.zero_()
-        timer.lap("bootstrap, GAE")
 
     def update(self) -> dict:
         if self.pipeline is None:
@@ -213,13 +136,13 @@ class OnPolicyRunner:
             pipe.hand_over(self.storage, self._old_log_std)
             self.samples += self._per_iter
         pipe.sync(self.policy)
-        side_by_side = pipe.stream is not None and self._rollout_graph is not None and not self.timer.enabled
+        side_by_side = pipe.stream is not None and self.collector.graph is not None and not self.timer.enabled
         if side_by_side:
             main = torch.cuda.current_stream(self.device)
             self._old_log_std = pipe.behaviour.log_std.detach().clone()
             pipe.stream.wait_stream(main)  # the behaviour weights and the normaliser are written
             with torch.cuda.stream(pipe.stream):
-                self._rollout_graph.replay()
+                self.collector.graph.replay()
             stats = self.update()
             self.clock.mark("update")
             main.wait_stream(pipe.stream)
@@ -313,7 +236,7 @@ class OnPolicyRunner:
     def close(self) -> None:
         """Free the CUDA graphs (before ``destroy_process_group``: see ``PPO.release_graph``)."""
         self.ppo.release_graph()
-        self._rollout_graph = None
+        self.collector.graph = None
         if self.eval_recorder is not None:
             self.eval_recorder.close()
         if self.device.type == "cuda":

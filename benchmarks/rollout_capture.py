@@ -1,5 +1,5 @@
 """How long a start takes, and how fast training then runs, with each way of capturing the rollout as
-CUDA graphs (agents.rollout_graph): one env step's graph replayed horizon_len times ("step"), the whole
+CUDA graphs (agents.collect): one env step's graph replayed horizon_len times ("step"), the whole
 rollout as one graph ("rollout"), or none ("off": each step launched from Python).
 
     python benchmarks/rollout_capture.py --out OUT --tasks Ant-v5 Hopper-v5 Ant --seconds 45 --repeats 3

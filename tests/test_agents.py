@@ -151,7 +151,7 @@ def test_ppo_learns_a_point_mass_within_seconds():
 @pytest.mark.parametrize("normalize_obs", [False, True])
 def test_a_rollout_stored_at_a_device_step_index_equals_a_plain_loop_over_the_steps(normalize_obs):
     """The runner's rollout step writes at an index held on the device (so one captured step can replay
-    as every step: agents.rollout_graph); two rollouts in a row must fill the storage as a loop indexing
+    as every step: agents.collect); two rollouts in a row must fill the storage as a loop indexing
     by Python ints does, truncations crossing the rollouts' boundary included."""
     import copy
 
@@ -159,7 +159,7 @@ def test_a_rollout_stored_at_a_device_step_index_equals_a_plain_loop_over_the_st
     env = PointMassVecEnv(8, episode_length=6, seed=3)
     twin = copy.deepcopy(env)
     runner = OnPolicyRunner(env, cfg, print_fn=lambda s: None)
-    assert runner.rollout_graph == "off"  # on the CPU
+    assert runner.collector.capture == "off"  # on the CPU
     with pytest.raises(ValueError, match="rollout_graph='whole'.*'step', 'rollout', 'off'"):
         OnPolicyRunner(PointMassVecEnv(8), cfg, rollout_graph="whole")
     names = ("raw_obs", "obs", "actions", "log_probs", "values", "means", "rewards", "dones", "truncated", "final_obs")
@@ -184,7 +184,7 @@ def test_a_rollout_stored_at_a_device_step_index_equals_a_plain_loop_over_the_st
                 raw = nxt.clone()
         for n in names:
             assert torch.equal(getattr(runner.storage, n), torch.stack(steps[n])), (rollout, n)
-        assert torch.equal(runner.last_raw_obs, raw) and int(runner._step_index) == 0
+        assert torch.equal(runner.collector.last_raw_obs, raw) and int(runner.collector.step_index) == 0
         assert runner.storage.truncated.sum() == (0 if rollout == 0 else 8)  # 6-step episodes end in the second
 
 

@@ -98,6 +98,47 @@ def test_suite_learning_reads_minutes_to_the_reference_from_the_runs_evaluations
     assert sl.table([run]).endswith("| 0.940 (Gymnasium / itself 1e-09 apart: 0.940) |")
 
 
+def test_suite_learning_scores_a_policy_below_the_goal_again_on_more_episodes_and_nudged_starts(monkeypatch, tmp_path):
+    """Below 0.95 on 30 episodes a policy is played again on 100 (seeds 0-9) with the nudge; the table shows that
+    result. A run scored before that rule is rescored only where it fell below."""
+    import suite_learning as sl
+
+    from warpgym.cli import eval as eval_command
+
+    calls = []
+
+    def fake_eval(args):
+        seeds = args[args.index("--seeds") + 1:args.index("--json")]
+        calls.append((os.path.basename(args[0]), seeds, "--nudge" in args))
+        low = "checkpoint-1.pt" in args[0] and len(seeds) == 3
+        result = {"gymnasium_return": 90.0 if low else 99.0, "warpgym_return": 100.0, "episodes": 10 * len(seeds),
+                  "gymnasium_over_warpgym": 0.9 if low else 0.99}
+        if "--nudge" in args:
+            result |= {"nudge": 1e-9, "gymnasium_over_gymnasium_nudged": 1.01}
+        with open(args[args.index("--json") + 1], "w") as f:
+            json.dump(result, f)
+
+    monkeypatch.setattr(eval_command, "main", fake_eval)
+    os.makedirs(tmp_path / "runs" / "Ant-v5-seed0")
+    run = {"task": "Ant-v5", "seed": 0, "scored": [],
+           "kept": [{"mark_s": m, "time_s": m, "samples": 1, "checkpoint": f"checkpoint-{i}.pt"}
+                    for i, m in enumerate((60.0, 120.0))]}
+    assert sl.needs_scoring(run)
+    scored = sl.score_run(run, str(tmp_path), 10, "cpu")["scored"]
+    assert calls == [("checkpoint-0.pt", ["0", "1", "2"], False), ("checkpoint-1.pt", ["0", "1", "2"], False),
+                     ("checkpoint-1.pt", [str(k) for k in range(10)], True)]
+    assert [s["episodes"] for s in scored] == [30, 100] and scored[1]["gymnasium_over_warpgym"] == 0.99
+    assert scored[1]["gymnasium_over_gymnasium_nudged"] == 1.01 and not sl.needs_scoring({**run, "scored": scored})
+    # scored before the rule: the low policy alone is played again, straight on 100 episodes
+    old = [{k: v for k, v in s.items() if k != "seeds"} for s in scored]
+    old[1] |= {"gymnasium_over_warpgym": 0.9, "episodes": 30}
+    calls.clear()
+    assert sl.needs_scoring({**run, "scored": old})
+    again = sl.score_run({**run, "scored": old}, str(tmp_path), 10, "cpu")["scored"]
+    assert calls == [("checkpoint-1.pt", [str(k) for k in range(10)], True)]
+    assert again[0] == old[0] and again[1]["episodes"] == 100
+
+
 def test_suite_learning_gives_each_gpus_process_the_arguments_less_the_spread():
     """--gpus N starts one process per seed: each gets every argument but --gpus and --seeds (its own seed is
     added), whichever form they were written in."""

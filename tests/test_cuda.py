@@ -92,7 +92,7 @@ def test_captured_rollout_matches_the_eager_one():
             runner.collect()
             rollouts.append({n: getattr(runner.storage, n).clone() for n in names}
                             | {"norm_mean": runner.normalizer.mean.clone()})
-        assert (runner._rollout_graph is not None) == (graph != "off")
+        assert (runner.collector.graph is not None) == (graph != "off")
         runs.append((rollouts, runner.episodes.read_and_clear()))
     (eager, eager_eps) = runs[0]
     for captured, captured_eps in runs[1:]:

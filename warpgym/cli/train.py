@@ -376,7 +376,7 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
                             cuda_graph=not args.no_cuda_graph, rollout_graph=args.rollout_graph,
                             eval_recorder=recorder)
     phase("policy and optimiser ready; the first iterations capture the update graph and the rollout's "
-          f"({runner.rollout_graph}: agents.rollout_graph)")
+          f"({runner.collector.capture}: agents.collect)")
     if live is not None:
         live["runner"] = runner
     if args.resume and has_checkpoint:

@@ -53,7 +53,7 @@ def parse_args(argv=None, description: str | None = None):
                     help="run everything eagerly: no CUDA graph of the rollout or of the PPO update")
     ap.add_argument("--rollout-graph", choices=("step", "rollout", "off"), default="step",
                     help="how rollouts are captured as CUDA graphs: one env step, replayed horizon_len times "
-                         "(default: the fastest start), the whole rollout as one graph, or off (agents.rollout_graph)")
+                         "(default: the fastest start), the whole rollout as one graph, or off (agents.collect)")
     ap.add_argument("--no-rollout-graph", action="store_const", const="off", dest="rollout_graph",
                     help="the same as --rollout-graph off")
     ap.add_argument("--no-mathdx", action="store_true",
