@@ -56,7 +56,7 @@ def counted(phase: str, original, arm):
 
 
 R = runner_module.OnPolicyRunner
-R._rollout = counted("rollout", R._rollout,
+R.collect = counted("rollout", R.collect,
                      lambda self: setattr(self.env, "step", after_calls(self.env.step, self.cfg.horizon_len // 2)))
 R.update = counted("update", R.update,
                    lambda self: setattr(self.ppo.optimizer, "step", after_calls(self.ppo.optimizer.step, 2)))
