@@ -6,9 +6,9 @@ rollout as one graph ("rollout"), or none ("off": each step launched from Python
 
 For each task, one warm-up run fills the kernel cache (not counted); then --repeats rounds, each running
 every mode once (the order turning each round, so that a drift of the machine falls on every mode alike).
-A run is ``warpgym train --task T --time-limit S --rollout-graph M`` without evaluations. Per run:
-"ready", the seconds from the process's start to the end of its third iteration (the first eager, the
-second captured: the third is the first that replays), and the steady samples/s of its summary. Writes
+A run is ``warpgym train --task T --time-limit S --rollout-graph M`` without evaluations. Per run, from
+its summary.json: "ready", its first_iteration_time_s (when the first iteration's row was logged, one
+iteration late: after the second iteration's captures), and its steady samples/s. Writes
 OUT/rollout_capture.json after every run; prints the medians over the rounds and their ratios to "rollout".
 """
 
@@ -26,13 +26,10 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
 
 MODES = ("step", "rollout", "off")
-READY_ITERATION = 3
 
 
 def train(task: str, mode: str, seconds: float, run_dir: str, device: str | None) -> dict:
     """One run; its ready time and steady samples/s, or its error."""
-    from agents.logger import read_metrics  # noqa: PLC0415
-
     cmd = [sys.executable, "-m", "warpgym", "train", "--task", task, "--time-limit", str(seconds), "--rollout-graph",
            mode, "--config", "eval_gap=1e9", "--run-dir", run_dir, "--no-plots"]
     cmd += ["--device", device] if device else []
@@ -41,11 +38,9 @@ def train(task: str, mode: str, seconds: float, run_dir: str, device: str | None
         code = subprocess.run(cmd, cwd=ROOT, stdout=log, stderr=subprocess.STDOUT, check=False).returncode
     if code != 0:
         return {"error": f"exit {code}: {run_dir}/train.log"}
-    rows = read_metrics(run_dir)
-    ready = next((r["time_s"] for r in rows if r["iteration"] >= READY_ITERATION), None)
     with open(os.path.join(run_dir, "summary.json")) as f:
         summary = json.load(f)
-    return {"ready_s": ready, "samples_per_s": summary["steady_samples_per_s_median"],
+    return {"ready_s": summary["first_iteration_time_s"], "samples_per_s": summary["steady_samples_per_s_median"],
             "iterations": summary["iterations"]}
 
 

@@ -109,9 +109,14 @@ def warm_up(task: str, out: str, device: str | None) -> None:
         raise SystemExit(f"the warm-up of {task} failed (exit {code}): see {run_dir}/train.log")
 
 
+def settled(score: dict) -> bool:
+    """A kept policy's score as score_run gives it now: at or above HOLDS, or played on MORE_SEEDS (a score
+    without ``seeds`` below HOLDS came before MORE_SEEDS did)."""
+    return score["gymnasium_over_warpgym"] >= HOLDS or "seeds" in score
+
+
 def needs_scoring(run: dict) -> bool:
-    """Not scored yet, or a policy below HOLDS scored only on SEEDS (before MORE_SEEDS came in)."""
-    return not run["scored"] or any(s["gymnasium_over_warpgym"] < HOLDS and "seeds" not in s for s in run["scored"])
+    return not run["scored"] or not all(settled(s) for s in run["scored"])
 
 
 def score_run(run: dict, out: str, episodes: int, device: str | None) -> dict:
@@ -120,9 +125,8 @@ def score_run(run: dict, out: str, episodes: int, device: str | None) -> dict:
     from warpgym.cli import eval as eval_command  # noqa: PLC0415
 
     run_dir = os.path.join(out, "runs", f"{run['task']}-seed{run['seed']}")
-    earlier = {s["mark_s"]: s for s in run.get("scored", [])
-               if s["gymnasium_over_warpgym"] >= HOLDS or "seeds" in s}
-    below = {s["mark_s"] for s in run.get("scored", []) if s["mark_s"] not in earlier}  # scored before MORE_SEEDS
+    earlier = {s["mark_s"]: s for s in run.get("scored", []) if settled(s)}
+    below = {s["mark_s"] for s in run.get("scored", []) if not settled(s)}  # known below HOLDS on SEEDS
     scored, results = [], {}
     for kept in run["kept"]:
         if kept["mark_s"] in earlier:
@@ -137,11 +141,12 @@ def score_run(run: dict, out: str, episodes: int, device: str | None) -> dict:
                 with open(path + ".eval.json") as f:
                     return json.load(f) | {"seeds": list(seeds)}
 
-            results[path] = None if kept["mark_s"] in below else play(SEEDS)
-            if results[path] is None or results[path]["gymnasium_over_warpgym"] < HOLDS:
+            result = None if kept["mark_s"] in below else play(SEEDS)
+            if result is None or result["gymnasium_over_warpgym"] < HOLDS:
                 # 30 episodes leave a ratio uncertain by several percent where episodes end early; and does
                 # Gymnasium's env agree with itself 1e-9 away? (a fall on a knife edge does not)
-                results[path] = play(MORE_SEEDS, ["--nudge", str(NUDGE)])
+                result = play(MORE_SEEDS, ["--nudge", str(NUDGE)])
+            results[path] = result
         result = results[path]
         scored.append({"mark_s": kept["mark_s"], "time_s": kept["time_s"], "samples": kept["samples"],
                        "gymnasium_return": result["gymnasium_return"], "warpgym_return": result["warpgym_return"],
@@ -201,7 +206,8 @@ def table(runs: list[dict], peer: bool = False) -> str:
         # a CPU learner's few thousand samples per second would read 0.00 M
         speed = f"{samples / 1e6:.1f} M | {sps / 1e6:.2f} M" if sps >= 1e4 else f"{samples / 1e6:.2f} M | {sps:.0f}"
         reach = f"{minutes('target')} ({minutes('half')})" if ref is not None else "-"
-        # seconds from the process's start to its first iteration's end: imports, build, graph captures
+        # the curve's first point is summary.json's first_iteration_time_s: when the first iteration's row was
+        # logged, one iteration late, so after imports, the build, the first rollout and the second's captures
         starts = [r["curve"][0][0] for r in rs if r.get("curve")]
         start = f"{_mean(starts):.0f} s" if starts and not peer else "-"
         lines.append(f"| {task} | {len(rs)} | {'; '.join(cells)} | {ref if ref is not None else '-'} | {reach} | "
