@@ -74,14 +74,16 @@ def run_train(args: list[str], run_dir: str, device: str | None) -> int:
                               stderr=subprocess.STDOUT, check=False).returncode
 
 
-def train_one(task: str, seed: int, out: str, scale: float, device: str | None) -> dict:
+def train_one(task: str, seed: int, out: str, scale: float, device: str | None, rollout_graph: str | None = None
+              ) -> dict:
     """Train, keeping the policies at the marks; the run's row for the JSON, not yet scored."""
     from agents.logger import read_metrics  # noqa: PLC0415
 
     marks = marks_of(task, scale)
     run_dir = os.path.join(out, "runs", f"{task}-seed{seed}")
+    capture = ["--rollout-graph", rollout_graph] if rollout_graph else []
     code = run_train(["--task", task, "--seed", str(seed), "--time-limit", str(marks[-1]), "--save-at",
-                      *[str(m) for m in marks]], run_dir, device)
+                      *[str(m) for m in marks], *capture], run_dir, device)
     if code != 0:
         return {"task": task, "seed": seed, "error": f"warpgym train exited {code}: see {run_dir}/train.log"}
     summary = json.load(open(os.path.join(run_dir, "summary.json")))
@@ -94,7 +96,7 @@ def train_one(task: str, seed: int, out: str, scale: float, device: str | None) 
     return {"task": task, "seed": seed, "budget_s": marks[-1], "marks_s": list(marks), "kept": kept, "scored": [],
             "samples": rows[-1]["samples"] if rows else 0, "num_envs": summary.get("num_envs"),
             "samples_per_s": summary.get("steady_samples_per_s_median"), "reference": target,
-            "first_eval_reaching": reach, "device": summary.get("device"),
+            "first_eval_reaching": reach, "device": summary.get("device"), "rollout_graph": rollout_graph or "step",
             "curve": thin([(r["time_s"], r["samples"], r["return"]) for r in rows if r.get("return") is not None]),
             "evals": [{"time_s": r["time_s"], "samples": r["samples"], "eval/return": r["eval/return"]}
                       for r in rows if r.get("eval/return") is not None]}
@@ -398,6 +400,8 @@ def main(argv=None) -> int:
     ap.add_argument("--runs-at-once", type=int, default=1, help=argparse.SUPPRESS)  # set by --gpus for its children
     ap.add_argument("--no-warm-up", action="store_true",
                     help="time each task's first run from an empty kernel cache (default: a short run fills it first)")
+    ap.add_argument("--rollout-graph", choices=("step", "rollout", "off"), default=None,
+                    help="warpgym train's rollout capture (default: train's own, step); it shapes the first iteration")
     args = ap.parse_args(argv)
     if args.report:
         return report(args.report, args.figure)
@@ -434,7 +438,7 @@ def main(argv=None) -> int:
         if not args.no_warm_up:
             warm_up(task, args.out, args.device)
         for seed in args.seeds:
-            run = train_one(task, seed, args.out, args.scale, args.device)
+            run = train_one(task, seed, args.out, args.scale, args.device, args.rollout_graph)
             if "error" not in run and not args.no_score:
                 run = score_run(run, args.out, args.eval_episodes, args.device)
             doc = {"meta": {"gpu": gpu, "scale": args.scale, "date": time.strftime("%Y-%m-%d"),

@@ -1,17 +1,20 @@
 """A sweep of PPO settings for one of Gymnasium's MuJoCo tasks: the evidence behind its preset.
 
 Every combination of the grid trains for --seconds with each seed (``warpgym train --config ...``),
-and its final policy is scored by ``warpgym eval`` in ``gymnasium.make``'s env. The table ranks the
-combinations by that return (mean over seeds), beside the training's throughput; the best row is the
-candidate preset for agents/config.py.
+and its final policy is scored by ``warpgym eval`` in ``gymnasium.make``'s env: 10 episodes from each of
+the reset seeds 0, 1 and 2 by default, as the learning table scores (where episodes end by falls, 5 do not
+rank two settings). The table ranks the combinations by that return (mean over seeds), beside the training's
+throughput; the best row is the candidate preset for agents/config.py.
 
     python benchmarks/suite_sweep.py --out OUT --task Hopper-v5 --seconds 120 \\
         --grid num_envs=4096,8192 --grid horizon_len=16,32 --grid gamma=0.99,0.995
     python benchmarks/suite_sweep.py --report OUT/sweep-Hopper-v5.json
     python benchmarks/suite_sweep.py --report GPU0/sweep-Hopper-v5.json GPU1/sweep-Hopper-v5.json  # one table
+    python benchmarks/suite_sweep.py --score OUT/sweep-Hopper-v5.json   # score again, e.g. on a CPU after a GPU
 
 A grid can be split over GPUs (one sweep per GPU, each given part of the grid); ``--report`` joins their
-rows, refusing sweeps of another task, budget, seeds or GPU.
+rows, refusing sweeps of another task, budget, seeds, GPU or scoring. ``--score`` plays each final policy
+again (its runs/ folder beside the JSON) and rewrites the JSON, keeping the earlier score beside the new.
 
 Grid names: ``num_envs`` (the command's --num-envs) and any ``Config`` field ``warpgym train --config``
 takes (learning_rate, gamma, net_dims as 256x128, reward_scale, normalize_obs, ...).
@@ -32,7 +35,7 @@ sys.path.insert(0, ROOT)
 
 
 def parse_grid(texts: list[str]) -> dict[str, list[str]]:
-    """``["gamma=0.99,0.995", "net_dims=256x128,64x64"]`` -> {"gamma": ["0.99", "0.995"], "net_dims": ["256,128", ...]}"""
+    """``["gamma=0.99,0.995", "net_dims=256x128"]`` -> {"gamma": ["0.99", "0.995"], "net_dims": ["256,128"]}"""
     grid = {}
     for text in texts:
         if "=" not in text:
@@ -53,10 +56,27 @@ def command(task: str, combo: dict, seed: int, seconds: float, run_dir: str, dev
     return cmd + (["--device", device] if device else [])
 
 
-def run_combo(task: str, combo: dict, seeds: list[int], seconds: float, out: str, device: str | None,
-              episodes: int) -> dict:
+def score(run_dir: str, scoring: dict, device: str | None) -> dict:
+    """The final policy of ``run_dir`` scored by ``warpgym eval``: episodes from each of the reset seeds in
+    Gymnasium's env and from the same starts in warpgym's."""
     from warpgym.cli import eval as eval_command  # noqa: PLC0415
 
+    path = os.path.join(run_dir, "eval.json")
+    eval_command.main([run_dir, "--episodes", str(scoring["episodes"]), "--seeds", *map(str, scoring["seeds"]),
+                       "--json", path] + (["--device", device] if device else []))
+    with open(path) as f:
+        result = json.load(f)
+    return {"gymnasium_return": result["gymnasium_return"], "ratio": result["gymnasium_over_warpgym"],
+            "gymnasium_length": result.get("gymnasium_length")}
+
+
+def mean_return(runs: list[dict]) -> float | None:
+    good = [r for r in runs if "error" not in r]
+    return sum(r["gymnasium_return"] for r in good) / len(good) if good else None
+
+
+def run_combo(task: str, combo: dict, seeds: list[int], seconds: float, out: str, device: str | None,
+              scoring: dict) -> dict:
     label = " ".join(f"{k}={v}" for k, v in combo.items()) or "preset"
     runs = []
     for seed in seeds:
@@ -69,36 +89,58 @@ def run_combo(task: str, combo: dict, seeds: list[int], seconds: float, out: str
             runs.append({"seed": seed, "error": f"exit {code}: {run_dir}/train.log"})
             continue
         summary = json.load(open(os.path.join(run_dir, "summary.json")))
-        scored = os.path.join(run_dir, "eval.json")
-        eval_command.main([run_dir, "--episodes", str(episodes), "--seeds", "0", "--json", scored]
-                          + (["--device", device] if device else []))
-        result = json.load(open(scored))
-        runs.append({"seed": seed, "run_dir": run_dir, "gymnasium_return": result["gymnasium_return"],
-                     "ratio": result["gymnasium_over_warpgym"], "samples": summary["final"]["samples"],
-                     "samples_per_s": summary["steady_samples_per_s_median"]})
-    good = [r for r in runs if "error" not in r]
-    mean = sum(r["gymnasium_return"] for r in good) / len(good) if good else None
-    return {"combo": combo, "label": label, "runs": runs, "gymnasium_return": mean}
+        runs.append({"seed": seed, "run_dir": run_dir, **score(run_dir, scoring, device),
+                     "samples": summary["final"]["samples"], "samples_per_s": summary["steady_samples_per_s_median"]})
+    return {"combo": combo, "label": label, "runs": runs, "gymnasium_return": mean_return(runs)}
+
+
+def score_again(path: str, scoring: dict, device: str | None) -> dict:
+    """A sweep's JSON with every final policy scored again with ``scoring`` (on this machine: the runs' folders
+    sit beside the JSON, under runs/, as the sweep wrote them); the earlier score stays as ``first_score``."""
+    with open(path) as f:
+        doc = json.load(f)
+    runs_dir = os.path.join(os.path.dirname(os.path.abspath(path)), "runs")
+    for row in doc["rows"]:
+        for run in row["runs"]:
+            if "error" in run:
+                continue
+            here = os.path.join(runs_dir, os.path.basename(run["run_dir"]))
+            if not os.path.exists(os.path.join(here, "checkpoint.pt")):
+                raise SystemExit(f"--score {path}: {here}/checkpoint.pt is missing; copy the sweep's runs/ folder "
+                                 "beside its JSON")
+            first = {k: run[k] for k in ("gymnasium_return", "ratio")}
+            run.update(score(here, scoring, device), first_score={**first, **scoring_of(doc["meta"])})
+        row["gymnasium_return"] = mean_return(row["runs"])
+    doc["meta"]["scoring"] = scoring
+    return doc
+
+
+def scoring_of(meta: dict) -> dict:
+    """How a sweep's policies were scored; sweeps written before the field scored 5 episodes from seed 0."""
+    return meta.get("scoring", {"episodes": 5, "seeds": [0]})
 
 
 def table(doc: dict) -> str:
     rows = sorted(doc["rows"], key=lambda r: -(r["gymnasium_return"] if r["gymnasium_return"] is not None else -1e30))
-    lines = ["| rank | settings | Gymnasium's env: return (mean of seeds) | per seed | samples/s | lowest ratio |",
-             "|---:|---|---:|---|---:|---:|"]
+    lines = ["| rank | settings | Gymnasium's env: return (mean of seeds) | per seed | episode length | samples/s "
+             "| lowest ratio |", "|---:|---|---:|---|---:|---:|---:|"]
     for i, r in enumerate(rows, 1):
         good = [x for x in r["runs"] if "error" not in x]
         ret = f"{r['gymnasium_return']:.1f}" if r["gymnasium_return"] is not None else "failed"
         seeds = ", ".join(f"{x['gymnasium_return']:.0f}" if "error" not in x else "failed" for x in r["runs"])
+        # episodes cut short by a fall, where a task ends them; sweeps before 2026-11-25's night did not record it
+        lengths = [x["gymnasium_length"] for x in good if x.get("gymnasium_length") is not None]
+        length = f"{sum(lengths) / len(lengths):.0f}" if lengths else "-"
         sps = f"{sum(x['samples_per_s'] for x in good) / len(good) / 1e6:.2f} M" if good else "-"
         ratio = f"{min(x['ratio'] for x in good):.3f}" if good else "-"
-        lines.append(f"| {i} | {r['label']} | {ret} | {seeds} | {sps} | {ratio} |")
+        lines.append(f"| {i} | {r['label']} | {ret} | {seeds} | {length} | {sps} | {ratio} |")
     return "\n".join(lines)
 
 
 def merged(docs: list[dict]) -> dict:
     """One sweep of several that ran the same task, budget and seeds on the same GPU (their rows together)."""
-    keys = ("task", "seconds", "seeds", "gpu")
-    kinds = {tuple(json.dumps(d["meta"][k]) for k in keys) for d in docs}
+    keys = ("task", "seconds", "seeds", "gpu", "scoring")
+    kinds = {tuple(json.dumps(d["meta"][k] if k != "scoring" else scoring_of(d["meta"])) for k in keys) for d in docs}
     if len(kinds) > 1:
         raise SystemExit(f"--report: these sweeps differ in {', '.join(keys)} ({sorted(kinds)}); report them apart")
     return {"meta": {**docs[0]["meta"], "dates": sorted({d["meta"]["date"] for d in docs}),
@@ -114,9 +156,22 @@ def main(argv=None) -> int:
     ap.add_argument("--grid", action="append", default=[], metavar="NAME=V1,V2")
     ap.add_argument("--seeds", type=int, nargs="+", default=[0])
     ap.add_argument("--seconds", type=float, default=120.0, help="training budget of each run")
-    ap.add_argument("--eval-episodes", type=int, default=5)
+    ap.add_argument("--eval-episodes", type=int, default=10, help="episodes per reset seed (default 10)")
+    ap.add_argument("--eval-seeds", type=int, nargs="+", default=[0, 1, 2], help="reset seeds (default 0 1 2)")
+    ap.add_argument("--score", nargs="+", metavar="JSON",
+                    help="score the sweeps' final policies again (--eval-episodes, --eval-seeds) and rewrite the JSON")
     ap.add_argument("--device", default=None)
     args = ap.parse_args(argv)
+    if args.eval_episodes < 1 or min(args.eval_seeds) < 0:
+        ap.error(f"--eval-episodes {args.eval_episodes} / --eval-seeds {args.eval_seeds}: episodes must be positive "
+                 "and seeds non-negative, e.g. --eval-episodes 10 --eval-seeds 0 1 2")
+    scoring = {"episodes": args.eval_episodes, "seeds": args.eval_seeds}
+    if args.score:
+        from warpgym.cli import write_json  # noqa: PLC0415
+
+        for path in args.score:
+            write_json(path, score_again(path, scoring, args.device))
+        args.report = args.score
     if args.report:
         docs = []
         for path in args.report:
@@ -124,8 +179,10 @@ def main(argv=None) -> int:
                 docs.append(json.load(f))
         doc = merged(docs)
         meta = doc["meta"]
+        how = scoring_of(meta)
         print(f"{meta['task']}, {meta['seconds']:g} s per run, seeds {meta['seeds']}, {meta['gpu']}, "
-              f"{', '.join(meta['dates'])}")
+              f"{', '.join(meta['dates'])}; each final policy scored on {how['episodes']} episodes from each of "
+              f"the reset seeds {how['seeds']}")
         print(table(doc))
         return 0
     if not (args.out and args.task):
@@ -146,13 +203,13 @@ def main(argv=None) -> int:
     os.makedirs(os.path.join(args.out, "runs"), exist_ok=True)
     gpu = torch.cuda.get_device_name(0) if torch.cuda.is_available() and args.device != "cpu" else "cpu"
     doc = {"meta": {"task": args.task, "seconds": args.seconds, "seeds": args.seeds, "grid": grid, "gpu": gpu,
-                    "date": time.strftime("%Y-%m-%d"),
+                    "scoring": scoring, "date": time.strftime("%Y-%m-%d"),
                     "command": " ".join(["benchmarks/suite_sweep.py"] + (argv or sys.argv[1:]))}, "rows": []}
     path = os.path.join(args.out, f"sweep-{args.task}.json")
     names = list(grid)
     for values in itertools.product(*(grid[n] for n in names)):
         doc["rows"].append(run_combo(args.task, dict(zip(names, values)), args.seeds, args.seconds, args.out,
-                                     args.device, args.eval_episodes))
+                                     args.device, scoring))
         print(json.dumps(doc["rows"][-1])[:300], flush=True)
         write_json(path, doc)
     print(table(doc))

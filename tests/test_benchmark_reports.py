@@ -206,23 +206,65 @@ def test_suite_sweep_ranks_combinations_by_their_return_in_gymnasiums_env():
     with pytest.raises(ValueError, match="NAME=V1,V2"):
         sw.parse_grid(["gamma"])
     cmd = sw.command("Hopper-v5", {"num_envs": "4096", "gamma": "0.995"}, 1, 60.0, "R", None)
-    assert cmd[-4:] == ["--num-envs", "4096", "--config", "gamma=0.995"] and cmd[cmd.index("--time-limit") + 1] == "60.0"
+    assert cmd[-4:] == ["--num-envs", "4096", "--config", "gamma=0.995"]
+    assert cmd[cmd.index("--time-limit") + 1] == "60.0"
 
-    def row(label, value, ratio):
+    def row(label, value, ratio, **length):
         return {"label": label, "gymnasium_return": value,
-                "runs": [{"seed": 0, "gymnasium_return": value, "ratio": ratio, "samples_per_s": 2e6}]}
+                "runs": [{"seed": 0, "gymnasium_return": value, "ratio": ratio, "samples_per_s": 2e6, **length}]}
 
-    doc = {"rows": [row("gamma=0.99", 900.0, 0.99), row("gamma=0.995", 2400.0, 0.97),
+    doc = {"rows": [row("gamma=0.99", 900.0, 0.99), row("gamma=0.995", 2400.0, 0.97, gymnasium_length=736.4),
                     {"label": "gamma=0.9", "gymnasium_return": None, "runs": [{"seed": 0, "error": "exit 1"}]}]}
     lines = sw.table(doc).splitlines()
-    assert lines[2].startswith("| 1 | gamma=0.995 | 2400.0 |") and lines[3].startswith("| 2 | gamma=0.99 | 900.0 |")
-    assert lines[4] == "| 3 | gamma=0.9 | failed | failed | - | - |"
+    assert lines[2] == "| 1 | gamma=0.995 | 2400.0 | 2400 | 736 | 2.00 M | 0.970 |"
+    assert lines[3] == "| 2 | gamma=0.99 | 900.0 | 900 | - | 2.00 M | 0.990 |"  # a sweep that kept no lengths
+    assert lines[4] == "| 3 | gamma=0.9 | failed | failed | - | - | - |"
 
     meta = {"task": "Hopper-v5", "seconds": 180.0, "seeds": [1], "gpu": "H100", "date": "2026-11-25", "command": "c"}
     both = sw.merged([{"meta": meta, "rows": doc["rows"][:1]}, {"meta": meta, "rows": doc["rows"][1:]}])
     assert [r["label"] for r in both["rows"]] == ["gamma=0.99", "gamma=0.995", "gamma=0.9"]
-    with pytest.raises(SystemExit, match="differ in task, seconds, seeds, gpu"):
+    with pytest.raises(SystemExit, match="differ in task, seconds, seeds, gpu, scoring"):
         sw.merged([{"meta": meta, "rows": []}, {"meta": {**meta, "seconds": 60.0}, "rows": []}])
+
+
+def test_suite_sweep_scores_its_policies_again_and_keeps_the_first_score(monkeypatch, tmp_path):
+    """``--score``: each final policy played again with the scoring asked for, from its folder beside the JSON
+    (not the path the GPU machine wrote); the row's mean follows; the earlier score stays beside the new."""
+    import suite_sweep as sw
+
+    from warpgym.cli import eval as eval_command
+
+    calls = []
+
+    def fake_eval(args):
+        seeds = args[args.index("--seeds") + 1:args.index("--json")]
+        calls.append((args[0], args[args.index("--episodes") + 1], seeds))
+        value = 3000.0 if args[0].endswith("-1") else 2000.0
+        with open(args[args.index("--json") + 1], "w") as f:
+            json.dump({"gymnasium_return": value, "gymnasium_over_warpgym": 0.98, "gymnasium_length": 700.0}, f)
+
+    monkeypatch.setattr(eval_command, "main", fake_eval)
+    for name in ("Hopper-v5-0", "Hopper-v5-1"):
+        os.makedirs(tmp_path / "runs" / name)
+        (tmp_path / "runs" / name / "checkpoint.pt").write_bytes(b"")
+    meta = {"task": "Hopper-v5", "seconds": 480.0, "seeds": [0, 1], "gpu": "H200", "date": "2026-11-25", "command": "c"}
+    runs = [{"seed": s, "run_dir": f"/root/sw/runs/Hopper-v5-{s}", "gymnasium_return": 1000.0 + s, "ratio": 0.9,
+             "samples_per_s": 5e5} for s in (0, 1)]
+    path = tmp_path / "sweep-Hopper-v5.json"
+    path.write_text(json.dumps({"meta": meta, "rows": [{"label": "anneal_lr=true", "gymnasium_return": 1000.5,
+                                                         "runs": runs + [{"seed": 2, "error": "exit 1"}]}]}))
+    doc = sw.score_again(str(path), {"episodes": 10, "seeds": [0, 1, 2]}, "cpu")
+    assert calls == [(str(tmp_path / "runs" / f"Hopper-v5-{s}"), "10", ["0", "1", "2"]) for s in (0, 1)]
+    (row,) = doc["rows"]
+    assert row["gymnasium_return"] == 2500.0
+    assert [r.get("gymnasium_return") for r in row["runs"]] == [2000.0, 3000.0, None]
+    assert row["runs"][1]["first_score"] == {"gymnasium_return": 1001.0, "ratio": 0.9, "episodes": 5, "seeds": [0]}
+    assert doc["meta"]["scoring"] == {"episodes": 10, "seeds": [0, 1, 2]}
+    with pytest.raises(SystemExit, match="differ in task, seconds, seeds, gpu, scoring"):
+        sw.merged([doc, {"meta": meta, "rows": []}])  # 30 episodes beside the old 5: not one table
+    os.remove(tmp_path / "runs" / "Hopper-v5-1" / "checkpoint.pt")
+    with pytest.raises(SystemExit, match="Hopper-v5-1/checkpoint.pt is missing; copy the sweep's runs/ folder"):
+        sw.score_again(str(path), {"episodes": 10, "seeds": [0]}, "cpu")
 
 
 def test_rollout_capture_reports_medians_of_the_rounds_against_the_whole_rollouts_graph():

@@ -73,19 +73,21 @@ def test_captured_update_with_nccl_in_the_graph_matches_the_eager_one_on_two_gpu
     assert not torch.equal(r0["graph"]["stats"]["loss/value"], r1["graph"]["stats"]["loss/value"])
 
 
-def test_captured_rollout_matches_the_eager_one():
+@pytest.mark.parametrize("task", ["Ant", "Hopper-v5"])
+def test_captured_rollout_matches_the_eager_one(task):
     """Rollouts replayed from CUDA graphs (policy, env step with its Warp launches, storage, GAE), one
     step's graph replayed horizon_len times or the whole rollout's, give what the same rollouts launched
-    step by step give: same seeds, same numbers."""
+    step by step give: same seeds, same numbers. Newton's Ant and a suite task (MuJoCo Warp's step,
+    Gymnasium's observation and reward)."""
     from agents import Config, OnPolicyRunner
-    from warpgym.envs import LocomotionVecEnv
+    from warpgym.envs import make_vec_env
 
-    cfg = Config.for_task("Ant", horizon_len=8, batch_size=256)
+    cfg = Config.for_task(task, horizon_len=8, batch_size=256)
     names = ("raw_obs", "actions", "rewards", "dones", "truncated", "final_obs", "advantages", "returns")
     runs = []
     for graph in ("off", "step", "rollout"):
         # 12-step episodes, so truncations (and their bootstrap from final_obs) happen inside the graph
-        env = LocomotionVecEnv("Ant", num_envs=32, device=DEV, seed=5, max_episode_steps=12)
+        env = make_vec_env(task, num_envs=32, device=DEV, seed=5, max_episode_steps=12)
         runner = OnPolicyRunner(env, cfg, print_fn=lambda s: None, rollout_graph=graph)
         rollouts = []
         for _ in range(4):  # eager; captured and replayed; replayed; replayed
