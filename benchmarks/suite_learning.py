@@ -180,6 +180,7 @@ def table(runs: list[dict], peer: bool = False) -> str:
     lines = ["| task | seeds | Gymnasium's env: return at each mark (mean of seeds) | reference | minutes to it "
              "(to half) | first iteration | samples | samples/s | Gymnasium / warpgym, lowest |",
              "|---|---:|---|---:|---|---:|---:|---:|---:|"]
+    whole = False
     for task, rs in by_task.items():
         cells = []
         for m in rs[0]["marks_s"]:
@@ -212,8 +213,15 @@ def table(runs: list[dict], peer: bool = False) -> str:
         # logged, one iteration late, so after imports, the build, the first rollout and the second's captures
         starts = [r["curve"][0][0] for r in rs if r.get("curve")]
         start = f"{_mean(starts):.0f} s" if starts and not peer else "-"
+        # runs without the field came before the step capture, when the whole rollout was captured as one graph
+        if not peer and starts and any(r.get("rollout_graph", "rollout") == "rollout" for r in rs):
+            start += " †"
+            whole = True
         lines.append(f"| {task} | {len(rs)} | {'; '.join(cells)} | {ref if ref is not None else '-'} | {reach} | "
                      f"{start} | {speed} | {ratio} |")
+    if whole:
+        lines += ["", "† the whole rollout captured as one graph (`--rollout-graph rollout`, the default before "
+                      "2026-11-25's step capture), which takes longer to record than one step's"]
     return "\n".join(lines)
 
 

@@ -49,7 +49,7 @@ def test_runs_made_differently_are_refused_by_name(tmp_path):
 def test_suite_learning_report_merges_runs_made_alike_and_refuses_others(tmp_path, capsys):
     import suite_learning as sl
 
-    def doc(folder, task, seed, scale=1.0, gpu="NVIDIA H100 80GB HBM3", hit=True):
+    def doc(folder, task, seed, scale=1.0, gpu="NVIDIA H100 80GB HBM3", hit=True, **capture):
         os.makedirs(folder, exist_ok=True)
         marks = list(sl.marks_of(task, scale))
         run = {"task": task, "seed": seed, "budget_s": marks[-1], "marks_s": marks, "samples": 2.4e8,
@@ -59,17 +59,22 @@ def test_suite_learning_report_merges_runs_made_alike_and_refuses_others(tmp_pat
                                        "half": {"time_s": 180.0, "samples": 7e7}},
                "scored": [{"mark_s": m, "time_s": m + 1, "samples": 1e6, "gymnasium_return": 1000.0 * (i + 1),
                            "warpgym_return": 1000.0 * (i + 1), "gymnasium_over_warpgym": 0.97 + 0.01 * i}
-                          for i, m in enumerate(marks)]}
+                          for i, m in enumerate(marks)], **capture}
         with open(os.path.join(folder, f"{task}-seed{seed}.json"), "w") as f:
             json.dump({"meta": {"gpu": gpu, "scale": scale, "date": "2026-11-26", "command": "x"}, "run": run}, f)
 
-    doc(tmp_path / "a", "Hopper-v5", 0)
-    doc(tmp_path / "b", "Hopper-v5", 1, hit=False)
+    doc(tmp_path / "a", "Hopper-v5", 0, rollout_graph="step")
+    doc(tmp_path / "b", "Hopper-v5", 1, hit=False, rollout_graph="step")
     assert sl.report([str(tmp_path / "a"), str(tmp_path / "b")]) == 0
     table = capsys.readouterr().out
     # both seeds in one row: the marks' mean returns, the reference reached by one seed of two, the lowest ratio
     assert ("| Hopper-v5 | 2 | 1 min: 1000; 2 min: 2000; 5 min: 3000; 10 min: 4000 | 3542.2 | 7.0 (1/2) (3.0 (2/2)) "
-            "| 35 s | 240.0 M |") in table
+            "| 35 s | 240.0 M |") in table and "†" not in table
+    # a seed from before the step capture (no rollout_graph in its JSON): its start took the whole rollout's capture
+    doc(tmp_path / "b", "Hopper-v5", 1, hit=False)
+    assert sl.report([str(tmp_path / "a"), str(tmp_path / "b")]) == 0
+    table = capsys.readouterr().out
+    assert "| 35 s † | 240.0 M |" in table and "† the whole rollout captured as one graph" in table
     assert next(line for line in table.splitlines() if line.startswith("| Hopper-v5")).endswith("| 0.970 |")
     assert "SLM-Lab's on v5 for Pusher and HumanoidStandup" in table  # where the two figures not Tianshou's come from
     doc(tmp_path / "c", "Hopper-v5", 2, scale=0.1)
