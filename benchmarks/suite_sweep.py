@@ -13,8 +13,10 @@ throughput; the best row is the candidate preset for agents/config.py.
     python benchmarks/suite_sweep.py --score OUT/sweep-Hopper-v5.json   # score again, e.g. on a CPU after a GPU
 
 A grid can be split over GPUs (one sweep per GPU, each given part of the grid); ``--report`` joins their
-rows, refusing sweeps of another task, budget, seeds, GPU or scoring. ``--score`` plays each final policy
-again (its runs/ folder beside the JSON) and rewrites the JSON, keeping the earlier score beside the new.
+rows, refusing sweeps of another task, budget, seeds, GPU or scoring. A short run of the task fills Warp's
+kernel cache first (``--no-warm-up``: none), so that no combination's budget pays for compiling.
+``--score`` plays each final policy again (its runs/ folder beside the JSON) and rewrites the JSON, keeping
+the earlier score beside the new.
 
 Grid names: ``num_envs`` (the command's --num-envs) and any ``Config`` field ``warpgym train --config``
 takes (learning_rate, gamma, net_dims as 256x128, reward_scale, normalize_obs, ...).
@@ -161,6 +163,8 @@ def main(argv=None) -> int:
     ap.add_argument("--score", nargs="+", metavar="JSON",
                     help="score the sweeps' final policies again (--eval-episodes, --eval-seeds) and rewrite the JSON")
     ap.add_argument("--device", default=None)
+    ap.add_argument("--no-warm-up", action="store_true",
+                    help="no short run to fill the kernel cache first (the first run then compiles on its clock)")
     args = ap.parse_args(argv)
     if args.eval_episodes < 1 or min(args.eval_seeds) < 0:
         ap.error(f"--eval-episodes {args.eval_episodes} / --eval-seeds {args.eval_seeds}: episodes must be positive "
@@ -201,9 +205,14 @@ def main(argv=None) -> int:
     import torch  # noqa: PLC0415
 
     os.makedirs(os.path.join(args.out, "runs"), exist_ok=True)
+    if not args.no_warm_up:  # else the first combination's budget pays for compiling the task's kernels
+        from suite_learning import warm_up  # noqa: PLC0415
+
+        warm_up(args.task, args.out, args.device)
     gpu = torch.cuda.get_device_name(0) if torch.cuda.is_available() and args.device != "cpu" else "cpu"
     doc = {"meta": {"task": args.task, "seconds": args.seconds, "seeds": args.seeds, "grid": grid, "gpu": gpu,
-                    "scoring": scoring, "date": time.strftime("%Y-%m-%d"),
+                    "scoring": scoring, "kernel_cache": "empty at the first run" if args.no_warm_up else "warm",
+                    "date": time.strftime("%Y-%m-%d"),
                     "command": " ".join(["benchmarks/suite_sweep.py"] + (argv or sys.argv[1:]))}, "rows": []}
     path = os.path.join(args.out, f"sweep-{args.task}.json")
     names = list(grid)
