@@ -20,13 +20,12 @@ PRESETS: dict[str, dict[str, Any]] = {
                      learning_rate=5e-4, reward_scale=0.01, value_coef=2.0),
 }
 # Gymnasium's MuJoCo suite (v5): starting points, each checked alone for 30-60 s on an H100 (docs/benchmarks.md,
-# "Gymnasium's MuJoCo suite: learning"); swept so far: InvertedPendulum's and Hopper's learning-rate
-# schedules. The reward scale
-# brings a step's reward near 0.1-1 (HumanoidStandup's is the torso height over MuJoCo's timestep: about 100);
-# Swimmer's reward is a slow drift, which a discount close to 1 sees. An evaluation (64 Ant-v5 episodes of 1000 steps)
-# took 8.7 s on an H100, 8.7 ms a step of 64 worlds where a step of 4096 training worlds took 14.5 ms: bound by MuJoCo
-# Warp's kernel launches more than by work. Every 30 s of wall-clock the evaluations took 28 % of a 550-s Ant-v5 run;
-# every 60 s, 14 % of the learning table's 10-minute Ant-v5 runs (16 % of Humanoid-v5's, 8 % of Hopper-v5's).
+# "Gymnasium's MuJoCo suite: learning"); swept so far: InvertedPendulum's and Hopper's learning-rate schedules.
+# The reward scale brings a step's reward near 0.1-1 (HumanoidStandup's is the torso height over MuJoCo's timestep:
+# about 100); Swimmer's reward is a slow drift, which a discount close to 1 sees. An evaluation (64 Ant-v5 episodes of
+# 1000 steps) took 8.7 s on an H100, 8.7 ms a step of 64 worlds where a step of 4096 training worlds took 14.5 ms: bound
+# by MuJoCo Warp's kernel launches more than by work. Every 30 s of wall-clock the evaluations took 28 % of a 550-s
+# Ant-v5 run; every 60 s, 14 % of the learning table's 10-minute Ant-v5 runs (16 % of Humanoid-v5's, 8 % of Hopper's).
 _SUITE = dict(net_dims=(256, 128, 64), horizon_len=32, batch_size=32768, repeat_times=5, learning_rate=3e-4,
               reward_scale=0.1, eval_gap=60.0)
 PRESETS.update({

@@ -96,7 +96,9 @@ def train_one(task: str, seed: int, out: str, scale: float, device: str | None, 
     return {"task": task, "seed": seed, "budget_s": marks[-1], "marks_s": list(marks), "kept": kept, "scored": [],
             "samples": rows[-1]["samples"] if rows else 0, "num_envs": summary.get("num_envs"),
             "samples_per_s": summary.get("steady_samples_per_s_median"), "reference": target,
-            "first_eval_reaching": reach, "device": summary.get("device"), "rollout_graph": rollout_graph or "step",
+            "first_eval_reaching": reach, "device": summary.get("device"),
+            # what the rollouts had, which a failed capture turns to "off" (summaries before 2026-11-26 lack it)
+            "rollout_graph": summary.get("rollout_graph", rollout_graph or "step"),
             "curve": thin([(r["time_s"], r["samples"], r["return"]) for r in rows if r.get("return") is not None]),
             "evals": [{"time_s": r["time_s"], "samples": r["samples"], "eval/return": r["eval/return"]}
                       for r in rows if r.get("eval/return") is not None]}

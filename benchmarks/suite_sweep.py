@@ -110,8 +110,10 @@ def score_again(path: str, scoring: dict, device: str | None) -> dict:
             if not os.path.exists(os.path.join(here, "checkpoint.pt")):
                 raise SystemExit(f"--score {path}: {here}/checkpoint.pt is missing; copy the sweep's runs/ folder "
                                  "beside its JSON")
-            first = {k: run[k] for k in ("gymnasium_return", "ratio")}
-            run.update(score(here, scoring, device), first_score={**first, **scoring_of(doc["meta"])})
+            # scored again twice, the first score is still the one the sweep's machine gave
+            first = run.get("first_score") or {**{k: run[k] for k in ("gymnasium_return", "ratio")},
+                                               **scoring_of(doc["meta"])}
+            run.update(score(here, scoring, device), first_score=first)
         row["gymnasium_return"] = mean_return(row["runs"])
     doc["meta"]["scoring"] = scoring
     return doc

@@ -265,6 +265,9 @@ def test_suite_sweep_scores_its_policies_again_and_keeps_the_first_score(monkeyp
     assert [r.get("gymnasium_return") for r in row["runs"]] == [2000.0, 3000.0, None]
     assert row["runs"][1]["first_score"] == {"gymnasium_return": 1001.0, "ratio": 0.9, "episodes": 5, "seeds": [0]}
     assert doc["meta"]["scoring"] == {"episodes": 10, "seeds": [0, 1, 2]}
+    path.write_text(json.dumps(doc))  # scored again once more: the first score is still the sweep machine's
+    again = sw.score_again(str(path), {"episodes": 20, "seeds": [0]}, "cpu")
+    assert again["rows"][0]["runs"][1]["first_score"]["episodes"] == 5 and again["meta"]["scoring"]["episodes"] == 20
     with pytest.raises(SystemExit, match="differ in task, seconds, seeds, gpu, scoring"):
         sw.merged([doc, {"meta": meta, "rows": []}])  # 30 episodes beside the old 5: not one table
     os.remove(tmp_path / "runs" / "Hopper-v5-1" / "checkpoint.pt")

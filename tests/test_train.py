@@ -36,6 +36,8 @@ def test_short_cpu_run_writes_logs_checkpoint_plots_resumes_and_plays(tmp_path, 
     from warpgym.tasks import ANT
 
     assert saved["env_args"]["substeps"] == ANT.substeps and saved["env_args"]["physics"] == ANT.physics.to_dict()
+    # asked for the step capture (the default), a CPU run collects eagerly and its summary says so
+    assert json.load(open(os.path.join(run, "summary.json")))["rollout_graph"] == "off"
 
     assert train.main(["--resume", run, "--max-iterations", "5", "--no-plots"]) == 0
     rows = read_metrics(run)

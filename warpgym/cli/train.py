@@ -399,6 +399,8 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
     summary = summarize(history, device_name, cfg)
     summary["solver_load"] = env.sim.solver_load()  # this process's envs, over the whole run
     summary["kept_checkpoints"] = runner.kept
+    # the capture the rollouts had: "off" where the device cannot capture or a capture failed and fell back
+    summary["rollout_graph"] = runner.collector.capture
     summary["startup"] = {"timeline": timeline, "kernel_cache": cache, "cached_modules_at_start": cached,
                           "compiled": compile_log.compile_trace(since=PROCESS_START),
                           "lto_builds": compile_log.lto_builds_since(PROCESS_START)}
