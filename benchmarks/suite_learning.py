@@ -123,11 +123,20 @@ def needs_scoring(run: dict) -> bool:
     return not run["scored"] or not all(settled(s) for s in run["scored"])
 
 
+def play(target: str, episodes: int, seeds, out_json: str, device: str | None, extra=()) -> dict:
+    """``warpgym eval TARGET`` (a checkpoint or a run folder): ``episodes`` from each of the reset ``seeds`` in
+    Gymnasium's env and from the same starts in warpgym's; its JSON, with the seeds."""
+    from warpgym.cli import eval as eval_command  # noqa: PLC0415
+
+    args = [target, "--episodes", str(episodes), "--seeds", *map(str, seeds), "--json", out_json]
+    eval_command.main(args + (["--device", device] if device else []) + list(extra))
+    with open(out_json) as f:
+        return json.load(f) | {"seeds": list(seeds)}
+
+
 def score_run(run: dict, out: str, episodes: int, device: str | None) -> dict:
     """Score each kept policy of ``run`` (trained under ``out``) by ``warpgym eval`` in Gymnasium's env;
     policies it already holds, scored as this function scores them, are kept as they are."""
-    from warpgym.cli import eval as eval_command  # noqa: PLC0415
-
     run_dir = os.path.join(out, "runs", f"{run['task']}-seed{run['seed']}")
     earlier = {s["mark_s"]: s for s in run.get("scored", []) if settled(s)}
     below = {s["mark_s"] for s in run.get("scored", []) if not settled(s)}  # known below HOLDS on SEEDS
@@ -138,18 +147,12 @@ def score_run(run: dict, out: str, episodes: int, device: str | None) -> dict:
             continue
         path = os.path.join(run_dir, kept["checkpoint"])
         if path not in results:
-            def play(seeds, extra=()):
-                # several seeds' episodes: under a closed loop each episode's return is a draw from a distribution
-                args = [path, "--episodes", str(episodes), "--seeds", *map(str, seeds), "--json", path + ".eval.json"]
-                eval_command.main(args + (["--device", device] if device else []) + list(extra))
-                with open(path + ".eval.json") as f:
-                    return json.load(f) | {"seeds": list(seeds)}
-
-            result = None if kept["mark_s"] in below else play(SEEDS)
+            # several seeds' episodes: under a closed loop each episode's return is a draw from a distribution
+            result = None if kept["mark_s"] in below else play(path, episodes, SEEDS, path + ".eval.json", device)
             if result is None or result["gymnasium_over_warpgym"] < HOLDS:
                 # 30 episodes leave a ratio uncertain by several percent where episodes end early; and does
                 # Gymnasium's env agree with itself 1e-9 away? (a fall on a knife edge does not)
-                result = play(MORE_SEEDS, ["--nudge", str(NUDGE)])
+                result = play(path, episodes, MORE_SEEDS, path + ".eval.json", device, ["--nudge", str(NUDGE)])
             results[path] = result
         result = results[path]
         scored.append({"mark_s": kept["mark_s"], "time_s": kept["time_s"], "samples": kept["samples"],

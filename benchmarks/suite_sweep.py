@@ -61,13 +61,9 @@ def command(task: str, combo: dict, seed: int, seconds: float, run_dir: str, dev
 def score(run_dir: str, scoring: dict, device: str | None) -> dict:
     """The final policy of ``run_dir`` scored by ``warpgym eval``: episodes from each of the reset seeds in
     Gymnasium's env and from the same starts in warpgym's."""
-    from warpgym.cli import eval as eval_command  # noqa: PLC0415
+    from suite_learning import play  # noqa: PLC0415
 
-    path = os.path.join(run_dir, "eval.json")
-    eval_command.main([run_dir, "--episodes", str(scoring["episodes"]), "--seeds", *map(str, scoring["seeds"]),
-                       "--json", path] + (["--device", device] if device else []))
-    with open(path) as f:
-        result = json.load(f)
+    result = play(run_dir, scoring["episodes"], scoring["seeds"], os.path.join(run_dir, "eval.json"), device)
     return {"gymnasium_return": result["gymnasium_return"], "ratio": result["gymnasium_over_warpgym"],
             "gymnasium_length": result.get("gymnasium_length")}
 
