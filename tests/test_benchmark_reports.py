@@ -289,3 +289,38 @@ def test_rollout_capture_reports_medians_of_the_rounds_against_the_whole_rollout
     assert lines[2] == "| Ant-v5 | step (3 runs) | 22.0 | 0.260 M | 0.52 | 0.945 |"
     assert lines[3] == "| Ant-v5 | rollout (2 runs) | 42.0 | 0.275 M | 1.00 | 1.000 |"
     assert lines[4] == "| Ant-v5 | off (1 runs) | 21.0 | 0.200 M | 0.50 | 0.727 |"
+
+
+def test_suite_versions_plays_each_runs_last_policy_in_v4_and_names_the_term_that_moved(monkeypatch, tmp_path):
+    """benchmarks/suite_versions.py: the last kept policy of each run of a task that plays in v4 (Ant's runs
+    left out), by ``warpgym eval --env-version 4``; the table's means over seeds and the term that moved most."""
+    import suite_versions as sv
+
+    from warpgym.cli import eval as eval_command
+
+    calls = []
+
+    def fake_eval(args):
+        calls.append((os.path.relpath(args[0], tmp_path), args[args.index("--env-version") + 1]))
+        seed = int(args[0].split("seed")[1][0])
+        v5 = {"reward_dist": -3.0 - seed, "reward_ctrl": -0.8}
+        v4 = {"reward_dist": -3.2 - seed, "reward_ctrl": -0.8}
+        with open(args[args.index("--json") + 1], "w") as f:
+            json.dump({"episodes": 30, "gymnasium_return": sum(v5.values()), "gymnasium_length": 50.0,
+                       "v4_return": sum(v4.values()), "v4_length": 50.0, "gymnasium_terms": v5, "v4_terms": v4,
+                       "v4_over_v5": 0.9 + 0.06 * seed}, f)
+
+    monkeypatch.setattr(eval_command, "main", fake_eval)
+    for task, seed in (("Reacher-v5", 0), ("Reacher-v5", 1), ("Ant-v5", 0)):
+        kept = [{"mark_s": m, "checkpoint": f"checkpoint-{i}.pt"} for i, m in enumerate((60.0, 180.0))]
+        (tmp_path / f"{task}-seed{seed}.json").write_text(json.dumps({"run": {"task": task, "seed": seed,
+                                                                               "kept": kept}}))
+        os.makedirs(tmp_path / "runs" / f"{task}-seed{seed}")
+        (tmp_path / "runs" / f"{task}-seed{seed}" / "checkpoint-1.pt").write_bytes(b"")
+    rows = sv.score([str(tmp_path)], 10, "cpu")
+    assert calls == [(os.path.join("runs", f"Reacher-v5-seed{s}", "checkpoint-1.pt"), "4") for s in (0, 1)]
+    text = sv.table(rows)
+    assert "| Reacher-v5 | 2 | 3 min | -4.3 | -4.5 | 0.930 | reward_dist -3.5 -> -3.7 | 50 / 50 | -2.6 (v2) |" in text
+    os.remove(tmp_path / "runs" / "Reacher-v5-seed1" / "checkpoint-1.pt")
+    with pytest.raises(SystemExit, match="its last policy .*checkpoint-1.pt is not there"):
+        sv.score([str(tmp_path)], 10, "cpu")

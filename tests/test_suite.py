@@ -218,6 +218,13 @@ def test_inverted_pendulum_trains_to_900_in_gymnasiums_own_env(tmp_path, capsys)
     assert result["gymnasium_return"] >= 900, result
     assert 0.95 <= result["gymnasium_over_warpgym"] <= 1.05, result
     assert result["nudge"] == 1e-9 and 0.95 <= result["gymnasium_over_gymnasium_nudged"] <= 1.05, result
+    for env in ("gymnasium", "warpgym"):  # the one term, survival, is the whole return
+        assert result[f"{env}_terms"]["reward_survive"] == pytest.approx(result[f"{env}_return"], rel=1e-6)
+    # in v4 a fall's step still pays 1: v4's return is v5's plus at most 1, the same episodes otherwise
+    assert eval_command.main([run, "--episodes", "5", "--seeds", "0", "1", "--json", out, "--env-version", "4"]) == 0
+    result = json.load(open(out))
+    assert 0.0 <= result["v4_return"] - result["gymnasium_return"] <= 1.0 + 1e-9, result
+    assert result["v4_length"] == result["gymnasium_length"], result
     pytest.importorskip("PIL")
     from PIL import Image
 
@@ -245,11 +252,18 @@ def test_how_much_of_a_return_holds_reads_alike_for_rewards_and_costs():
 def test_eval_refuses_a_policy_of_warpgyms_own_tasks(tmp_path):
     import glob
 
+    from agents.checkpoint import load, save_atomic
     from warpgym.cli import eval as eval_command
 
     policy = sorted(glob.glob(os.path.join(os.path.dirname(__file__), "data", "ant*.pt")))[0]
     with pytest.raises(SystemExit, match="not one of Gymnasium's tasks.*warpgym sim2sim"):
         eval_command.main([policy])
+    # a suite task whose v4 is laid out otherwise: refused before anything is built, naming the tasks that play
+    ckpt = load(policy, torch.device("cpu"))
+    ckpt["config"]["env_args"]["task"] = "Ant-v5"
+    save_atomic(ckpt, str(tmp_path / "ant_v5.pt"))
+    with pytest.raises(SystemExit, match=r"--env-version 4: Ant-v5's v4 observation .*Reacher-v5"):
+        eval_command.main([str(tmp_path / "ant_v5.pt"), "--env-version", "4"])
 
 
 def test_suite_training_refuses_the_robots_physics_flags(capsys):
@@ -423,6 +437,60 @@ def test_a_policy_plays_the_same_episodes_in_both_envs_from_gymnasiums_starts(su
     # float32 against float64 over a 50-step loop: 3e-7 apart on the CPU, 2026-11-25
     np.testing.assert_allclose(ours, gym_returns, rtol=1e-4)
     assert np.std(gym_returns) > 0.1 * abs(np.mean(gym_returns))  # the starts matter: pairing is what agrees
+
+
+def test_reward_terms_sum_to_the_return_and_agree_episode_by_episode(suite_envs):
+    """The reward terms ``warpgym eval`` prints: Gymnasium's info entries summed per episode add up to the
+    return (HumanoidStandup pays 1 a step beside them), and warpgym's, over the same episodes, agree with
+    Gymnasium's term by term."""
+    from warpgym.envs.conformance import gymnasium_policy_episodes, warpgym_policy_episodes
+
+    weights = torch.randn(400, 17, generator=torch.Generator().manual_seed(1))
+    for name, actions, rest_per_step in (("Reacher-v5", 2, 0.0), ("InvertedDoublePendulum-v5", 1, 0.0),
+                                         ("HumanoidStandup-v5", 17, 1.0)):
+        task = SUITE[name].replace(episode_length=40)
+
+        def act(obs, actions=actions):
+            return 0.3 * torch.tanh(obs @ weights[: obs.shape[1], :actions].to(obs.device))
+
+        starts, terms = [], {}
+        returns, lengths = gymnasium_policy_episodes(task, act, 3, seed=7, unit_actions=False, starts=starts,
+                                                     terms=terms)
+        assert set(terms) == set(task.reward_terms()) and len(terms) >= 1
+        summed = np.sum([terms[k] for k in terms], axis=0)
+        np.testing.assert_allclose(summed + rest_per_step * lengths, returns, rtol=1e-12, atol=1e-9)
+        if name == "Reacher-v5":  # the same episodes in warpgym: each term as Gymnasium's, episode by episode
+            ours_terms = {}
+            ours, _ = warpgym_policy_episodes(suite_envs(name), act, starts, max_steps=40, terms=ours_terms)
+            for key in terms:
+                np.testing.assert_allclose(ours_terms[key], terms[key], rtol=1e-4, atol=1e-5)
+            np.testing.assert_allclose(np.sum([ours_terms[k] for k in terms], axis=0), ours, rtol=1e-5)
+
+
+def test_a_v5_policy_plays_v4_and_is_paid_v4s_reward():
+    """``warpgym eval --env-version 4``: the policy sees the part of v4's observation that is v5's and
+    plays the same episodes from the same reset seeds (the same actions: the control terms agree), and
+    v4 pays Reacher's distance as it was before each step, which the v5 run's observations give."""
+    from warpgym.envs.conformance import gymnasium_policy_episodes
+
+    weights = torch.randn(10, 2, generator=torch.Generator().manual_seed(0))
+    seen = []
+
+    def act(obs):  # feedback on every entry, the fingertip-to-target vector included
+        seen.append(obs[0].double().numpy().copy())
+        return 0.2 * torch.tanh(obs @ weights)
+
+    v5, v4 = {}, {}
+    gymnasium_policy_episodes("Reacher-v5", act, 3, seed=4, unit_actions=False, terms=v5)
+    before = -np.linalg.norm(np.array(seen)[:, 8:10], axis=1).reshape(3, 50).sum(axis=1)
+    seen.clear()
+    gymnasium_policy_episodes("Reacher-v5", act, 3, seed=4, unit_actions=False, terms=v4, version=4)
+    assert all(len(o) == 10 for o in seen)
+    np.testing.assert_allclose(v4["reward_ctrl"], v5["reward_ctrl"], rtol=1e-9)
+    np.testing.assert_allclose(v4["reward_dist"], before, rtol=1e-5)
+    assert not np.allclose(v4["reward_dist"], v5["reward_dist"], rtol=1e-3)  # v5 reads it after the step
+    with pytest.raises(ValueError, match="Ant-v5 in Gymnasium's v4"):
+        gymnasium_policy_episodes("Ant-v5", act, 1, version=4)
 
 
 def test_nudged_starts_move_every_coordinate_and_nothing_else():

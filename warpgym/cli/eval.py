@@ -11,6 +11,15 @@ observation) of one of Gymnasium's episodes, and the ratio of the two mean retur
 learnt on the GPU holds where it is scored (below 1: worse in Gymnasium's env; for the negative returns
 of Reacher and Pusher, warpgym's over Gymnasium's). With the same starts the ratio measures the two
 simulators, not the luck of the draw: Reacher's return, for one, is mostly its target's distance.
+Each reward term's sum (Gymnasium's info entries: forward, control, survival, ...) stands beside the
+return in both envs, so that a gap names its term.
+
+    warpgym eval RUN --env-version 4      # also in Gymnasium's v4: where most published figures were made
+
+``--env-version 4`` plays the same episodes in Gymnasium's v4 of the task as well (gym's v2/v3
+definitions on MuJoCo's bindings: Reacher's distance read before the step, Walker2d's left foot at
+friction 1.9, a survival reward on the step that falls), for the seven tasks whose v4 observation holds
+v5's, and prints how much of the v5 return holds there.
 """
 
 from __future__ import annotations
@@ -43,7 +52,11 @@ def parse_args(argv=None):
                     help="also play Gymnasium's episodes from starts moved by EPS (e.g. 1e-9) and compare "
                          "Gymnasium with itself: how far a policy's return moves under a change no simulator "
                          "difference is smaller than")
+    ap.add_argument("--env-version", type=int, choices=(5, 4), default=5,
+                    help="4: also score in Gymnasium's v4 of the task, from the same reset seeds (default 5: v5 only)")
     args = ap.parse_args(argv)
+    if args.env_version == 4 and args.nudge:
+        ap.error(f"--nudge {args.nudge} with --env-version 4: the nudge compares v5 with itself; run them apart")
     if not (args.nudge >= 0.0 and args.nudge < 1e-3):
         ap.error(f"--nudge {args.nudge}: a tiny non-negative number, e.g. --nudge 1e-9 (0: not played)")
     if args.episodes < 1:
@@ -51,6 +64,43 @@ def parse_args(argv=None):
     if any(s < 0 for s in args.seeds):
         ap.error(f"--seeds {args.seeds}: seeds are non-negative integers, e.g. --seeds 0 1 2")
     return args
+
+
+def mean_terms(terms: dict[str, list[float]]) -> dict[str, float]:
+    return {name: float(sum(v) / len(v)) for name, v in terms.items() if v}
+
+
+def terms_line(columns: dict[str, dict[str, float]], returns: dict[str, float], lengths: dict[str, float]) -> str:
+    """Each reward term's mean episode sum in each env ("a | b"); the rest of the return, where the terms
+    do not sum to it (HumanoidStandup's 1 a step), as its own entry."""
+    names = list(next(iter(columns.values())))
+    cells = [f"{name} " + " | ".join(f"{col[name]:.1f}" if name in col else "-" for col in columns.values())
+             for name in names]
+    if any(set(col) != set(names) for col in columns.values()):  # v4 names fewer terms: no rest to compare
+        return "; ".join(cells)
+    rest = {env: returns[env] - sum(col.values()) for env, col in columns.items()}
+    if any(abs(r) > 1e-3 * max(1.0, abs(returns[env])) for env, r in rest.items()):
+        cells.append("the rest " + " | ".join(f"{rest[env]:.1f} ({rest[env] / lengths[env]:.2f} a step)"
+                                              for env in columns))
+    return "; ".join(cells)
+
+
+def gymnasium_side(task, act, args, unit: bool, version: int = 5, starts: list | None = None) -> dict:
+    """The policy's episodes in ``gymnasium.make`` of the task (v5, or v4): seeds 1000 s for each of
+    ``args.seeds``, ``args.episodes`` each."""
+    import numpy as np  # noqa: PLC0415
+
+    from warpgym.envs.conformance import gymnasium_policy_episodes  # noqa: PLC0415
+
+    per_seed, returns, lengths, terms = [], [], [], {}
+    for seed in args.seeds:
+        r, n = gymnasium_policy_episodes(task, act, args.episodes, seed=1000 * seed, unit_actions=unit, starts=starts,
+                                         terms=terms, version=version)
+        per_seed.append({"seed": seed, "return": float(r.mean()), "length": float(n.mean())})
+        returns += r.tolist()
+        lengths += n.tolist()
+    return {"return": float(np.mean(returns)), "std": float(np.std(returns)), "length": float(np.mean(lengths)),
+            "per_seed": per_seed, "terms": mean_terms(terms)}
 
 
 def main(argv=None) -> int:
@@ -61,7 +111,7 @@ def main(argv=None) -> int:
     from agents.checkpoint import load_for_command, policy_from_checkpoint  # noqa: PLC0415
     from warpgym.cli import write_json  # noqa: PLC0415
     from warpgym.envs import make_vec_env  # noqa: PLC0415
-    from warpgym.envs.conformance import gymnasium_policy_episodes, warpgym_policy_episodes  # noqa: PLC0415
+    from warpgym.envs.conformance import gymnasium_policy_episodes, v4_tasks, warpgym_policy_episodes  # noqa: PLC0415
     from warpgym.sim.device import resolve_device  # noqa: PLC0415
     from warpgym.tasks.suite import SUITE  # noqa: PLC0415
 
@@ -72,6 +122,9 @@ def main(argv=None) -> int:
     if name not in SUITE:
         raise SystemExit(f"{path}: its policy was trained on {name}, not one of Gymnasium's tasks ({list(SUITE)}); "
                          "score warpgym's own Ant and Humanoid in native MuJoCo with `warpgym sim2sim`")
+    if args.env_version == 4 and SUITE[name].v4_observation is None:
+        raise SystemExit(f"--env-version 4: {name}'s v4 observation is not v5's plus entries after it (or v4 needs "
+                         f"MuJoCo < 3), so a v5 policy cannot play it; v4 is scored for {v4_tasks()}")
     unit = bool(env_args.get("unit_actions", False))
     task = SUITE[name]
     if env_args.get("max_episode_steps"):
@@ -84,43 +137,55 @@ def main(argv=None) -> int:
     def act(obs):
         return policy.act_deterministic(normalize(obs.to(device))).cpu()
 
-    per_seed, returns, lengths, starts = [], [], [], []
-    for seed in args.seeds:
-        r, n = gymnasium_policy_episodes(task, act, args.episodes, seed=1000 * seed, unit_actions=unit, starts=starts)
-        per_seed.append({"seed": seed, "return": float(r.mean()), "length": float(n.mean())})
-        returns += r.tolist()
-        lengths += n.tolist()
+    starts = []
+    gym = gymnasium_side(task, act, args, unit, starts=starts)
     # the same episodes in warpgym: each world starts where one of Gymnasium's episodes started
-    ours_r, ours_n = warpgym_policy_episodes(env, lambda obs: policy.act_deterministic(normalize(obs)), starts)
+    ours_terms = {}
+    ours_r, ours_n = warpgym_policy_episodes(env, lambda obs: policy.act_deterministic(normalize(obs)), starts,
+                                             terms=ours_terms)
     env.close()
     ours = {"eval/return": float(ours_r.mean()), "eval/length": float(ours_n.mean())}
-    gym_return = float(np.mean(returns))
+    gym_return = gym["return"]
     ratio = holds(gym_return, ours["eval/return"])
-    nudged = {}
+    extra = {}
     if args.nudge:
         moved = np.concatenate([gymnasium_policy_episodes(task, act, args.episodes, seed=1000 * seed, unit_actions=unit,
                                                           nudge=args.nudge)[0] for seed in args.seeds])
-        nudged = {"nudge": args.nudge, "gymnasium_nudged_return": float(moved.mean()),
-                  "gymnasium_over_gymnasium_nudged": holds(gym_return, float(moved.mean()))}
+        extra = {"nudge": args.nudge, "gymnasium_nudged_return": float(moved.mean()),
+                 "gymnasium_over_gymnasium_nudged": holds(gym_return, float(moved.mean()))}
+    if args.env_version == 4:
+        old = gymnasium_side(task, act, args, unit, version=4)
+        extra = {"v4_return": old["return"], "v4_return_std": old["std"], "v4_length": old["length"],
+                 "v4_per_seed": old["per_seed"], "v4_terms": old["terms"],
+                 "v4_over_v5": holds(old["return"], gym_return)}
     result = {"task": name, "checkpoint": path, "iteration": ckpt["iteration"], "samples": ckpt["samples"],
-              "episodes": episodes, "gymnasium_return": gym_return, "gymnasium_return_std": float(np.std(returns)),
-              "gymnasium_length": float(np.mean(lengths)), "per_seed": per_seed,
+              "episodes": episodes, "gymnasium_return": gym_return, "gymnasium_return_std": gym["std"],
+              "gymnasium_length": gym["length"], "per_seed": gym["per_seed"], "gymnasium_terms": gym["terms"],
               "warpgym_return": ours["eval/return"], "warpgym_length": ours["eval/length"],
-              "warpgym_return_std": float(np.std(ours_r)), "same_starts": True,
-              "gymnasium_over_warpgym": ratio, **nudged}
+              "warpgym_return_std": float(np.std(ours_r)), "warpgym_terms": mean_terms(ours_terms),
+              "same_starts": True, "gymnasium_over_warpgym": ratio, **extra}
     print(f"{name}, policy of iteration {ckpt['iteration']} ({ckpt['samples'] / 1e6:.2f} M samples), deterministic, "
           f"{episodes} episodes each:")
-    print(f"  Gymnasium's env (gymnasium.make, float64): return {gym_return:.1f} ± {np.std(returns):.1f}, "
-          f"length {np.mean(lengths):.0f}   per seed: "
-          + ", ".join(f"{s['seed']}: {s['return']:.1f}" for s in per_seed))
+    print(f"  Gymnasium's env (gymnasium.make, float64): return {gym_return:.1f} ± {gym['std']:.1f}, "
+          f"length {gym['length']:.0f}   per seed: "
+          + ", ".join(f"{s['seed']}: {s['return']:.1f}" for s in gym["per_seed"]))
     print(f"  warpgym's env (float32, {device}), the same starts: return {ours['eval/return']:.1f} "
-          f"± {np.std(ours_r):.1f}, "
-          f"length {ours['eval/length']:.0f}")
+          f"± {np.std(ours_r):.1f}, length {ours['eval/length']:.0f}")
+    print("  reward terms, mean per episode (Gymnasium | warpgym): " + terms_line(
+        {"gymnasium": gym["terms"], "warpgym": result["warpgym_terms"]},
+        {"gymnasium": gym_return, "warpgym": ours["eval/return"]},
+        {"gymnasium": gym["length"], "warpgym": ours["eval/length"]}))
     print(f"  held in Gymnasium's env (Gymnasium / warpgym; for costs warpgym / Gymnasium): {ratio:.3f}")
-    if nudged:
+    if args.nudge:
         print(f"  Gymnasium's env, every start moved by {args.nudge:g}: "
-              f"return {nudged['gymnasium_nudged_return']:.1f}; "
-              f"Gymnasium / itself so moved: {nudged['gymnasium_over_gymnasium_nudged']:.3f}")
+              f"return {extra['gymnasium_nudged_return']:.1f}; "
+              f"Gymnasium / itself so moved: {extra['gymnasium_over_gymnasium_nudged']:.3f}")
+    if args.env_version == 4:
+        print(f"  Gymnasium's v4 ({task.version_name(4)}), the same reset seeds: return {old['return']:.1f} "
+              f"± {old['std']:.1f}, length {old['length']:.0f}; v4 / v5 (for costs v5 / v4): {extra['v4_over_v5']:.3f}")
+        print("  reward terms, mean per episode (v5 | v4): " + terms_line(
+            {"v5": gym["terms"], "v4": old["terms"]}, {"v5": gym_return, "v4": old["return"]},
+            {"v5": gym["length"], "v4": old["length"]}))
     print(json.dumps(result))
     if args.json:
         write_json(args.json, result)

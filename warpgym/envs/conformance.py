@@ -10,6 +10,7 @@ states and states along random-action episodes.
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -17,16 +18,28 @@ import torch
 
 from kernels import gym_params as G
 from warpgym.envs.suite import SuiteVecEnv
-from warpgym.tasks.suite import GymTask, get_suite_task
+from warpgym.tasks.suite import SUITE, GymTask, get_suite_task
 
 
-def gymnasium_env(task: str | GymTask, **kwargs):
-    """``gymnasium.make`` of the same task with the same constructor arguments (TimeLimit included)."""
+def gymnasium_env(task: str | GymTask, version: int = 5, **kwargs):
+    """``gymnasium.make`` of the same task with the same constructor arguments (TimeLimit included).
+    ``version=4``: Gymnasium's v4 of it instead, with v4's own defaults (v5's arguments it does not take)."""
     import gymnasium  # noqa: PLC0415
 
     task = get_suite_task(task)
-    args = {name: getattr(task, name) for name in task.argument_names()}
-    return gymnasium.make(task.name, max_episode_steps=task.episode_length, **args, **kwargs)
+    if version == 5:
+        args = {name: getattr(task, name) for name in task.argument_names()}
+        return gymnasium.make(task.name, max_episode_steps=task.episode_length, **args, **kwargs)
+    if version != 4 or task.v4_observation is None:
+        raise ValueError(f"{task.name} in Gymnasium's v{version}: warpgym plays v5 policies in v5, and in v4 "
+                         f"for {v4_tasks()} (whose v4 observation holds v5's)")
+    with warnings.catch_warnings():  # v4 is out of date on purpose: it is what older figures were made in
+        warnings.simplefilter("ignore", DeprecationWarning)
+        return gymnasium.make(task.version_name(4), max_episode_steps=task.episode_length, **kwargs)
+
+
+def v4_tasks() -> list[str]:
+    return [name for name, task in SUITE.items() if task.v4_observation is not None]
 
 
 def reference_position(task: GymTask, env) -> np.ndarray:
@@ -248,7 +261,8 @@ def open_loop_returns(env: SuiteVecEnv, actions: np.ndarray, seeds: list[int]) -
 
 # ---------------------------------------------------------------------- a policy in Gymnasium's env
 def gymnasium_policy_episodes(task: str | GymTask, act, episodes: int, seed: int = 0, unit_actions: bool = True,
-                              starts: list | None = None, nudge: float = 0.0):
+                              starts: list | None = None, nudge: float = 0.0, terms: dict | None = None,
+                              version: int = 5):
     """Returns and lengths of ``episodes`` episodes of ``act`` (a float32 observation batch (1, O) ->
     action batch (1, U), torch, on the CPU) in ``gymnasium.make`` of the task: native MuJoCo, float64,
     episode e reset with seed ``seed + e``. ``unit_actions``: the policy acts in [-1, 1], clipped and
@@ -256,11 +270,18 @@ def gymnasium_policy_episodes(task: str | GymTask, act, episodes: int, seed: int
     that gets each episode's start (its state in put_states' form and its first observation), for
     ``warpgym_policy_episodes`` to play the same episodes. ``nudge``: every start's qpos moved by this much
     (the first action still sees the unmoved observation), to see how far Gymnasium's own returns move
-    under a change far below float32's resolution."""
+    under a change far below float32's resolution. ``terms``: a dict that gets, for each reward term, the
+    list of its episode sums. ``version=4``: in Gymnasium's v4 of the task, the policy seeing the part of
+    v4's observation that is v5's (its info holds fewer terms, some under other names: those it lacks under
+    v5's names are left out)."""
     task = get_suite_task(task)
-    env = gymnasium_env(task)
+    if version != 5 and (starts is not None or nudge):
+        raise ValueError("starts and nudge are v5's (warpgym's twin of the env): leave them out with version=4")
+    env = gymnasium_env(task, version)
+    seen = task.v4_observation if version == 4 else None
     low, high = env.action_space.low.astype(np.float64), env.action_space.high.astype(np.float64)
     returns, lengths = [], []
+    names = task.reward_terms()
     with torch.no_grad():
         for e in range(episodes):
             obs, _ = env.reset(seed=seed + e)
@@ -269,26 +290,33 @@ def gymnasium_policy_episodes(task: str | GymTask, act, episodes: int, seed: int
                 env.unwrapped.set_state(data.qpos + nudge, data.qvel.copy())
             if starts is not None:
                 starts.append(start_of(task, env, obs))
-            total, steps, done = 0.0, 0, False
+            total, steps, done, sums = 0.0, 0, False, dict.fromkeys(names, 0.0)
             while not done:
-                a = act(torch.as_tensor(obs, dtype=torch.float32)[None])[0].double().numpy()
+                a = act(torch.as_tensor(obs[:seen], dtype=torch.float32)[None])[0].double().numpy()
                 if unit_actions:
                     a = low + (np.clip(a, -1.0, 1.0) + 1.0) * 0.5 * (high - low)
-                obs, reward, terminated, truncated, _ = env.step(a)
+                obs, reward, terminated, truncated, info = env.step(a)
                 total, steps, done = total + float(reward), steps + 1, terminated or truncated
+                for name in names:
+                    sums[name] += float(info.get(name, math.nan))
             returns.append(total)
             lengths.append(steps)
+            if terms is not None:
+                for name in names:
+                    if not math.isnan(sums[name]):
+                        terms.setdefault(name, []).append(sums[name])
     env.close()
     return np.array(returns), np.array(lengths)
 
 
-def warpgym_policy_episodes(env: SuiteVecEnv, act, starts: list, max_steps: int | None = None
-                            ) -> tuple[np.ndarray, np.ndarray]:
+def warpgym_policy_episodes(env: SuiteVecEnv, act, starts: list, max_steps: int | None = None,
+                            terms: dict | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Returns and lengths of the episodes of ``starts`` (``start_of``'s, as ``gymnasium_policy_episodes``
     collects them) played by ``act`` (observation batch -> action batch, on ``env``'s device) in the first
     worlds of ``env``: the same episodes as in Gymnasium's env, so that the two envs' returns differ by the
     simulators alone and not by which starts each drew (Reacher's return, for one, is mostly its target's
-    distance). ``max_steps``: stop there, episodes still running counting what they have."""
+    distance). ``max_steps``: stop there, episodes still running counting what they have. ``terms``: a
+    dict that gets, for each reward term, the list of its episode sums."""
     n = len(starts)
     if env.num_envs < n:
         raise ValueError(f"{n} episodes need num_envs >= {n}, got {env.num_envs}")
@@ -297,13 +325,20 @@ def warpgym_policy_episodes(env: SuiteVecEnv, act, starts: list, max_steps: int 
     obs = torch.zeros(env.num_envs, env.num_obs, device=env.device)
     obs[:n] = torch.as_tensor(np.stack([o for _, o in starts]), dtype=torch.float32, device=env.device)
     returns, lengths = torch.zeros(n, device=env.device), torch.zeros(n, device=env.device)
+    names = env.task.reward_terms()
+    sums = torch.zeros(len(names), n, device=env.device)
     live = torch.ones(n, dtype=torch.bool, device=env.device)
     with torch.no_grad():
         steps = 0
         while bool(live.any()) and (max_steps is None or steps < max_steps):
             steps += 1
-            obs, reward, terminated, truncated, _ = env.step(act(obs))
+            obs, reward, terminated, truncated, info = env.step(act(obs))
             returns += torch.where(live, reward[:n], torch.zeros_like(reward[:n]))
+            for i, name in enumerate(names):
+                sums[i] += torch.where(live, info[name][:n], torch.zeros_like(reward[:n]))
             lengths += live.float()
             live &= ~(terminated[:n] | truncated[:n])
+    if terms is not None:
+        for i, name in enumerate(names):
+            terms.setdefault(name, []).extend(sums[i].cpu().double().tolist())
     return returns.cpu().numpy().astype(np.float64), lengths.cpu().numpy().astype(np.float64)

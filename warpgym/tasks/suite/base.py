@@ -47,6 +47,20 @@ class GymTask:
     reset_kinematics: ClassVar[bool] = False  # the first observation or forward position needs body poses
     reset_com: ClassVar[bool] = False  # ... and com inertias and velocities
     has_speed: ClassVar[bool] = False  # a forward speed (info["episode"]["s"])
+    # Gymnasium's v4 of the task (gym's v2/v3 definitions on MuJoCo's own bindings, where most published
+    # figures come from): how many of its observation's first entries are v5's observation, so that a
+    # v5 policy plays it unchanged. None where v4's observation is laid out otherwise (Ant, Humanoid,
+    # HumanoidStandup) or v4 refuses MuJoCo 3 (Pusher).
+    v4_observation: ClassVar[int | None] = None
+
+    @classmethod
+    def reward_terms(cls) -> tuple[str, ...]:
+        """The info entries that are terms of the reward, in Gymnasium's names and signs (a cost is
+        negative), each step's reward their sum (HumanoidStandup adds 1 a step beside them)."""
+        return tuple(k for k in cls.info_keys if k.startswith("reward_") or k.endswith("_penalty"))
+
+    def version_name(self, version: int) -> str:
+        return self.name.rsplit("-v", 1)[0] + f"-v{version}"
 
     # ------------------------------------------------------------------ Gymnasium's arguments
     @classmethod

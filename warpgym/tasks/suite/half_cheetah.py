@@ -18,6 +18,7 @@ class HalfCheetah(GymTask):
     exclude_current_positions_from_observation: bool = True
 
     info_keys: ClassVar = ("reward_forward", "reward_ctrl", "x_velocity", "x_position")
+    v4_observation: ClassVar = 17
     has_speed: ClassVar = True
 
     def observation_size(self, sim) -> int:

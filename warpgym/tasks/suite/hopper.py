@@ -24,6 +24,7 @@ class Hopper(GymTask):
     exclude_current_positions_from_observation: bool = True
 
     info_keys: ClassVar = ("reward_forward", "reward_ctrl", "reward_survive", "x_velocity", "x_position")
+    v4_observation: ClassVar = 11
     has_speed: ClassVar = True
 
     def observation_size(self, sim) -> int:

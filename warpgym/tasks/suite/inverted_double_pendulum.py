@@ -18,6 +18,7 @@ class InvertedDoublePendulum(GymTask):
 
     kind: ClassVar = G.DOUBLE_PENDULUM
     info_keys: ClassVar = ("reward_survive", "distance_penalty", "velocity_penalty")
+    v4_observation: ClassVar = 9  # v4 adds two hinge constraint forces, always 0
 
     def observation_size(self, sim) -> int:
         return 2 * sim.nq - 1 + sim.nv + 1

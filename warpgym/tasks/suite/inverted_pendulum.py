@@ -17,6 +17,7 @@ class InvertedPendulum(GymTask):
 
     kind: ClassVar = G.PENDULUM
     info_keys: ClassVar = ("reward_survive",)
+    v4_observation: ClassVar = 4
 
     def observation_size(self, sim) -> int:
         return sim.nq + sim.nv

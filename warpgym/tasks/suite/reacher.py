@@ -19,6 +19,7 @@ class Reacher(GymTask):
 
     kind: ClassVar = G.REACHER
     info_keys: ClassVar = ("reward_dist", "reward_ctrl")
+    v4_observation: ClassVar = 10  # v4 adds the fingertip's height above the target, always 0
     reset_kinematics: ClassVar = True
 
     def observation_size(self, sim) -> int:

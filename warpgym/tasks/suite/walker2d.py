@@ -23,6 +23,7 @@ class Walker2d(GymTask):
     exclude_current_positions_from_observation: bool = True
 
     info_keys: ClassVar = ("reward_forward", "reward_ctrl", "reward_survive", "x_velocity", "x_position")
+    v4_observation: ClassVar = 17
     has_speed: ClassVar = True
 
     def observation_size(self, sim) -> int:

@@ -1,0 +1,116 @@
+"""The learning table's policies in Gymnasium's v4 of their task beside v5: how far the definitions the
+reference figures were made in move a return.
+
+Tianshou's figures come from gym's v3 tasks (v2 for Reacher and the two pendulums) on mujoco-py; Gymnasium's
+v4 keeps those definitions on MuJoCo's own bindings, v5 changed some of them (Reacher's distance read after
+the step, not before it; Walker2d's left foot at friction 0.9, not 1.9; no survival reward on the step
+that falls). This script plays each run's last kept policy by ``warpgym eval --env-version 4``: the same
+30 episodes (reset seeds 0, 1000, 2000 and the next nine of each) in both versions, and, where v4's
+observation holds v5's, nothing else changed. Ant, Humanoid and HumanoidStandup lay out v4's observation
+otherwise and Pusher's v4 needs MuJoCo < 3: they are left out.
+
+    python benchmarks/suite_versions.py --runs OUT [OUT2 ...] --json docs/bench/suite_versions.json
+    python benchmarks/suite_versions.py --report docs/bench/suite_versions.json
+
+``--runs`` takes suite_learning.py's output folders (the ``<task>-seed<k>.json`` and the ``runs/`` beside
+them, where the checkpoints are); the policies' own ``.v4.json`` lie beside their checkpoints.
+"""
+
+from __future__ import annotations
+
+import argparse
+import glob
+import json
+import os
+import sys
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, ROOT)
+
+from suite_learning import REFERENCE, SEEDS, play  # noqa: E402
+
+REFERENCE_VERSION = {task: "v3" for task in REFERENCE} | {"Reacher-v5": "v2", "InvertedPendulum-v5": "v2",
+                                                         "InvertedDoublePendulum-v5": "v2"}
+
+
+def score(folders: list[str], episodes: int, device: str | None) -> list[dict]:
+    from warpgym.tasks.suite import SUITE  # noqa: PLC0415
+
+    rows = []
+    for folder in folders:
+        for path in sorted(glob.glob(os.path.join(folder, "*-seed*.json"))):
+            if os.path.basename(path).startswith("sb3-"):
+                continue
+            run = json.load(open(path))["run"]
+            if "error" in run or SUITE[run["task"]].v4_observation is None:
+                continue
+            last = run["kept"][-1]
+            ckpt = os.path.join(folder, "runs", f"{run['task']}-seed{run['seed']}", last["checkpoint"])
+            if not os.path.exists(ckpt):
+                raise SystemExit(f"{path}: its last policy {ckpt} is not there; --runs takes the folder that "
+                                 "suite_learning.py --out wrote, runs/ included")
+            r = play(ckpt, episodes, SEEDS, ckpt + ".v4.json", device, extra=("--env-version", "4"))
+            rows.append({"task": run["task"], "seed": run["seed"], "mark_s": last["mark_s"], "checkpoint": ckpt,
+                         "episodes": r["episodes"], "v5_return": r["gymnasium_return"],
+                         "v5_length": r["gymnasium_length"],
+                         "v4_return": r["v4_return"], "v4_length": r["v4_length"], "v4_over_v5": r["v4_over_v5"],
+                         "v5_terms": r["gymnasium_terms"], "v4_terms": r["v4_terms"]})
+    return rows
+
+
+def table(rows: list[dict]) -> str:
+    out = ["| task | seeds | policy at | v5 return | v4 return | v4 / v5 | the term that moved (v5 -> v4) | "
+           "episode length v5 / v4 | reference (its version) |",
+           "|---|---:|---:|---:|---:|---:|---|---|---:|"]
+    for task in dict.fromkeys(r["task"] for r in rows):
+        mine = [r for r in rows if r["task"] == task]
+        n = len(mine)
+
+        def mean(key, mine=mine, n=n):
+            return sum(r[key] for r in mine) / n
+
+        both = [k for k in mine[0]["v5_terms"] if all(k in r["v4_terms"] for r in mine)]
+        terms = {k: sum(r["v4_terms"][k] - r["v5_terms"][k] for r in mine) / n for k in both}
+        moved = "- (v4's info names no term)"
+        if terms:
+            name = max(terms, key=lambda k: abs(terms[k]))
+            v5_term = sum(r["v5_terms"][name] for r in mine) / n
+            moved = f"{name} {v5_term:.1f} -> {v5_term + terms[name]:.1f}"
+        mark = f"{mine[0]['mark_s'] / 60:g} min"
+        out.append(f"| {task} | {n} | {mark} | {mean('v5_return'):.1f} | {mean('v4_return'):.1f} | "
+                   f"{mean('v4_over_v5'):.3f} | {moved} | "
+                   f"{mean('v5_length'):.0f} / {mean('v4_length'):.0f} | "
+                   f"{REFERENCE[task]:g} ({REFERENCE_VERSION[task]}) |")
+    return "\n".join(out)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--runs", nargs="+", metavar="OUT", help="suite_learning.py output folders")
+    ap.add_argument("--report", metavar="JSON", help="print the table of an earlier --json")
+    ap.add_argument("--json", metavar="JSON", help="write the rows here")
+    ap.add_argument("--eval-episodes", type=int, default=10, help="episodes per reset seed of 3 (default 10)")
+    ap.add_argument("--device", default=None)
+    args = ap.parse_args(argv)
+    if args.report:
+        print(table(json.load(open(args.report))["rows"]))
+        return 0
+    if not args.runs:
+        ap.error("--runs OUT... (suite_learning.py's output folders) or --report JSON")
+    if args.eval_episodes < 1:
+        ap.error(f"--eval-episodes {args.eval_episodes}: must be a positive integer, e.g. 10")
+    rows = score(args.runs, args.eval_episodes, args.device)
+    if not rows:
+        raise SystemExit(f"--runs {args.runs}: no run of a task that plays in v4 (<task>-seed<k>.json)")
+    if args.json:
+        from warpgym.cli import write_json  # noqa: PLC0415
+
+        write_json(args.json, {"meta": {"date": time.strftime("%Y-%m-%d"), "command": " ".join(
+            ["benchmarks/suite_versions.py"] + (argv or sys.argv[1:]))}, "rows": rows})
+    print(table(rows))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
