@@ -3,7 +3,7 @@ reference figures were made in move a return.
 
 Tianshou's figures come from gym's v3 tasks (v2 for Reacher and the two pendulums) on mujoco-py; Gymnasium's
 v4 keeps those definitions on MuJoCo's own bindings, v5 changed some of them (Reacher's distance read after
-the step, not before it; Walker2d's left foot at friction 0.9, not 1.9; no survival reward on the step
+the step, not before it; Walker2d's right foot at friction 1.9, not 0.9; no survival reward on the step
 that falls). This script plays each run's last kept policy by ``warpgym eval --env-version 4``: the same
 30 episodes (reset seeds 0, 1000, 2000 and the next nine of each) in both versions, and, where v4's
 observation holds v5's, nothing else changed. Ant, Humanoid and HumanoidStandup lay out v4's observation

@@ -17,8 +17,8 @@ return in both envs, so that a gap names its term.
     warpgym eval RUN --env-version 4      # also in Gymnasium's v4: where most published figures were made
 
 ``--env-version 4`` plays the same episodes in Gymnasium's v4 of the task as well (gym's v2/v3
-definitions on MuJoCo's bindings: Reacher's distance read before the step, Walker2d's left foot at
-friction 1.9, a survival reward on the step that falls), for the seven tasks whose v4 observation holds
+definitions on MuJoCo's bindings: Reacher's distance read before the step, Walker2d's right foot at
+friction 0.9, a survival reward on the step that falls), for the seven tasks whose v4 observation holds
 v5's, and prints how much of the v5 return holds there.
 """
 
