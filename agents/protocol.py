@@ -7,7 +7,9 @@ device. Finished envs reset inside the step (Gymnasium's same-step autoreset): `
 holds their last observation, masked by ``info["_final_obs"]``. Optional:
 ``info["episode"] = {"r": return, "l": length, "s": forward speed, "_r": mask}`` for logging;
 ``info["episode_so_far"]`` with the same keys for the episode in progress after the step (what an
-evaluation cut short reports); and ``max_episode_steps`` for evaluation. The learner computes no
+evaluation cut short reports); ``max_episode_steps`` for evaluation; and reward terms, each step's
+parts of the reward as tensors of one value per env under Gymnasium's ``reward_*`` (or ``*_penalty``)
+keys of ``info``, whose episode sums the evaluation logs beside the return. The learner computes no
 speed of its own: it averages the env's.
 
 Optional: ``fault_counters() -> {name: device tensor}``, running totals of things that should

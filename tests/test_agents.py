@@ -5,6 +5,7 @@ import os
 import statistics
 import subprocess
 import sys
+import time
 
 import numpy as np
 import pytest
@@ -338,11 +339,21 @@ def test_a_time_limit_stops_every_process_after_the_same_iteration():
     assert [r["iteration"] for r in history] == [1, 2]
 
 
+class SlowPointMass(PointMassVecEnv):
+    """A point mass whose steps take 4 ms of waiting, not of work: its evaluations stay long beside an
+    iteration however busy the machine's cores are (a busy machine slowed the iterations of an
+    evaluation env that only computed until they were as long as its evaluations)."""
+
+    def step(self, actions):
+        time.sleep(0.004)
+        return super().step(actions)
+
+
 def test_evaluation_time_is_left_out_of_the_iteration_it_delays():
     # an evaluation after every row, each far longer than an iteration of 8 envs x 4 steps; the
     # evaluation runs while the next iteration is already queued, so its time belongs to the one after
     cfg = Config(net_dims=(8,), horizon_len=4, batch_size=32, repeat_times=1, eval_gap=0.0, save_gap=10**6)
-    runner = OnPolicyRunner(PointMassVecEnv(8), cfg, eval_env=PointMassVecEnv(4, episode_length=400),
+    runner = OnPolicyRunner(PointMassVecEnv(8), cfg, eval_env=SlowPointMass(4, episode_length=60),
                             print_fn=lambda s: None)
     history = runner.learn(max_iterations=8)
     assert all("eval_s" in r for r in history)
@@ -432,3 +443,42 @@ def test_a_failed_checkpoint_write_keeps_the_previous_one(tmp_path, monkeypatch)
     monkeypatch.undo()
     assert load(path, torch.device("cpu"))["iteration"] == 1
     assert os.listdir(tmp_path) == ["ck.pt"]  # no temporary file left behind
+
+
+class _TermsEnv:
+    """Three envs whose episodes end after 2 and 4 steps and never; each step pays ``reward_alive`` 1 and
+    ``reward_step`` its step number, and also reports a position and a per-world matrix that are not terms."""
+
+    num_envs, num_obs, num_actions, max_episode_steps = 3, 1, 1, 6
+
+    def __init__(self):
+        self.t = 0
+
+    def reset(self):
+        self.t = 0
+        return torch.zeros(3, 1), {}
+
+    def step(self, actions):
+        self.t += 1
+        alive, step = torch.ones(3), torch.full((3,), float(self.t))
+        ended = torch.tensor([self.t % 2 == 0, self.t % 4 == 0, False])
+        info = {"reward_alive": alive, "reward_step": step, "x_position": torch.full((3,), 9.0),
+                "reward_matrix": torch.ones(3, 2)}
+        return torch.zeros(3, 1), alive + step, ended, torch.zeros(3, dtype=torch.bool), info
+
+
+class _Zero:
+    def act_deterministic(self, obs):
+        return torch.zeros(obs.shape[0], 1)
+
+
+def test_an_evaluation_logs_each_reward_term_summed_over_the_first_episode_of_every_env():
+    from agents.evaluate import evaluate
+
+    result = evaluate(_TermsEnv(), _Zero(), lambda o: o, max_steps=6)
+    # episodes of 2, 4 and 6 (cut short) steps; what comes after an env's first episode does not count
+    assert result["eval/length"] == pytest.approx(4.0)
+    assert result["eval/reward_alive"] == pytest.approx((2 + 4 + 6) / 3)
+    assert result["eval/reward_step"] == pytest.approx(((1 + 2) + (1 + 2 + 3 + 4) + 21) / 3)
+    assert result["eval/reward_alive"] + result["eval/reward_step"] == pytest.approx(result["eval/return"])
+    assert not {"eval/x_position", "eval/reward_matrix"} & set(result)

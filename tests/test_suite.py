@@ -220,6 +220,8 @@ def test_inverted_pendulum_trains_to_900_in_gymnasiums_own_env(tmp_path, capsys)
     assert result["nudge"] == 1e-9 and 0.95 <= result["gymnasium_over_gymnasium_nudged"] <= 1.05, result
     for env in ("gymnasium", "warpgym"):  # the one term, survival, is the whole return
         assert result[f"{env}_terms"]["reward_survive"] == pytest.approx(result[f"{env}_return"], rel=1e-6)
+    evals = [json.loads(line) for line in open(os.path.join(run, "metrics.jsonl")) if "eval/return" in line]
+    assert evals and all(r["eval/reward_survive"] == pytest.approx(r["eval/return"], rel=1e-6) for r in evals)
     # in v4 a fall's step still pays 1: v4's return is v5's plus at most 1, the same episodes otherwise
     assert eval_command.main([run, "--episodes", "3", "--seeds", "0", "--json", out, "--env-version", "4"]) == 0
     result = json.load(open(out))
