@@ -73,11 +73,14 @@ def test_sigkill_at_ten_moments_always_resumes_and_loses_at_most_one_save_interv
 
 
 def test_same_seed_gives_bit_identical_metrics_for_20_iterations_on_the_cpu(tmp_path):
+    # the two runs side by side (one per core): what they compute cannot depend on when it runs
+    procs = [subprocess.Popen([sys.executable, TRAIN, *SMALL, "--seed", "3", "--max-iterations", "20", "--eval-gap",
+                               "0", "--run-dir", str(tmp_path / f"r{k}")], cwd=ROOT, stdout=subprocess.DEVNULL,
+                              stderr=subprocess.PIPE, text=True) for k in range(2)]
     runs = []
-    for k in range(2):
-        proc = run([*SMALL, "--seed", "3", "--max-iterations", "20", "--eval-gap", "0",
-                    "--run-dir", str(tmp_path / f"r{k}")])
-        assert proc.returncode == 0, proc.stderr[-2000:]
+    for k, proc in enumerate(procs):
+        _, err = proc.communicate(timeout=300)
+        assert proc.returncode == 0, err[-2000:]
         jsonl, _ = rows_of(str(tmp_path / f"r{k}"))
         runs.append([{k: v for k, v in r.items() if k not in TIMING and not k.startswith(("phase/", "memory/"))}
                      for r in jsonl])
