@@ -39,6 +39,10 @@ REFERENCE = {"Ant-v5": 5850.2, "HalfCheetah-v5": 12138.8, "Hopper-v5": 3542.2, "
              "InvertedDoublePendulum-v5": 9359.5, "Pusher-v5": -42.6, "HumanoidStandup-v5": 138222.0}
 REFERENCE_SOURCE = {task: "Tianshou SAC" for task in REFERENCE} | {"Pusher-v5": "SLM-Lab SAC",
                                                                   "HumanoidStandup-v5": "SLM-Lab SAC"}
+# the task versions the figures were made on (v5's Pusher and HumanoidStandup: SLM-Lab's)
+REFERENCE_VERSION = {task: "v3" for task in REFERENCE} | {"Reacher-v5": "v2", "InvertedPendulum-v5": "v2",
+                                                         "InvertedDoublePendulum-v5": "v2", "Pusher-v5": "v5",
+                                                         "HumanoidStandup-v5": "v5"}
 HOLDS = 0.95  # the issue's goal for Gymnasium / warpgym; below it a policy is scored again, more widely
 NUDGE = 1e-9
 SEEDS = (0, 1, 2)  # Gymnasium's reset seeds 0, 1000, 2000 (warpgym eval), each starting --eval-episodes episodes

@@ -28,10 +28,7 @@ import time
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
 
-from suite_learning import REFERENCE, SEEDS, play  # noqa: E402
-
-REFERENCE_VERSION = {task: "v3" for task in REFERENCE} | {"Reacher-v5": "v2", "InvertedPendulum-v5": "v2",
-                                                         "InvertedDoublePendulum-v5": "v2"}
+from suite_learning import REFERENCE, REFERENCE_VERSION, SEEDS, play  # noqa: E402
 
 
 def score(folders: list[str], episodes: int, device: str | None) -> list[dict]:

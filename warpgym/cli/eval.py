@@ -85,17 +85,18 @@ def terms_line(columns: dict[str, dict[str, float]], returns: dict[str, float], 
     return "; ".join(cells)
 
 
-def gymnasium_side(task, act, args, unit: bool, version: int = 5, starts: list | None = None) -> dict:
-    """The policy's episodes in ``gymnasium.make`` of the task (v5, or v4): seeds 1000 s for each of
-    ``args.seeds``, ``args.episodes`` each."""
+def gymnasium_side(task, act, episodes: int, seeds: list[int], unit: bool, version: int = 5,
+                   starts: list | None = None, nudge: float = 0.0) -> dict:
+    """The policy's episodes in ``gymnasium.make`` of the task (v5, or v4): ``episodes`` from reset seed
+    1000 s on, for each s of ``seeds`` (``gymnasium_policy_episodes``' starts, nudge and version)."""
     import numpy as np  # noqa: PLC0415
 
     from warpgym.envs.conformance import gymnasium_policy_episodes  # noqa: PLC0415
 
     per_seed, returns, lengths, terms = [], [], [], {}
-    for seed in args.seeds:
-        r, n = gymnasium_policy_episodes(task, act, args.episodes, seed=1000 * seed, unit_actions=unit, starts=starts,
-                                         terms=terms, version=version)
+    for seed in seeds:
+        r, n = gymnasium_policy_episodes(task, act, episodes, seed=1000 * seed, unit_actions=unit, starts=starts,
+                                         nudge=nudge, terms=terms, version=version)
         per_seed.append({"seed": seed, "return": float(r.mean()), "length": float(n.mean())})
         returns += r.tolist()
         lengths += n.tolist()
@@ -111,7 +112,7 @@ def main(argv=None) -> int:
     from agents.checkpoint import load_for_command, policy_from_checkpoint  # noqa: PLC0415
     from warpgym.cli import write_json  # noqa: PLC0415
     from warpgym.envs import make_vec_env  # noqa: PLC0415
-    from warpgym.envs.conformance import gymnasium_policy_episodes, v4_tasks, warpgym_policy_episodes  # noqa: PLC0415
+    from warpgym.envs.conformance import v4_tasks, warpgym_policy_episodes  # noqa: PLC0415
     from warpgym.sim.device import resolve_device  # noqa: PLC0415
     from warpgym.tasks.suite import SUITE  # noqa: PLC0415
 
@@ -138,7 +139,7 @@ def main(argv=None) -> int:
         return policy.act_deterministic(normalize(obs.to(device))).cpu()
 
     starts = []
-    gym = gymnasium_side(task, act, args, unit, starts=starts)
+    gym = gymnasium_side(task, act, args.episodes, args.seeds, unit, starts=starts)
     # the same episodes in warpgym: each world starts where one of Gymnasium's episodes started
     ours_terms = {}
     ours_r, ours_n = warpgym_policy_episodes(env, lambda obs: policy.act_deterministic(normalize(obs)), starts,
@@ -149,12 +150,11 @@ def main(argv=None) -> int:
     ratio = holds(gym_return, ours["eval/return"])
     extra = {}
     if args.nudge:
-        moved = np.concatenate([gymnasium_policy_episodes(task, act, args.episodes, seed=1000 * seed, unit_actions=unit,
-                                                          nudge=args.nudge)[0] for seed in args.seeds])
-        extra = {"nudge": args.nudge, "gymnasium_nudged_return": float(moved.mean()),
-                 "gymnasium_over_gymnasium_nudged": holds(gym_return, float(moved.mean()))}
+        moved = gymnasium_side(task, act, args.episodes, args.seeds, unit, nudge=args.nudge)["return"]
+        extra = {"nudge": args.nudge, "gymnasium_nudged_return": moved,
+                 "gymnasium_over_gymnasium_nudged": holds(gym_return, moved)}
     if args.env_version == 4:
-        old = gymnasium_side(task, act, args, unit, version=4)
+        old = gymnasium_side(task, act, args.episodes, args.seeds, unit, version=4)
         extra = {"v4_return": old["return"], "v4_return_std": old["std"], "v4_length": old["length"],
                  "v4_per_seed": old["per_seed"], "v4_terms": old["terms"],
                  "v4_over_v5": holds(old["return"], gym_return)}

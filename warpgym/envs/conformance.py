@@ -334,8 +334,8 @@ def warpgym_policy_episodes(env: SuiteVecEnv, act, starts: list, max_steps: int 
             steps += 1
             obs, reward, terminated, truncated, info = env.step(act(obs))
             returns += torch.where(live, reward[:n], torch.zeros_like(reward[:n]))
-            for i, name in enumerate(names):
-                sums[i] += torch.where(live, info[name][:n], torch.zeros_like(reward[:n]))
+            if names:
+                sums += torch.stack([info[name][:n] for name in names]) * live
             lengths += live.float()
             live &= ~(terminated[:n] | truncated[:n])
     if terms is not None:
