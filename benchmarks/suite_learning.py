@@ -101,6 +101,9 @@ def train_one(task: str, seed: int, out: str, scale: float, device: str | None, 
             "samples": rows[-1]["samples"] if rows else 0, "num_envs": summary.get("num_envs"),
             "samples_per_s": summary.get("steady_samples_per_s_median"), "reference": target,
             "first_eval_reaching": reach, "device": summary.get("device"),
+            # the curve cannot stand for it: its first point is the first iteration that finished an episode
+            # (HalfCheetah's 1000-step episodes: the 32nd)
+            "first_iteration_s": summary.get("first_iteration_time_s"),
             # what the rollouts had, which a failed capture turns to "off" (summaries before 2026-11-26 lack it)
             "rollout_graph": summary.get("rollout_graph", rollout_graph or "step"),
             "curve": thin([(r["time_s"], r["samples"], r["return"]) for r in rows if r.get("return") is not None]),
@@ -218,9 +221,10 @@ def table(runs: list[dict], peer: bool = False) -> str:
         # a CPU learner's few thousand samples per second would read 0.00 M
         speed = f"{samples / 1e6:.1f} M | {sps / 1e6:.2f} M" if sps >= 1e4 else f"{samples / 1e6:.2f} M | {sps:.0f}"
         reach = f"{minutes('target')} ({minutes('half')})" if ref is not None else "-"
-        # the curve's first point is summary.json's first_iteration_time_s: when the first iteration's row was
-        # logged, one iteration late, so after imports, the build, the first rollout and the second's captures
-        starts = [r["curve"][0][0] for r in rs if r.get("curve")]
+        # summary.json's first_iteration_time_s: when the first iteration's row was logged, one iteration late, so
+        # after imports, the build, the first rollout and the second's captures (older JSONs: the curve's first
+        # point, the same number where an episode ended within the first iteration)
+        starts = [r.get("first_iteration_s") or r["curve"][0][0] for r in rs if r.get("curve")]
         start = f"{_mean(starts):.0f} s" if starts and not peer else "-"
         # runs without the field came before the step capture, when the whole rollout was captured as one graph
         if not peer and starts and any(r.get("rollout_graph", "rollout") == "rollout" for r in rs):

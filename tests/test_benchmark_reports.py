@@ -76,6 +76,12 @@ def test_suite_learning_report_merges_runs_made_alike_and_refuses_others(tmp_pat
     table = capsys.readouterr().out
     assert "| 35 s † | 240.0 M |" in table and "† the whole rollout captured as one graph" in table
     assert next(line for line in table.splitlines() if line.startswith("| Hopper-v5")).endswith("| 0.970 |")
+    # the first iteration as summary.json has it, where the run holds it: the curve starts with the first
+    # iteration that finished an episode
+    doc(tmp_path / "a", "Hopper-v5", 0, rollout_graph="step", first_iteration_s=6.0)
+    doc(tmp_path / "b", "Hopper-v5", 1, hit=False, rollout_graph="step", first_iteration_s=8.0)
+    assert sl.report([str(tmp_path / "a"), str(tmp_path / "b")]) == 0
+    assert "| 7 s | 240.0 M |" in capsys.readouterr().out
     assert "SLM-Lab's on v5 for Pusher and HumanoidStandup" in table  # where the two figures not Tianshou's come from
     doc(tmp_path / "c", "Hopper-v5", 2, scale=0.1)
     with pytest.raises(SystemExit, match="made differently"):
