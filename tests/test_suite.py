@@ -218,6 +218,10 @@ def test_inverted_pendulum_trains_to_900_in_gymnasiums_own_env(tmp_path, capsys)
     assert result["gymnasium_return"] >= 900, result
     assert 0.95 <= result["gymnasium_over_warpgym"] <= 1.05, result
     assert result["nudge"] == 1e-9 and 0.95 <= result["gymnasium_over_gymnasium_nudged"] <= 1.05, result
+    for env in ("gymnasium", "warpgym"):  # the episodes one by one, the same starts in the same order
+        assert len(result[f"{env}_returns"]) == len(result[f"{env}_lengths"]) == 10, result
+        assert np.mean(result[f"{env}_returns"]) == pytest.approx(result[f"{env}_return"], rel=1e-9)
+        assert np.mean(result[f"{env}_lengths"]) == pytest.approx(result[f"{env}_length"], rel=1e-9)
     for env in ("gymnasium", "warpgym"):  # the one term, survival, is the whole return
         assert result[f"{env}_terms"]["reward_survive"] == pytest.approx(result[f"{env}_return"], rel=1e-6)
     evals = [json.loads(line) for line in open(os.path.join(run, "metrics.jsonl")) if "eval/return" in line]

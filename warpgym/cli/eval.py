@@ -12,7 +12,9 @@ learnt on the GPU holds where it is scored (below 1: worse in Gymnasium's env; f
 of Reacher and Pusher, warpgym's over Gymnasium's). With the same starts the ratio measures the two
 simulators, not the luck of the draw: Reacher's return, for one, is mostly its target's distance.
 Each reward term's sum (Gymnasium's info entries: forward, control, survival, ...) stands beside the
-return in both envs, so that a gap names its term.
+return in both envs, so that a gap names its term. ``--json`` also keeps each episode's return and length
+in both envs, paired, so that a mean's spread can be read episode by episode (a robot that flips or falls
+in a few of them).
 
     warpgym eval RUN --env-version 4      # also in Gymnasium's v4: where most published figures were made
 
@@ -101,7 +103,7 @@ def gymnasium_side(task, act, episodes: int, seeds: list[int], unit: bool, versi
         returns += r.tolist()
         lengths += n.tolist()
     return {"return": float(np.mean(returns)), "std": float(np.std(returns)), "length": float(np.mean(lengths)),
-            "per_seed": per_seed, "terms": mean_terms(terms)}
+            "per_seed": per_seed, "terms": mean_terms(terms), "returns": returns, "lengths": lengths}
 
 
 def main(argv=None) -> int:
@@ -163,7 +165,11 @@ def main(argv=None) -> int:
               "gymnasium_length": gym["length"], "per_seed": gym["per_seed"], "gymnasium_terms": gym["terms"],
               "warpgym_return": ours["eval/return"], "warpgym_length": ours["eval/length"],
               "warpgym_return_std": float(np.std(ours_r)), "warpgym_terms": mean_terms(ours_terms),
-              "same_starts": True, "gymnasium_over_warpgym": ratio, **extra}
+              "same_starts": True, "gymnasium_over_warpgym": ratio,
+              # episode by episode, paired (the same start in both envs): a mean hides a knife edge, a robot that
+              # falls or flips in a few episodes
+              "gymnasium_returns": gym["returns"], "gymnasium_lengths": gym["lengths"],
+              "warpgym_returns": ours_r.tolist(), "warpgym_lengths": ours_n.tolist(), **extra}
     print(f"{name}, policy of iteration {ckpt['iteration']} ({ckpt['samples'] / 1e6:.2f} M samples), deterministic, "
           f"{episodes} episodes each:")
     print(f"  Gymnasium's env (gymnasium.make, float64): return {gym_return:.1f} ± {gym['std']:.1f}, "
