@@ -173,3 +173,21 @@ def policy_from_checkpoint(ckpt: dict, num_obs: int, num_actions: int, device: t
     norm = RunningMeanStd(num_obs, cfg["obs_clip"]).to(device)
     norm.load_state_dict(ckpt["normalizer"])
     return policy, norm
+
+
+def with_normalizer(ckpt: dict, other: dict, names: tuple[str, str] = ("the checkpoint", "the other")) -> dict:
+    """``ckpt`` acting on the inputs that ``other``'s observation statistics give it: its weights, their
+    normaliser. A policy that decays while its learning rate is near zero may be following its normaliser:
+    where an input's running mean follows the policy's own behaviour (a cart's position), the policy's notion
+    of centre moves with it. Played with an earlier normaliser, such a policy recovers; played with a later
+    one, an earlier policy decays."""
+    for name, c in zip(names, (ckpt, other)):
+        if not c["config"].get("normalize_obs", False):
+            raise ValueError(f"{name} was trained without an observation normaliser (normalize_obs false): "
+                             "it has no statistics to swap; compare two checkpoints that have them")
+    tasks = [c["config"]["env_args"].get("task") for c in (ckpt, other)]
+    sizes = [c["spec"]["num_obs"] for c in (ckpt, other)]
+    if tasks[0] != tasks[1] or sizes[0] != sizes[1]:
+        raise ValueError(f"{names[0]} is for {tasks[0]} ({sizes[0]} observations), {names[1]} for {tasks[1]} "
+                         f"({sizes[1]}): swap normalisers between checkpoints of one task")
+    return {**ckpt, "normalizer": other["normalizer"]}

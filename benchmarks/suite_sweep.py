@@ -12,9 +12,10 @@ throughput; the best row is the candidate preset for agents/config.py.
     python benchmarks/suite_sweep.py --report GPU0/sweep-Hopper-v5.json GPU1/sweep-Hopper-v5.json  # one table
     python benchmarks/suite_sweep.py --score OUT/sweep-Hopper-v5.json   # score again, e.g. on a CPU after a GPU
 
-A grid can be split over GPUs (one sweep per GPU, each given part of the grid); ``--report`` joins their
-rows, refusing sweeps of another task, budget, seeds, GPU or scoring. A short run of the task fills Warp's
-kernel cache first (``--no-warm-up``: none), so that no combination's budget pays for compiling.
+A grid can be split over GPUs (one sweep per GPU, each given part of the grid or of the seeds); ``--report``
+joins them, one row per setting, refusing sweeps of another task, budget, GPU or scoring, and settings left
+with different seeds. A short run of the task fills Warp's kernel cache first (``--no-warm-up``: none), so that
+no combination's budget pays for compiling.
 ``--score`` plays each final policy again (its runs/ folder beside the JSON) and rewrites the JSON, keeping
 the earlier score beside the new.
 
@@ -138,14 +139,27 @@ def table(doc: dict) -> str:
 
 
 def merged(docs: list[dict]) -> dict:
-    """One sweep of several that ran the same task, budget and seeds on the same GPU (their rows together)."""
-    keys = ("task", "seconds", "seeds", "gpu", "scoring")
+    """One sweep of several that ran the same task and budget on the same GPU, scored alike: their rows together.
+    A grid split over GPUs by setting adds rows; one split by seed adds runs to a setting's row. Every setting
+    must end with the same seeds, each run once, so that the rows' means compare."""
+    keys = ("task", "seconds", "gpu", "scoring")
     kinds = {tuple(json.dumps(d["meta"][k] if k != "scoring" else scoring_of(d["meta"])) for k in keys) for d in docs}
     if len(kinds) > 1:
         raise SystemExit(f"--report: these sweeps differ in {', '.join(keys)} ({sorted(kinds)}); report them apart")
-    return {"meta": {**docs[0]["meta"], "dates": sorted({d["meta"]["date"] for d in docs}),
+    rows: dict[str, dict] = {}
+    for d in docs:
+        for r in d["rows"]:
+            rows.setdefault(r["label"], {**r, "runs": []})["runs"].extend(r["runs"])
+    seeds = {label: sorted(x["seed"] for x in r["runs"]) for label, r in rows.items()}
+    if len({tuple(s) for s in seeds.values()}) > 1 or any(len(set(s)) < len(s) for s in seeds.values()):
+        raise SystemExit(f"--report: the settings ran on different seeds, or a seed twice ({seeds}); join sweeps "
+                         "that give every setting the same seeds")
+    for r in rows.values():
+        r["gymnasium_return"] = mean_return(r["runs"])
+    return {"meta": {**docs[0]["meta"], "seeds": next(iter(seeds.values()), docs[0]["meta"]["seeds"]),
+                     "dates": sorted({d["meta"]["date"] for d in docs}),
                      "commands": [d["meta"]["command"] for d in docs]},
-            "rows": [r for d in docs for r in d["rows"]]}
+            "rows": list(rows.values())}
 
 
 def main(argv=None) -> int:

@@ -13,7 +13,7 @@ import torch
 
 from agents import Config, OnPolicyRunner, RunningMeanStd
 from agents.actor_critic import ActorCritic, gaussian_kl, gaussian_log_prob
-from agents.checkpoint import load, save_atomic
+from agents.checkpoint import load, policy_from_checkpoint, save_atomic, with_normalizer
 from agents.logger import read_metrics
 from agents.ppo import adapted_lr, surrogate_loss, value_loss
 from agents.storage import compute_gae
@@ -215,6 +215,29 @@ def test_resume_restores_policy_normalizer_optimizer_and_counters(tmp_path):
     assert b.iteration == 5
     rows = [r["iteration"] for r in read_metrics(str(tmp_path))]
     assert rows == [1, 2, 3, 4, 5]
+
+
+def test_a_policy_plays_with_another_checkpoints_normalizer_and_refuses_what_has_none(tmp_path):
+    """``warpgym eval --normalizer-from``: one checkpoint's weights on the inputs another's statistics give."""
+    cfg = Config(net_dims=(16,), horizon_len=10, batch_size=320, repeat_times=2, save_gap=1, eval_gap=1e9)
+    runner = OnPolicyRunner(PointMassVecEnv(64), cfg, run_dir=str(tmp_path), print_fn=lambda s: None)
+    runner.learn(max_iterations=2)
+    mine = load(str(tmp_path / "checkpoint.pt"), torch.device("cpu"))
+    theirs = {**mine, "normalizer": {**mine["normalizer"], "mean": mine["normalizer"]["mean"] + 0.5}}
+    num_obs, num_actions = mine["spec"]["num_obs"], mine["spec"]["num_actions"]
+    policy, norm = policy_from_checkpoint(with_normalizer(mine, theirs), num_obs, num_actions, torch.device("cpu"))
+    own_policy, own_norm = policy_from_checkpoint(mine, num_obs, num_actions, torch.device("cpu"))
+    obs = torch.randn(8, num_obs)
+    for a, b in zip(policy.parameters(), own_policy.parameters()):  # the weights stay the checkpoint's own
+        torch.testing.assert_close(a, b)
+    torch.testing.assert_close(norm.mean, own_norm.mean + 0.5)
+    assert not torch.allclose(policy.act_deterministic(norm(obs)), own_policy.act_deterministic(own_norm(obs)))
+    plain = {**mine, "config": {**mine["config"], "normalize_obs": False}}
+    with pytest.raises(ValueError, match="theirs was trained without an observation normaliser"):
+        with_normalizer(mine, plain, ("mine", "theirs"))
+    other_task = {**theirs, "spec": {**mine["spec"], "num_obs": num_obs + 1}}
+    with pytest.raises(ValueError, match="swap normalisers between checkpoints of one task"):
+        with_normalizer(mine, other_task)
 
 
 def test_agents_imports_nothing_of_the_simulator():

@@ -234,8 +234,17 @@ def test_suite_sweep_ranks_combinations_by_their_return_in_gymnasiums_env():
     meta = {"task": "Hopper-v5", "seconds": 180.0, "seeds": [1], "gpu": "H100", "date": "2026-11-25", "command": "c"}
     both = sw.merged([{"meta": meta, "rows": doc["rows"][:1]}, {"meta": meta, "rows": doc["rows"][1:]}])
     assert [r["label"] for r in both["rows"]] == ["gamma=0.99", "gamma=0.995", "gamma=0.9"]
-    with pytest.raises(SystemExit, match="differ in task, seconds, seeds, gpu, scoring"):
+    with pytest.raises(SystemExit, match="differ in task, seconds, gpu, scoring"):
         sw.merged([{"meta": meta, "rows": []}, {"meta": {**meta, "seconds": 60.0}, "rows": []}])
+    # a grid split over GPUs by seed: each setting's runs join into one row, its mean over all its seeds
+    split = [{"meta": {**meta, "seeds": [s]}, "rows": [row("gamma=0.99", 100.0 * (s + 1), 1.0)]} for s in (0, 1)]
+    split[1]["rows"][0]["runs"][0]["seed"] = 1
+    one = sw.merged(split)
+    assert len(one["rows"]) == 1 and one["rows"][0]["gymnasium_return"] == 150.0 and one["meta"]["seeds"] == [0, 1]
+    with pytest.raises(SystemExit, match="different seeds, or a seed twice"):
+        sw.merged(split + [{"meta": meta, "rows": [row("gamma=0.995", 1.0, 1.0)]}])  # one setting on seed 0 only
+    with pytest.raises(SystemExit, match="different seeds, or a seed twice"):
+        sw.merged([split[0], split[0]])
 
 
 def test_suite_sweep_scores_its_policies_again_and_keeps_the_first_score(monkeypatch, tmp_path):
@@ -274,7 +283,7 @@ def test_suite_sweep_scores_its_policies_again_and_keeps_the_first_score(monkeyp
     path.write_text(json.dumps(doc))  # scored again once more: the first score is still the sweep machine's
     again = sw.score_again(str(path), {"episodes": 20, "seeds": [0]}, "cpu")
     assert again["rows"][0]["runs"][1]["first_score"]["episodes"] == 5 and again["meta"]["scoring"]["episodes"] == 20
-    with pytest.raises(SystemExit, match="differ in task, seconds, seeds, gpu, scoring"):
+    with pytest.raises(SystemExit, match="differ in task, seconds, gpu, scoring"):
         sw.merged([doc, {"meta": meta, "rows": []}])  # 30 episodes beside the old 5: not one table
     os.remove(tmp_path / "runs" / "Hopper-v5-1" / "checkpoint.pt")
     with pytest.raises(SystemExit, match="Hopper-v5-1/checkpoint.pt is missing; copy the sweep's runs/ folder"):

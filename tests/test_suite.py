@@ -231,6 +231,9 @@ def test_inverted_pendulum_trains_to_900_in_gymnasiums_own_env(tmp_path, capsys)
     result = json.load(open(out))
     assert 0.0 <= result["v4_return"] - result["gymnasium_return"] <= 1.0 + 1e-9, result
     assert result["v4_length"] == result["gymnasium_length"], result
+    # the preset trains without an observation normaliser: nothing to swap, said before anything is built
+    with pytest.raises(SystemExit, match="trained without an observation normaliser"):
+        eval_command.main([run, "--normalizer-from", run])
     pytest.importorskip("PIL")
     from PIL import Image
 

@@ -54,6 +54,9 @@ def parse_args(argv=None):
                     help="also play Gymnasium's episodes from starts moved by EPS (e.g. 1e-9) and compare "
                          "Gymnasium with itself: how far a policy's return moves under a change no simulator "
                          "difference is smaller than")
+    ap.add_argument("--normalizer-from", default=None, metavar="CKPT",
+                    help="play the policy with CKPT's observation statistics instead of its own (a checkpoint of "
+                         "the same task): does a decay follow the weights or the normaliser?")
     ap.add_argument("--env-version", type=int, choices=(5, 4), default=5,
                     help="4: also score in Gymnasium's v4 of the task, from the same reset seeds (default 5: v5 only)")
     args = ap.parse_args(argv)
@@ -111,7 +114,7 @@ def main(argv=None) -> int:
     import numpy as np  # noqa: PLC0415
     import torch  # noqa: PLC0415
 
-    from agents.checkpoint import load_for_command, policy_from_checkpoint  # noqa: PLC0415
+    from agents.checkpoint import load_for_command, policy_from_checkpoint, with_normalizer  # noqa: PLC0415
     from warpgym.cli import write_json  # noqa: PLC0415
     from warpgym.envs import make_vec_env  # noqa: PLC0415
     from warpgym.envs.conformance import v4_tasks, warpgym_policy_episodes  # noqa: PLC0415
@@ -120,6 +123,14 @@ def main(argv=None) -> int:
 
     device = resolve_device(args.device)
     path, ckpt = load_for_command(args.checkpoint, torch.device(device))
+    if args.normalizer_from:
+        other_path, other = load_for_command(args.normalizer_from, torch.device(device))
+        try:
+            ckpt = with_normalizer(ckpt, other, (path, other_path))
+        except ValueError as e:
+            raise SystemExit(f"--normalizer-from {args.normalizer_from}: {e}") from None
+        print(f"the policy of {path} with the observation statistics of {other_path} "
+              f"(iteration {other['iteration']})")
     env_args = dict(ckpt["config"]["env_args"])
     name = env_args.get("task")
     if name not in SUITE:
@@ -170,6 +181,8 @@ def main(argv=None) -> int:
               # falls or flips in a few episodes
               "gymnasium_returns": gym["returns"], "gymnasium_lengths": gym["lengths"],
               "warpgym_returns": ours_r.tolist(), "warpgym_lengths": ours_n.tolist(), **extra}
+    if args.normalizer_from:
+        result.update(normalizer_from=other_path, normalizer_iteration=other["iteration"])
     print(f"{name}, policy of iteration {ckpt['iteration']} ({ckpt['samples'] / 1e6:.2f} M samples), deterministic, "
           f"{episodes} episodes each:")
     print(f"  Gymnasium's env (gymnasium.make, float64): return {gym_return:.1f} ± {gym['std']:.1f}, "
