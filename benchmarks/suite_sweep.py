@@ -9,15 +9,19 @@ throughput; the best row is the candidate preset for agents/config.py.
     python benchmarks/suite_sweep.py --out OUT --task Hopper-v5 --seconds 120 \\
         --grid num_envs=4096,8192 --grid horizon_len=16,32 --grid gamma=0.99,0.995
     python benchmarks/suite_sweep.py --report OUT/sweep-Hopper-v5.json
+    python benchmarks/suite_sweep.py --out OUT --task InvertedPendulum-v5 --seconds 180 --seeds 0 1 2 3 \
+        --grid normalize_obs=true,false --gpus 4          # 8 runs, 4 at once
     python benchmarks/suite_sweep.py --report GPU0/sweep-Hopper-v5.json GPU1/sweep-Hopper-v5.json  # one table
     python benchmarks/suite_sweep.py --score OUT/sweep-Hopper-v5.json   # score again, e.g. on a CPU after a GPU
 
-A grid can be split over GPUs (one sweep per GPU, each given part of the grid or of the seeds); ``--report``
-joins them, one row per setting, refusing sweeps of another task, budget, GPU or scoring, and settings left
-with different seeds. A short run of the task fills Warp's kernel cache first (``--no-warm-up``: none), so that
-no combination's budget pays for compiling.
-``--score`` plays each final policy again (its runs/ folder beside the JSON) and rewrites the JSON, keeping
-the earlier score beside the new.
+On a host of several GPUs, ``--gpus N`` runs every setting and seed as its own process, N at a time, one per
+GPU, each pinned to its share of the cores (what a one-GPU machine with that many cores gives), and joins
+them into one sweep-<task>.json. A grid can also be split by hand (one sweep per GPU or machine, each given
+part of the grid or of the seeds); ``--report`` joins them, one row per setting, refusing sweeps of another
+task, budget, GPU or scoring, and settings left with different seeds. A short run of the task fills Warp's
+kernel cache first (``--no-warm-up``: none), so that no combination's budget pays for compiling. ``--score``
+plays each final policy again (its runs/ folder beside the JSON) and rewrites the JSON, keeping the earlier
+score beside the new.
 
 Grid names: ``num_envs`` (the command's --num-envs) and any ``Config`` field ``warpgym train --config``
 takes (learning_rate, gamma, net_dims as 256x128, reward_scale, normalize_obs, ...).
@@ -29,8 +33,10 @@ import argparse
 import itertools
 import json
 import os
+import shutil
 import subprocess
 import sys
+import threading
 import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -162,6 +168,80 @@ def merged(docs: list[dict]) -> dict:
             "rows": list(rows.values())}
 
 
+def spread(args, grid: dict[str, list[str]], argv: list[str]) -> dict:
+    """``--gpus N``: each setting and seed of the grid its own sweep process, N at a time, one per GPU, each
+    pinned to its share of the cores, writing under OUT/parts/<k>; their sweeps joined into one, their runs
+    moved to OUT/runs (so that ``--score`` finds them beside the JSON). A process that wrote nothing leaves
+    its run as an error row that names its log."""
+    from suite_learning import without  # noqa: PLC0415
+
+    cores = sorted(os.sched_getaffinity(0))
+    share = len(cores) // args.gpus
+    if share < 1:
+        raise SystemExit(f"--gpus {args.gpus}: more GPUs than the {len(cores)} cores this process may use")
+    names = list(grid)
+    jobs = [(dict(zip(names, values)), seed) for values in itertools.product(*(grid[n] for n in names))
+            for seed in args.seeds]
+    rest = without(argv, ("--gpus", "--grid", "--seeds", "--out"))
+    todo, lock = list(enumerate(jobs)), threading.Lock()
+
+    def command_of(k: int, combo: dict, seed: int) -> list[str]:
+        cmd = [sys.executable, os.path.abspath(__file__), *rest, "--out", os.path.join(args.out, "parts", f"{k:03d}"),
+               "--seeds", str(seed), "--no-warm-up"]
+        for name, value in combo.items():  # parse_grid read "256x128" as "256,128"
+            cmd += ["--grid", f"{name}={value.replace(',', 'x')}"]
+        return cmd
+
+    def worker(gpu: int) -> None:
+        mine = set(cores[gpu * share:(gpu + 1) * share])
+        while True:
+            with lock:
+                if not todo:
+                    return
+                k, (combo, seed) = todo.pop(0)
+            part = os.path.join(args.out, "parts", f"{k:03d}")
+            os.makedirs(part, exist_ok=True)
+            with open(os.path.join(part, "sweep.log"), "w") as log:
+                subprocess.run(command_of(k, combo, seed), cwd=ROOT, stdout=log, stderr=subprocess.STDOUT,
+                               env=dict(os.environ, CUDA_VISIBLE_DEVICES=str(gpu)), check=False,
+                               preexec_fn=lambda mine=mine: os.sched_setaffinity(0, mine))
+
+    threads = [threading.Thread(target=worker, args=(g,)) for g in range(min(args.gpus, len(jobs)))]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    return join_parts(args.out, args.task, jobs)
+
+
+def join_parts(out: str, task: str, jobs: list[tuple[dict, int]]) -> dict:
+    """The sweeps under OUT/parts/<k> (job k: a setting and a seed) as one; each run's folder moved to
+    OUT/runs/<task>-<k>."""
+    docs = []
+    os.makedirs(os.path.join(out, "runs"), exist_ok=True)
+    for k, (combo, seed) in enumerate(jobs):
+        part = os.path.join(out, "parts", f"{k:03d}")
+        path = os.path.join(part, f"sweep-{task}.json")
+        if not os.path.exists(path):
+            label = " ".join(f"{n}={v}" for n, v in combo.items()) or "preset"
+            error = {"seed": seed, "error": f"the process wrote no sweep: see {part}/sweep.log"}
+            docs.append({"meta": None, "rows": [{"combo": combo, "label": label, "runs": [error]}]})
+            continue
+        with open(path) as f:
+            doc = json.load(f)
+        for row in doc["rows"]:
+            for run in row["runs"]:
+                if "run_dir" in run:
+                    moved = os.path.join(out, "runs", f"{task}-{k}")
+                    shutil.move(os.path.join(part, "runs", os.path.basename(run["run_dir"])), moved)
+                    run["run_dir"] = moved
+        docs.append(doc)
+    written = [d for d in docs if d["meta"] is not None]
+    if not written:
+        raise SystemExit(f"--gpus: no process wrote a sweep; see {out}/parts/*/sweep.log")
+    return merged([d if d["meta"] is not None else {**d, "meta": written[0]["meta"]} for d in docs])
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", help="folder for the runs and sweep-<task>.json")
@@ -177,7 +257,11 @@ def main(argv=None) -> int:
     ap.add_argument("--device", default=None)
     ap.add_argument("--no-warm-up", action="store_true",
                     help="no short run to fill the kernel cache first (the first run then compiles on its clock)")
+    ap.add_argument("--gpus", type=int, default=1,
+                    help="run the settings and seeds N at a time, one process per GPU with an equal share of the cores")
     args = ap.parse_args(argv)
+    if args.gpus < 1:
+        ap.error(f"--gpus {args.gpus}: the number of GPUs to run on, e.g. --gpus 4")
     if args.eval_episodes < 1 or min(args.eval_seeds) < 0:
         ap.error(f"--eval-episodes {args.eval_episodes} / --eval-seeds {args.eval_seeds}: episodes must be positive "
                  "and seeds non-negative, e.g. --eval-episodes 10 --eval-seeds 0 1 2")
@@ -221,12 +305,22 @@ def main(argv=None) -> int:
         from suite_learning import warm_up  # noqa: PLC0415
 
         warm_up(args.task, args.out, args.device)
+    path = os.path.join(args.out, f"sweep-{args.task}.json")
+    if args.gpus > 1:
+        if torch.cuda.device_count() < args.gpus:
+            ap.error(f"--gpus {args.gpus}: this machine shows {torch.cuda.device_count()} GPU(s)")
+        doc = spread(args, grid, list(argv if argv is not None else sys.argv[1:]))
+        doc["meta"].update(grid=grid, runs_at_once=args.gpus, cores=len(os.sched_getaffinity(0)) // args.gpus,
+                           kernel_cache="empty at the first run" if args.no_warm_up else "warm",
+                           command=" ".join(["benchmarks/suite_sweep.py"] + (argv or sys.argv[1:])))
+        write_json(path, doc)
+        print(table(doc))
+        return 0
     gpu = torch.cuda.get_device_name(0) if torch.cuda.is_available() and args.device != "cpu" else "cpu"
     doc = {"meta": {"task": args.task, "seconds": args.seconds, "seeds": args.seeds, "grid": grid, "gpu": gpu,
                     "scoring": scoring, "kernel_cache": "empty at the first run" if args.no_warm_up else "warm",
                     "date": time.strftime("%Y-%m-%d"),
                     "command": " ".join(["benchmarks/suite_sweep.py"] + (argv or sys.argv[1:]))}, "rows": []}
-    path = os.path.join(args.out, f"sweep-{args.task}.json")
     names = list(grid)
     for values in itertools.product(*(grid[n] for n in names)):
         doc["rows"].append(run_combo(args.task, dict(zip(names, values)), args.seeds, args.seconds, args.out,

@@ -247,6 +247,52 @@ def test_suite_sweep_ranks_combinations_by_their_return_in_gymnasiums_env():
         sw.merged([split[0], split[0]])
 
 
+def test_suite_sweep_spreads_settings_and_seeds_over_gpus_and_joins_them(monkeypatch, tmp_path):
+    """``--gpus N``: one process per setting and seed, on GPUs 0..N-1; their sweeps joined into one row per
+    setting, their runs moved beside the joined JSON; a process that wrote nothing is an error row naming its log."""
+    import argparse
+
+    import suite_sweep as sw
+
+    calls = []
+
+    def fake_child(cmd, env, **kw):
+        out, seed = cmd[cmd.index("--out") + 1], int(cmd[cmd.index("--seeds") + 1])
+        grid = [cmd[i + 1] for i, a in enumerate(cmd) if a == "--grid"]
+        calls.append((env["CUDA_VISIBLE_DEVICES"], grid, seed, "--no-warm-up" in cmd))
+        if out.endswith("003"):
+            return  # crashed before writing anything
+        os.makedirs(os.path.join(out, "runs", "InvertedPendulum-v5-0"))
+        combo = {"net_dims": grid[0].split("=")[1].replace("x", ",")}
+        value = 100.0 * seed + (1000.0 if combo["net_dims"] == "64,64" else 0.0)
+        run = {"seed": seed, "run_dir": "/root/x/runs/InvertedPendulum-v5-0", "gymnasium_return": value,
+               "ratio": 1.0, "samples_per_s": 1e6}
+        meta = {"task": "InvertedPendulum-v5", "seconds": 180.0, "seeds": [seed], "gpu": "H100", "date": "d",
+                "command": " ".join(cmd), "scoring": {"episodes": 10, "seeds": [0, 1, 2]}}
+        with open(os.path.join(out, "sweep-InvertedPendulum-v5.json"), "w") as f:
+            json.dump({"meta": meta, "rows": [{"combo": combo, "label": f"net_dims={combo['net_dims']}",
+                                               "runs": [run], "gymnasium_return": value}]}, f)
+
+    monkeypatch.setattr(sw.subprocess, "run", fake_child)
+    args = argparse.Namespace(gpus=2, seeds=[0, 1], out=str(tmp_path), task="InvertedPendulum-v5")
+    doc = sw.spread(args, {"net_dims": ["64,64", "32,32"]},
+                    ["--out", str(tmp_path), "--task", "InvertedPendulum-v5", "--grid", "net_dims=64x64,32x32",
+                     "--seeds", "0", "1", "--gpus", "2", "--seconds", "180"])
+    assert sorted((g, s) for _, g, s, _ in calls) == [(["net_dims=32x32"], 0), (["net_dims=32x32"], 1),
+                                                      (["net_dims=64x64"], 0), (["net_dims=64x64"], 1)]
+    assert {gpu for gpu, *_ in calls} <= {"0", "1"} and all(warm for *_, warm in calls)
+    rows = {r["label"]: r for r in doc["rows"]}
+    assert doc["meta"]["seeds"] == [0, 1] and set(rows) == {"net_dims=64,64", "net_dims=32,32"}
+    assert rows["net_dims=64,64"]["gymnasium_return"] == 1050.0
+    (failed,) = [r for r in rows["net_dims=32,32"]["runs"] if "error" in r]
+    assert failed["seed"] == 1 and "parts/003/sweep.log" in failed["error"]
+    assert rows["net_dims=32,32"]["gymnasium_return"] == 0.0  # the one seed that wrote
+    for r in doc["rows"]:
+        for run in r["runs"]:
+            if "run_dir" in run:
+                assert os.path.dirname(run["run_dir"]) == str(tmp_path / "runs") and os.path.isdir(run["run_dir"])
+
+
 def test_suite_sweep_scores_its_policies_again_and_keeps_the_first_score(monkeypatch, tmp_path):
     """``--score``: each final policy played again with the scoring asked for, from its folder beside the JSON
     (not the path the GPU machine wrote); the row's mean follows; the earlier score stays beside the new."""
