@@ -177,9 +177,9 @@ def policy_from_checkpoint(ckpt: dict, num_obs: int, num_actions: int, device: t
 
 def with_normalizer(ckpt: dict, other: dict, names: tuple[str, str] = ("the checkpoint", "the other")) -> dict:
     """``ckpt`` acting on the inputs that ``other``'s observation statistics give it: its weights, their
-    normaliser. A policy that decays while its learning rate is near zero may be following its normaliser:
-    where an input's running mean follows the policy's own behaviour (a cart's position), the policy's notion
-    of centre moves with it. Played with an earlier normaliser, such a policy recovers; played with a later
+    normaliser. A policy whose return decays as training goes on may be following its normaliser: where an
+    input's running mean follows the policy's own behaviour (a cart's position), the policy's notion of
+    centre moves with it. Played with an earlier normaliser, such a policy recovers; played with a later
     one, an earlier policy decays."""
     for name, c in zip(names, (ckpt, other)):
         if not c["config"].get("normalize_obs", False):
