@@ -373,27 +373,34 @@ def without(argv: list[str], options: tuple[str, ...]) -> list[str]:
     return kept
 
 
+def gpu_slot(gpu: int, gpus: int) -> dict:
+    """``subprocess`` arguments that give a child GPU ``gpu`` of ``gpus`` and its equal share of this process's
+    cores, so that one GPU's run does not take another's CPU (suite_sweep.py's ``--gpus`` uses it too)."""
+    cores = sorted(os.sched_getaffinity(0))
+    share = len(cores) // gpus
+    if share < 1:
+        raise SystemExit(f"--gpus {gpus}: more GPUs than the {len(cores)} cores this process may use")
+    mine = set(cores[gpu * share:(gpu + 1) * share])
+    return {"env": dict(os.environ, CUDA_VISIBLE_DEVICES=str(gpu)),
+            "preexec_fn": lambda: os.sched_setaffinity(0, mine)}
+
+
 def spread_seeds(args, argv: list[str]) -> int:
     """Run each seed in its own process on its own GPU (``--gpus N``, seeds over GPUs in turn), each process
     pinned to its share of the host's cores, so that one GPU's run does not take another's CPU; a run's
     clock is then what a one-GPU machine with that many cores gives."""
-    cores = sorted(os.sched_getaffinity(0))
-    share = len(cores) // args.gpus
-    if share < 1:
-        raise SystemExit(f"--gpus {args.gpus}: more GPUs than the {len(cores)} cores this process may use")
+    gpu_slot(0, args.gpus)  # too many GPUs for the cores: said before anything starts
     rest = without(argv, ("--gpus", "--seeds"))
     waves = [args.seeds[i:i + args.gpus] for i in range(0, len(args.seeds), args.gpus)]
     failed = 0
     for wave in waves:
         procs, logs = [], []
         for gpu, seed in enumerate(wave):
-            mine = set(cores[gpu * share:(gpu + 1) * share])
-            env = dict(os.environ, CUDA_VISIBLE_DEVICES=str(gpu))
             logs.append(open(os.path.join(args.out, f"seed{seed}.log"), "w"))  # noqa: SIM115 (closed below)
             procs.append(subprocess.Popen([sys.executable, os.path.abspath(__file__), *rest, "--seeds", str(seed),
                                            "--runs-at-once", str(len(wave))],
-                                          env=env, stdout=logs[-1], stderr=subprocess.STDOUT,
-                                          preexec_fn=lambda mine=mine: os.sched_setaffinity(0, mine)))
+                                          stdout=logs[-1], stderr=subprocess.STDOUT,
+                                          **gpu_slot(gpu, args.gpus)))
         failed += sum(p.wait() != 0 for p in procs)
         for log in logs:
             log.close()

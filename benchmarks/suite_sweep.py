@@ -173,12 +173,9 @@ def spread(args, grid: dict[str, list[str]], argv: list[str]) -> dict:
     pinned to its share of the cores, writing under OUT/parts/<k>; their sweeps joined into one, their runs
     moved to OUT/runs (so that ``--score`` finds them beside the JSON). A process that wrote nothing leaves
     its run as an error row that names its log."""
-    from suite_learning import without  # noqa: PLC0415
+    from suite_learning import gpu_slot, without  # noqa: PLC0415
 
-    cores = sorted(os.sched_getaffinity(0))
-    share = len(cores) // args.gpus
-    if share < 1:
-        raise SystemExit(f"--gpus {args.gpus}: more GPUs than the {len(cores)} cores this process may use")
+    gpu_slot(0, args.gpus)  # too many GPUs for the cores: said before anything starts
     names = list(grid)
     jobs = [(dict(zip(names, values)), seed) for values in itertools.product(*(grid[n] for n in names))
             for seed in args.seeds]
@@ -193,7 +190,7 @@ def spread(args, grid: dict[str, list[str]], argv: list[str]) -> dict:
         return cmd
 
     def worker(gpu: int) -> None:
-        mine = set(cores[gpu * share:(gpu + 1) * share])
+        slot = gpu_slot(gpu, args.gpus)
         while True:
             with lock:
                 if not todo:
@@ -203,8 +200,7 @@ def spread(args, grid: dict[str, list[str]], argv: list[str]) -> dict:
             os.makedirs(part, exist_ok=True)
             with open(os.path.join(part, "sweep.log"), "w") as log:
                 subprocess.run(command_of(k, combo, seed), cwd=ROOT, stdout=log, stderr=subprocess.STDOUT,
-                               env=dict(os.environ, CUDA_VISIBLE_DEVICES=str(gpu)), check=False,
-                               preexec_fn=lambda mine=mine: os.sched_setaffinity(0, mine))
+                               check=False, **slot)
 
     threads = [threading.Thread(target=worker, args=(g,)) for g in range(min(args.gpus, len(jobs)))]
     for t in threads:

@@ -273,6 +273,13 @@ def test_suite_sweep_spreads_settings_and_seeds_over_gpus_and_joins_them(monkeyp
             json.dump({"meta": meta, "rows": [{"combo": combo, "label": f"net_dims={combo['net_dims']}",
                                                "runs": [run], "gymnasium_return": value}]}, f)
 
+    import suite_learning as sl
+
+    cores = sorted(os.sched_getaffinity(0))
+    with pytest.raises(SystemExit, match=f"--gpus {len(cores) + 1}: more GPUs than the {len(cores)} cores"):
+        sl.gpu_slot(0, len(cores) + 1)
+    slot = sl.gpu_slot(len(cores) - 1, len(cores))  # the last GPU gets the last core
+    assert slot["env"]["CUDA_VISIBLE_DEVICES"] == str(len(cores) - 1)
     monkeypatch.setattr(sw.subprocess, "run", fake_child)
     args = argparse.Namespace(gpus=2, seeds=[0, 1], out=str(tmp_path), task="InvertedPendulum-v5")
     doc = sw.spread(args, {"net_dims": ["64,64", "32,32"]},

@@ -183,6 +183,9 @@ def main(argv=None) -> int:
               "warpgym_returns": ours_r.tolist(), "warpgym_lengths": ours_n.tolist(), **extra}
     if args.normalizer_from:
         result.update(normalizer_from=other_path, normalizer_iteration=other["iteration"])
+    if ckpt["config"].get("normalize_obs"):  # the statistics the policy was played with: where do they drift?
+        stats = ckpt["normalizer"]
+        result.update(normalizer_mean=stats["mean"].tolist(), normalizer_std=stats["var"].sqrt().tolist())
     print(f"{name}, policy of iteration {ckpt['iteration']} ({ckpt['samples'] / 1e6:.2f} M samples), deterministic, "
           f"{episodes} episodes each:")
     print(f"  Gymnasium's env (gymnasium.make, float64): return {gym_return:.1f} ± {gym['std']:.1f}, "
