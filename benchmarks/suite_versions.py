@@ -13,7 +13,9 @@ otherwise and Pusher's v4 needs MuJoCo < 3: they are left out.
     python benchmarks/suite_versions.py --report docs/bench/suite_versions.json
 
 ``--runs`` takes suite_learning.py's output folders (the ``<task>-seed<k>.json`` and the ``runs/`` beside
-them, where the checkpoints are); the policies' own ``.v4.json`` lie beside their checkpoints.
+them, where the checkpoints are); the policies' own ``.v4.json`` lie beside their checkpoints, and a policy
+whose file is there from an earlier run (the same episodes and seeds, newer than the checkpoint) is not
+played again: a new row costs the new row's plays.
 """
 
 from __future__ import annotations
@@ -29,6 +31,18 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
 
 from suite_learning import REFERENCE, REFERENCE_VERSION, SEEDS, play  # noqa: E402
+
+
+def earlier(ckpt: str, episodes: int) -> dict | None:
+    """The policy's ``.v4.json`` from an earlier run of this script, where it is newer than the checkpoint and
+    played the same episodes from the same reset seeds; else None (delete the file to play it again)."""
+    path = ckpt + ".v4.json"
+    if not os.path.isfile(path) or os.path.getmtime(path) < os.path.getmtime(ckpt):
+        return None
+    with open(path) as f:
+        r = json.load(f)
+    same = r.get("episodes") == episodes * len(SEEDS) and [s["seed"] for s in r.get("v4_per_seed", [])] == list(SEEDS)
+    return r | {"seeds": list(SEEDS)} if same and "v4_return" in r else None
 
 
 def score(folders: list[str], episodes: int, device: str | None) -> list[dict]:
@@ -47,7 +61,8 @@ def score(folders: list[str], episodes: int, device: str | None) -> list[dict]:
             if not os.path.exists(ckpt):
                 raise SystemExit(f"{path}: its last policy {ckpt} is not there; --runs takes the folder that "
                                  "suite_learning.py --out wrote, runs/ included")
-            r = play(ckpt, episodes, SEEDS, ckpt + ".v4.json", device, extra=("--env-version", "4"))
+            r = earlier(ckpt, episodes) or play(ckpt, episodes, SEEDS, ckpt + ".v4.json", device,
+                                                 extra=("--env-version", "4"))
             rows.append({"task": run["task"], "seed": run["seed"], "mark_s": last["mark_s"], "checkpoint": ckpt,
                          "episodes": r["episodes"], "v5_return": r["gymnasium_return"],
                          "v5_length": r["gymnasium_length"],

@@ -392,3 +392,38 @@ def test_suite_versions_plays_each_runs_last_policy_in_v4_and_names_the_term_tha
     os.remove(tmp_path / "runs" / "Reacher-v5-seed1" / "checkpoint-1.pt")
     with pytest.raises(SystemExit, match="its last policy .*checkpoint-1.pt is not there"):
         sv.score([str(tmp_path)], 10, "cpu")
+
+
+def test_suite_versions_plays_again_only_what_changed(monkeypatch, tmp_path):
+    """A policy's .v4.json from an earlier run is read, not played again, where it is newer than the checkpoint
+    and played the same episodes from the same reset seeds; a newer checkpoint or other episodes play anew."""
+    import suite_versions as sv
+
+    from warpgym.cli import eval as eval_command
+
+    calls = []
+
+    def fake_eval(args):
+        calls.append(args[args.index("--episodes") + 1])
+        episodes = int(args[args.index("--episodes") + 1])
+        with open(args[args.index("--json") + 1], "w") as f:
+            json.dump({"episodes": 3 * episodes, "gymnasium_return": -4.0, "gymnasium_length": 50.0,
+                       "v4_return": -4.2, "v4_length": 50.0, "gymnasium_terms": {}, "v4_terms": {},
+                       "v4_over_v5": 1.05, "v4_per_seed": [{"seed": s} for s in sv.SEEDS]}, f)
+
+    monkeypatch.setattr(eval_command, "main", fake_eval)
+    kept = [{"mark_s": 180.0, "checkpoint": "checkpoint-9.pt"}]
+    (tmp_path / "Reacher-v5-seed0.json").write_text(json.dumps({"run": {"task": "Reacher-v5", "seed": 0,
+                                                                         "kept": kept}}))
+    ckpt = tmp_path / "runs" / "Reacher-v5-seed0" / "checkpoint-9.pt"
+    os.makedirs(ckpt.parent)
+    ckpt.write_bytes(b"")
+    os.utime(ckpt, (1000, 1000))
+    first = sv.score([str(tmp_path)], 10, "cpu")
+    assert calls == ["10"] and sv.score([str(tmp_path)], 10, "cpu") == first and calls == ["10"]
+    sv.score([str(tmp_path)], 5, "cpu")  # other episodes: played again
+    assert calls == ["10", "5"]
+    later = os.path.getmtime(str(ckpt) + ".v4.json") + 60
+    os.utime(ckpt, (later, later))  # a checkpoint newer than its .v4.json (a run made again in the same folder)
+    sv.score([str(tmp_path)], 5, "cpu")
+    assert calls == ["10", "5", "5"]

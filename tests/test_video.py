@@ -247,3 +247,31 @@ def test_a_suite_clip_plays_in_real_time_and_follows_the_runner(tmp_path):
     # 6 m from its start the robot is still in view (Gymnasium 1.4's own camera has lost it there; 1.2's
     # tracks the model's "track" camera, which follows too)
     assert (np.abs(seen - empty).sum(axis=2) > 30).mean() > 0.01
+
+
+def test_a_clip_of_humanoid_standup_follows_it_as_it_walks_off(tmp_path):
+    """HumanoidStandup has no forward speed, but a policy that stands up steps away from where it lay (the
+    learning table's 10-minute policy left a fixed camera's frame within 5 s): its clips follow the torso."""
+    import gymnasium as gym
+    from PIL import Image
+
+    from warpgym.media.video import render_suite_clip
+    from warpgym.tasks.suite import SUITE
+
+    task = SUITE["HumanoidStandup-v5"]
+    env = gym.make(task.name)
+    start = env.unwrapped.init_qpos.copy()
+    env.close()
+    steps = 8
+    last = {}
+    for name, z in (("seen", start[2]), ("hidden", -50.0)):  # hidden: under the opaque floor
+        qpos = np.tile(start, (steps, 1, 1))
+        qpos[:, 0, 0] = np.linspace(0.0, 6.0, steps)  # 6 m from where it lay
+        qpos[:, 0, 2] = z
+        gif = str(tmp_path / f"{name}.gif")
+        render_suite_clip(task, {"dof_pos": qpos, "dof_vel": np.zeros((steps, 1, start.size - 1))},
+                          {gif: {"fps": 20}}, 0.015, 160, 120)
+        with Image.open(gif) as im:
+            im.seek(im.n_frames - 1)
+            last[name] = np.asarray(im.convert("RGB")).astype(int)
+    assert (np.abs(last["seen"] - last["hidden"]).sum(axis=2) > 30).mean() > 0.01

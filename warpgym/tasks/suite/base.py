@@ -47,6 +47,9 @@ class GymTask:
     reset_kinematics: ClassVar[bool] = False  # the first observation or forward position needs body poses
     reset_com: ClassVar[bool] = False  # ... and com inertias and velocities
     has_speed: ClassVar[bool] = False  # a forward speed (info["episode"]["s"])
+    # the root body leaves where it started without a forward speed to show for it (a humanoid that stands up
+    # and steps away): a clip's camera follows it, as it follows a runner
+    roams: ClassVar[bool] = False
     # Gymnasium's v4 of the task (gym's v2/v3 definitions on MuJoCo's own bindings, where most published
     # figures come from): how many of its observation's first entries are v5's observation, so that a
     # v5 policy plays it unchanged. None where v4's observation is laid out otherwise (Ant, Humanoid,

@@ -34,6 +34,7 @@ class HumanoidStandup(GymTask):
     contact_forces: ClassVar = True
     reset_kinematics: ClassVar = True
     reset_com: ClassVar = True
+    roams: ClassVar = True
 
     def observation_size(self, sim) -> int:
         return com_observation_size(self, sim)
