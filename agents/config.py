@@ -83,6 +83,10 @@ class Config:
     anneal_lr: bool = False
     reward_scale: float = 1.0
     normalize_obs: bool = True
+    # observations (every env's steps, all processes together) after which the normaliser's statistics stay
+    # as they are (rsl_rl's EmpiricalNormalization ``until``); 0: it learns throughout. A running mean of an
+    # input the policy steers follows the policy (a cart's position: docs/benchmarks.md, InvertedPendulum-v5)
+    normalize_until: float = 0
     tf32: bool = True  # on CUDA, let matmuls use TF32 tensor cores
     # collect the next rollout while PPO learns from the last one, on two CUDA streams, each rollout
     # learnt one update after the weights that collected it (agents.overlap)
@@ -131,7 +135,8 @@ class Config:
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise ValueError(f"{name}={v!r} must be a positive number")
-        for name in ("value_clip", "value_coef", "entropy_coef", "bounds_coef", "desired_kl", "eval_gap"):
+        for name in ("value_clip", "value_coef", "entropy_coef", "bounds_coef", "desired_kl", "eval_gap",
+                     "normalize_until"):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
                 raise ValueError(f"{name}={v!r} must be a non-negative number")

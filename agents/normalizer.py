@@ -7,10 +7,14 @@ from torch import nn
 
 
 class RunningMeanStd(nn.Module):
-    def __init__(self, size: int, clip: float = 5.0, eps: float = 1e-8):
+    """``until``: once the statistics hold at least this many observations they stay as they are (the batch
+    that crosses it is learnt whole); 0 learns from every batch."""
+
+    def __init__(self, size: int, clip: float = 5.0, eps: float = 1e-8, until: float = 0):
         super().__init__()
         self.clip = clip
         self.eps = eps
+        self.until = until
         self.register_buffer("mean", torch.zeros(size))
         self.register_buffer("var", torch.ones(size))
         self.register_buffer("count", torch.zeros((), dtype=torch.float64))
@@ -31,6 +35,10 @@ class RunningMeanStd(nn.Module):
         batch_var = (moments[1 + size :] / n - batch_mean * batch_mean).clamp(min=0.0)
         total = self.count + n
         w = n / total
+        if self.until > 0:  # decided on the device: the update stays free of host syncs and capturable
+            learning = self.count < self.until
+            w = torch.where(learning, w, torch.zeros_like(w))
+            total = torch.where(learning, total, self.count)
         delta = batch_mean - self.mean
         self.mean.add_((delta * w).float())
         self.var.copy_((self.var * (1 - w) + batch_var * w + delta * delta * w * (1 - w)).float())

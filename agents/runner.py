@@ -48,7 +48,7 @@ class OnPolicyRunner:
             torch.backends.cuda.matmul.allow_tf32 = True
         self.policy = ActorCritic(spec.num_obs, spec.num_actions, cfg.net_dims, cfg.activation,
                                   cfg.init_noise_std).to(self.device)
-        self.normalizer = RunningMeanStd(spec.num_obs, cfg.obs_clip).to(self.device)
+        self.normalizer = RunningMeanStd(spec.num_obs, cfg.obs_clip, until=cfg.normalize_until).to(self.device)
         # every process starts from rank 0's weights, then explores with its own noise
         self.workers.broadcast_(list(self.policy.parameters()) + list(self.normalizer.buffers()))
         torch.manual_seed(cfg.seed + 7919 * self.workers.rank)

@@ -120,6 +120,29 @@ def test_normalizer_matches_numpy_over_batches():
     assert RunningMeanStd(1, clip=5.0)(torch.tensor([[1e6]])).item() == 5.0
 
 
+def test_normalizer_keeps_its_statistics_once_it_holds_until_observations():
+    """rsl_rl's ``until``: the batch that reaches the count is learnt whole, the ones after it not at all; the
+    runner's normaliser stops so in a run (Config.normalize_until), and 0 learns throughout."""
+    rng = np.random.default_rng(1)
+    batches = [torch.from_numpy(rng.normal(m, 1.0, size=(60, 3)).astype(np.float32)) for m in (0.0, 1.0, 9.0)]
+    frozen, free = RunningMeanStd(3, until=100), RunningMeanStd(3)
+    for b in batches:
+        frozen.update(b)
+        free.update(b)
+    learnt = torch.cat(batches[:2]).numpy()
+    np.testing.assert_allclose(frozen.mean.numpy(), learnt.mean(0), rtol=1e-5)
+    np.testing.assert_allclose(frozen.var.numpy(), learnt.var(0), rtol=1e-4)
+    assert frozen.count.item() == 120 and free.count.item() == 180 and free.mean.mean().item() > 3.0
+
+    cfg = Config(net_dims=(16,), horizon_len=4, batch_size=32, seed=0, normalize_until=40, eval_gap=1e9)
+    runner = OnPolicyRunner(PointMassVecEnv(8, seed=0), cfg, print_fn=lambda s: None)
+    runner.learn(max_iterations=3)
+    # the first observations (8), then the first rollout (32): 40, where it stops
+    assert runner.normalizer.count.item() == 40
+    with pytest.raises(ValueError, match="normalize_until=-1"):
+        Config(normalize_until=-1).validated()
+
+
 def test_config_validation_names_the_value_and_the_fix():
     with pytest.raises(ValueError, match="gamma=1.5"):
         Config(gamma=1.5).validated()
