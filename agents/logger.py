@@ -15,6 +15,7 @@ COLUMNS = [
     "iteration", "samples", "time_s", "samples_per_s", "iteration_s", "episodes",
     "return", "length", "speed", "eval/return", "eval/length", "eval/speed", "eval_s",
     "loss/surrogate", "loss/value", "loss/entropy", "loss/bounds", "policy/kl", "policy/lr", "policy/noise_std",
+    "policy/lr_mean", "policy/lr_max", "policy/kl_max",
     "phase/idle_s", "phase/collect_s", "phase/normalizer_s", "phase/update_s", "phase/statistics_s",
     "faults/nan_actions", "faults/diverged_resets", "faults/solver_overflows", "faults/nonfinite_obs_rewards",
     "memory/allocated_mib", "memory/reserved_mib",

@@ -112,7 +112,10 @@ class PPO:
         self._idx = torch.zeros(size, dtype=torch.long, device=self.device)
         self._old_log_std = torch.zeros_like(self.policy.log_std)
         self._prox_log_std = torch.zeros_like(self.policy.log_std)
-        self._sums = torch.zeros(5, device=self.device)  # surrogate, value, entropy, kl, bounds
+        self._sums = torch.zeros(6, device=self.device)  # surrogate, value, entropy, kl, bounds, lr
+        # the largest KL and rate of the update's mini-batches: the rule moves the rate 1.5x a mini-batch, and
+        # the rate after the last one alone (policy/lr) can read the floor after swinging to the ceiling
+        self._peaks = torch.zeros(2, device=self.device)
         self._storage_id = id(storage)
         self._graph = None
 
@@ -141,7 +144,8 @@ class PPO:
         self.lr.copy_(self.lr_free * self.lr_scale)
         torch.nn.utils.clip_grad_norm_(policy.parameters(), cfg.max_grad_norm, foreach=True)
         self.optimizer.step()
-        self._sums += torch.stack([terms[0], terms[1], terms[2], kl, terms[4]])
+        self._sums += torch.stack([terms[0], terms[1], terms[2], kl, terms[4], self.lr])
+        torch.maximum(self._peaks, torch.stack([kl, self.lr]), out=self._peaks)
 
     def release_graph(self) -> None:
         """Free the captured step. Under NCCL a communicator cannot be destroyed while a graph that
@@ -177,6 +181,7 @@ class PPO:
         else:
             self._prox_log_std.copy_(old_log_std)
         self._sums.zero_()
+        self._peaks.zero_()
 
         def epoch() -> None:
             perm = torch.randperm(total, device=self.device)
@@ -203,4 +208,5 @@ class PPO:
         s = self._sums
         return {"loss/surrogate": s[0].clone(), "loss/value": s[1].clone(), "loss/entropy": s[2].clone(),
                 "policy/kl": s[3].clone(), "loss/bounds": s[4].clone(), "policy/lr": self.lr.clone(),
-                "policy/noise_std": self.policy.log_std.detach().exp().mean()}
+                "policy/lr_mean": s[5].clone(), "policy/lr_max": self._peaks[1].clone(),
+                "policy/kl_max": self._peaks[0].clone(), "policy/noise_std": self.policy.log_std.detach().exp().mean()}

@@ -80,6 +80,34 @@ def test_adaptive_learning_rate_rule():
     assert adapted_lr(torch.tensor(1e-2), torch.tensor(0.0), 0.01).item() == pytest.approx(1e-2)
 
 
+def test_an_update_logs_the_mean_and_peak_of_its_mini_batches_rates_and_kls(monkeypatch):
+    """policy/lr is the rate after the last mini-batch; policy/lr_mean, policy/lr_max and policy/kl_max read
+    every mini-batch of the update, where the KL rule may have swung the rate and come back."""
+    import agents.ppo as ppo_module
+
+    kls, rates = [], []
+    rule = ppo_module.adapted_lr
+
+    def watched(lr, kl, desired_kl):
+        kls.append(kl.item())
+        return rule(lr, kl, desired_kl)
+
+    monkeypatch.setattr(ppo_module, "adapted_lr", watched)
+    cfg = Config(net_dims=(16,), horizon_len=4, batch_size=8, repeat_times=3, learning_rate=5e-3, seed=1,
+                 eval_gap=1e9)
+    runner = OnPolicyRunner(PointMassVecEnv(8, seed=1), cfg, print_fn=lambda s: None)
+    step = runner.ppo.optimizer.step
+    monkeypatch.setattr(runner.ppo.optimizer, "step", lambda *a, **k: (rates.append(runner.ppo.lr.item()),
+                                                                       step(*a, **k))[1])
+    for row in runner.learn(max_iterations=3):
+        n = 3 * 4  # repeat_times passes of 4 mini-batches
+        mine, kl, rates, kls = rates[:n], kls[:n], rates[n:], kls[n:]
+        assert row["policy/lr"] == pytest.approx(mine[-1])
+        assert row["policy/lr_mean"] == pytest.approx(sum(mine) / n) and row["policy/lr_max"] == pytest.approx(max(mine))
+        assert row["policy/kl_max"] == pytest.approx(max(kl)) and row["policy/kl"] == pytest.approx(sum(kl) / n)
+    assert len(set(mine)) > 1  # the rule moved the rate within an update
+
+
 def test_an_annealed_learning_rate_falls_linearly_to_zero_over_the_budget_and_resumes_where_it_was(tmp_path):
     """Config.anneal_lr: iteration k of n learns at learning_rate * (1 - (k - 1) / n) (the factor is set
     before each update), with the KL rule too (its rate, scaled), and a resumed run goes on down the line."""
