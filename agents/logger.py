@@ -114,7 +114,8 @@ def read_metrics(run_dir: str) -> list[dict]:
             rows.append(json.loads(line))
         except json.JSONDecodeError:
             if i < len(lines) - 1 and any(rest.strip() for rest in lines[i + 1 :]):
-                raise ValueError(f"{path} line {i + 1} is not JSON and not the last line: the file is damaged") from None
+                raise ValueError(f"{path} line {i + 1} is not JSON and not the last line: the file is "
+                                 "damaged") from None
     return rows
 
 
