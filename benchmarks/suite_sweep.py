@@ -144,18 +144,18 @@ def table(doc: dict) -> str:
     return "\n".join(lines)
 
 
-def merged(docs: list[dict]) -> dict:
+def merged(docs: list[dict], failed: list[dict] = ()) -> dict:
     """One sweep of several that ran the same task and budget on the same GPU, scored alike: their rows together.
     A grid split over GPUs by setting adds rows; one split by seed adds runs to a setting's row. Every setting
-    must end with the same seeds, each run once, so that the rows' means compare."""
+    must end with the same seeds, each run once, so that the rows' means compare. ``failed``: rows of processes
+    that wrote no sweep (``--gpus``), their runs errors that keep the seed's place."""
     keys = ("task", "seconds", "gpu", "scoring")
     kinds = {tuple(json.dumps(d["meta"][k] if k != "scoring" else scoring_of(d["meta"])) for k in keys) for d in docs}
     if len(kinds) > 1:
         raise SystemExit(f"--report: these sweeps differ in {', '.join(keys)} ({sorted(kinds)}); report them apart")
     rows: dict[str, dict] = {}
-    for d in docs:
-        for r in d["rows"]:
-            rows.setdefault(r["label"], {**r, "runs": []})["runs"].extend(r["runs"])
+    for r in [row for d in docs for row in d["rows"]] + list(failed):
+        rows.setdefault(r["label"], {**r, "runs": []})["runs"].extend(r["runs"])
     seeds = {label: sorted(x["seed"] for x in r["runs"]) for label, r in rows.items()}
     if len({tuple(s) for s in seeds.values()}) > 1 or any(len(set(s)) < len(s) for s in seeds.values()):
         raise SystemExit(f"--report: the settings ran on different seeds, or a seed twice ({seeds}); join sweeps "
@@ -213,7 +213,7 @@ def spread(args, grid: dict[str, list[str]], argv: list[str]) -> dict:
 def join_parts(out: str, task: str, jobs: list[tuple[dict, int]]) -> dict:
     """The sweeps under OUT/parts/<k> (job k: a setting and a seed) as one; each run's folder moved to
     OUT/runs/<task>-<k>."""
-    docs = []
+    docs, failed = [], []
     os.makedirs(os.path.join(out, "runs"), exist_ok=True)
     for k, (combo, seed) in enumerate(jobs):
         part = os.path.join(out, "parts", f"{k:03d}")
@@ -221,7 +221,7 @@ def join_parts(out: str, task: str, jobs: list[tuple[dict, int]]) -> dict:
         if not os.path.exists(path):
             label = " ".join(f"{n}={v}" for n, v in combo.items()) or "preset"
             error = {"seed": seed, "error": f"the process wrote no sweep: see {part}/sweep.log"}
-            docs.append({"meta": None, "rows": [{"combo": combo, "label": label, "runs": [error]}]})
+            failed.append({"combo": combo, "label": label, "runs": [error]})
             continue
         with open(path) as f:
             doc = json.load(f)
@@ -232,10 +232,9 @@ def join_parts(out: str, task: str, jobs: list[tuple[dict, int]]) -> dict:
                     shutil.move(os.path.join(part, "runs", os.path.basename(run["run_dir"])), moved)
                     run["run_dir"] = moved
         docs.append(doc)
-    written = [d for d in docs if d["meta"] is not None]
-    if not written:
+    if not docs:
         raise SystemExit(f"--gpus: no process wrote a sweep; see {out}/parts/*/sweep.log")
-    return merged([d if d["meta"] is not None else {**d, "meta": written[0]["meta"]} for d in docs])
+    return merged(docs, failed)
 
 
 def main(argv=None) -> int:

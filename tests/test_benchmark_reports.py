@@ -251,15 +251,22 @@ def test_suite_sweep_spreads_settings_and_seeds_over_gpus_and_joins_them(monkeyp
     """``--gpus N``: one process per setting and seed, on GPUs 0..N-1; their sweeps joined into one row per
     setting, their runs moved beside the joined JSON; a process that wrote nothing is an error row naming its log."""
     import argparse
+    import threading
 
     import suite_sweep as sw
 
     calls = []
+    both_running = threading.Barrier(2, timeout=20)  # the first two children run at once, or the test fails
 
     def fake_child(cmd, env, **kw):
         out, seed = cmd[cmd.index("--out") + 1], int(cmd[cmd.index("--seeds") + 1])
         grid = [cmd[i + 1] for i, a in enumerate(cmd) if a == "--grid"]
         calls.append((env["CUDA_VISIBLE_DEVICES"], grid, seed, "--no-warm-up" in cmd))
+        if len(calls) <= 2:
+            try:
+                both_running.wait()
+            except threading.BrokenBarrierError:
+                pass
         if out.endswith("003"):
             return  # crashed before writing anything
         os.makedirs(os.path.join(out, "runs", "InvertedPendulum-v5-0"))
@@ -287,7 +294,9 @@ def test_suite_sweep_spreads_settings_and_seeds_over_gpus_and_joins_them(monkeyp
                      "--seeds", "0", "1", "--gpus", "2", "--seconds", "180"])
     assert sorted((g, s) for _, g, s, _ in calls) == [(["net_dims=32x32"], 0), (["net_dims=32x32"], 1),
                                                       (["net_dims=64x64"], 0), (["net_dims=64x64"], 1)]
-    assert {gpu for gpu, *_ in calls} <= {"0", "1"} and all(warm for *_, warm in calls)
+    # two at a time, one on each GPU
+    assert {calls[0][0], calls[1][0]} == {"0", "1"} and not both_running.broken
+    assert {gpu for gpu, *_ in calls} == {"0", "1"} and all(warm for *_, warm in calls)
     rows = {r["label"]: r for r in doc["rows"]}
     assert doc["meta"]["seeds"] == [0, 1] and set(rows) == {"net_dims=64,64", "net_dims=32,32"}
     assert rows["net_dims=64,64"]["gymnasium_return"] == 1050.0
