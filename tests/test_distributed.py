@@ -117,6 +117,11 @@ def test_a_lost_peer_names_the_checkpoint_written_after_the_watch_started(tmp_pa
         watch.stop(finished=True)
 
 
+# The jobs that test how a distributed run starts, stops, fails and resumes: a suite task, which a process
+# builds in half the time Newton's Ant takes on the CPU (the torchrun command above keeps the Ant)
+LIFECYCLE_TASK = "HalfCheetah-v5"
+
+
 def worker_pids(agent_pid: int) -> dict[int, int]:
     """RANK -> pid of the worker processes a torchrun agent started (read from /proc)."""
     found = {}
@@ -139,8 +144,8 @@ def test_a_killed_worker_stops_the_job_and_the_run_resumes_on_one_process(tmp_pa
     run = tmp_path / "ant"
     common = ["--horizon-len", "4", "--episode-length", "20", "--no-eval", "--no-plots"]
     log = open(tmp_path / "job.log", "w")
-    job = subprocess.Popen([*torchrun_args(2), "scripts/train.py", "--task", "Ant", "--device", "cpu", "--num-envs",
-                            "4", "--max-iterations", "100000", "--save-gap", "3", "--run-dir", str(run), *common],
+    job = subprocess.Popen([*torchrun_args(2), "scripts/train.py", "--task", LIFECYCLE_TASK, "--device", "cpu",
+                            "--num-envs", "4", "--max-iterations", "100000", "--save-gap", "3", "--run-dir", str(run), *common],
                            cwd=ROOT, stdout=log, stderr=subprocess.STDOUT, env=dict(ENV, WARPGYM_PEER_TIMEOUT="20"))
     deadline = time.time() + 240
     while time.time() < deadline and job.poll() is None:
@@ -174,7 +179,7 @@ def test_a_killed_worker_stops_the_job_and_the_run_resumes_on_one_process(tmp_pa
 def start_job(tmp_path, name, *flags, script="scripts/train.py", env=None):
     run = tmp_path / name
     log = open(tmp_path / f"{name}.log", "w")
-    job = subprocess.Popen([*torchrun_args(2), script, "--task", "Ant", "--device", "cpu", "--num-envs", "4",
+    job = subprocess.Popen([*torchrun_args(2), script, "--task", LIFECYCLE_TASK, "--device", "cpu", "--num-envs", "4",
                             "--horizon-len", "4", "--episode-length", "20", "--no-eval", "--no-plots",
                             "--run-dir", str(run), *flags], cwd=ROOT, stdout=log, stderr=subprocess.STDOUT,
                            env=dict(ENV, **(env or {})), start_new_session=True)
@@ -195,8 +200,8 @@ def test_finished_two_process_runs_exit_within_10_s_of_their_last_row(tmp_path):
     """A run whose time limit is read at a checkpoint iteration once left rank 0 a step ahead of the
     others: it finished while they waited in the next iteration's collectives (on GPUs, for ever).
     --save-gap 1 makes every iteration a checkpoint iteration."""
-    for name, flags in (("gap1", ["--save-gap", "1", "--time-limit", "16"]),
-                        ("gap3", ["--save-gap", "3", "--time-limit", "17"]),
+    for name, flags in (("gap1", ["--save-gap", "1", "--time-limit", "10"]),
+                        ("gap3", ["--save-gap", "3", "--time-limit", "11"]),
                         ("iterations", ["--save-gap", "1", "--max-iterations", "12"])):
         job, run, log = start_job(tmp_path, name, *flags)
         code = job.wait(timeout=240)
@@ -204,6 +209,7 @@ def test_finished_two_process_runs_exit_within_10_s_of_their_last_row(tmp_path):
         assert code == 0, log.read_text()[-3000:]
         last_row = os.path.getmtime(run / "metrics.jsonl")
         assert ended - last_row < 10.0, (name, ended - last_row)
+        assert len(read_metrics(str(run))) >= 6, name  # the time limits ended runs of several save gaps
         assert load(str(run / "checkpoint.pt"), torch.device("cpu"))["iteration"] == read_metrics(str(run))[-1]["iteration"]
 
 
