@@ -145,7 +145,8 @@ def test_a_killed_worker_stops_the_job_and_the_run_resumes_on_one_process(tmp_pa
     common = ["--horizon-len", "4", "--episode-length", "20", "--no-eval", "--no-plots"]
     log = open(tmp_path / "job.log", "w")
     job = subprocess.Popen([*torchrun_args(2), "scripts/train.py", "--task", LIFECYCLE_TASK, "--device", "cpu",
-                            "--num-envs", "4", "--max-iterations", "100000", "--save-gap", "3", "--run-dir", str(run), *common],
+                            "--num-envs", "4", "--max-iterations", "100000", "--save-gap", "3", "--run-dir", str(run),
+                            *common],
                            cwd=ROOT, stdout=log, stderr=subprocess.STDOUT, env=dict(ENV, WARPGYM_PEER_TIMEOUT="20"))
     deadline = time.time() + 240
     while time.time() < deadline and job.poll() is None:
@@ -210,7 +211,8 @@ def test_finished_two_process_runs_exit_within_10_s_of_their_last_row(tmp_path):
         last_row = os.path.getmtime(run / "metrics.jsonl")
         assert ended - last_row < 10.0, (name, ended - last_row)
         assert len(read_metrics(str(run))) >= 6, name  # the time limits ended runs of several save gaps
-        assert load(str(run / "checkpoint.pt"), torch.device("cpu"))["iteration"] == read_metrics(str(run))[-1]["iteration"]
+        saved = load(str(run / "checkpoint.pt"), torch.device("cpu"))["iteration"]
+        assert saved == read_metrics(str(run))[-1]["iteration"]
 
 
 @pytest.mark.skipif(not os.path.isdir("/proc"), reason="finds the worker processes through /proc")
