@@ -36,9 +36,9 @@ class RunningMeanStd(nn.Module):
         total = self.count + n
         w = n / total
         if self.until > 0:  # decided on the device: the update stays free of host syncs and capturable
-            learning = self.count < self.until
-            w = torch.where(learning, w, torch.zeros_like(w))
-            total = torch.where(learning, total, self.count)
+            learning = (self.count < self.until).double()  # 1 or 0: a batch past the limit weighs nothing
+            w = w * learning
+            total = self.count + n * learning
         delta = batch_mean - self.mean
         self.mean.add_((delta * w).float())
         self.var.copy_((self.var * (1 - w) + batch_var * w + delta * delta * w * (1 - w)).float())

@@ -144,8 +144,9 @@ class PPO:
         self.lr.copy_(self.lr_free * self.lr_scale)
         torch.nn.utils.clip_grad_norm_(policy.parameters(), cfg.max_grad_norm, foreach=True)
         self.optimizer.step()
-        self._sums += torch.stack([terms[0], terms[1], terms[2], kl, terms[4], self.lr])
-        torch.maximum(self._peaks, torch.stack([kl, self.lr]), out=self._peaks)
+        step = torch.stack([terms[0], terms[1], terms[2], kl, terms[4], self.lr])
+        self._sums += step
+        torch.maximum(self._peaks, step[3::2], out=self._peaks)  # kl, lr
 
     def release_graph(self) -> None:
         """Free the captured step. Under NCCL a communicator cannot be destroyed while a graph that

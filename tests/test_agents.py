@@ -99,11 +99,14 @@ def test_an_update_logs_the_mean_and_peak_of_its_mini_batches_rates_and_kls(monk
     step = runner.ppo.optimizer.step
     monkeypatch.setattr(runner.ppo.optimizer, "step", lambda *a, **k: (rates.append(runner.ppo.lr.item()),
                                                                        step(*a, **k))[1])
-    for row in runner.learn(max_iterations=3):
-        n = 3 * 4  # repeat_times passes of 4 mini-batches
-        mine, kl, rates, kls = rates[:n], kls[:n], rates[n:], kls[n:]
+    history = runner.learn(max_iterations=3)
+    n = 3 * 4  # an update: repeat_times passes of 4 mini-batches
+    assert len(rates) == len(kls) == 3 * n
+    for i, row in enumerate(history):
+        mine, kl = rates[i * n:(i + 1) * n], kls[i * n:(i + 1) * n]
         assert row["policy/lr"] == pytest.approx(mine[-1])
-        assert row["policy/lr_mean"] == pytest.approx(sum(mine) / n) and row["policy/lr_max"] == pytest.approx(max(mine))
+        assert row["policy/lr_mean"] == pytest.approx(sum(mine) / n)
+        assert row["policy/lr_max"] == pytest.approx(max(mine))
         assert row["policy/kl_max"] == pytest.approx(max(kl)) and row["policy/kl"] == pytest.approx(sum(kl) / n)
     assert len(set(mine)) > 1  # the rule moved the rate within an update
 
