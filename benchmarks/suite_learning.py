@@ -375,13 +375,19 @@ def without(argv: list[str], options: tuple[str, ...]) -> list[str]:
 
 def gpu_slot(gpu: int, gpus: int) -> dict:
     """``subprocess`` arguments that give a child GPU ``gpu`` of ``gpus`` and its equal share of this process's
-    cores, so that one GPU's run does not take another's CPU (suite_sweep.py's ``--gpus`` uses it too)."""
+    cores, so that one GPU's run does not take another's CPU (suite_sweep.py's ``--gpus`` uses it too). GPU k is
+    the k-th this process may see: under ``CUDA_VISIBLE_DEVICES=2,3`` and ``taskset``, two such commands share a
+    host, each on its own GPUs and cores."""
+    visible = [d.strip() for d in os.environ.get("CUDA_VISIBLE_DEVICES", "").split(",") if d.strip()]
+    if visible and len(visible) < gpus:
+        raise SystemExit(f"--gpus {gpus}: CUDA_VISIBLE_DEVICES={','.join(visible)} gives this process "
+                         f"{len(visible)}; name more there or ask for --gpus {len(visible)}")
     cores = sorted(os.sched_getaffinity(0))
     share = len(cores) // gpus
     if share < 1:
         raise SystemExit(f"--gpus {gpus}: more GPUs than the {len(cores)} cores this process may use")
     mine = set(cores[gpu * share:(gpu + 1) * share])
-    return {"env": dict(os.environ, CUDA_VISIBLE_DEVICES=str(gpu)),
+    return {"env": dict(os.environ, CUDA_VISIBLE_DEVICES=visible[gpu] if visible else str(gpu)),
             "preexec_fn": lambda: os.sched_setaffinity(0, mine)}
 
 

@@ -285,8 +285,15 @@ def test_suite_sweep_spreads_settings_and_seeds_over_gpus_and_joins_them(monkeyp
     cores = sorted(os.sched_getaffinity(0))
     with pytest.raises(SystemExit, match=f"--gpus {len(cores) + 1}: more GPUs than the {len(cores)} cores"):
         sl.gpu_slot(0, len(cores) + 1)
+    monkeypatch.delenv("CUDA_VISIBLE_DEVICES", raising=False)
     slot = sl.gpu_slot(len(cores) - 1, len(cores))  # the last GPU gets the last core
     assert slot["env"]["CUDA_VISIBLE_DEVICES"] == str(len(cores) - 1)
+    # within the GPUs this process was given: its second is the host's GPU 3
+    monkeypatch.setenv("CUDA_VISIBLE_DEVICES", "2, 3")
+    assert sl.gpu_slot(1, 2)["env"]["CUDA_VISIBLE_DEVICES"] == "3"
+    with pytest.raises(SystemExit, match="--gpus 3: CUDA_VISIBLE_DEVICES=2,3 gives this process 2; name more"):
+        sl.gpu_slot(0, 3)
+    monkeypatch.delenv("CUDA_VISIBLE_DEVICES")
     monkeypatch.setattr(sw.subprocess, "run", fake_child)
     args = argparse.Namespace(gpus=2, seeds=[0, 1], out=str(tmp_path), task="InvertedPendulum-v5")
     doc = sw.spread(args, {"net_dims": ["64,64", "32,32"]},
