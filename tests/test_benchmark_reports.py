@@ -443,3 +443,21 @@ def test_suite_versions_plays_again_only_what_changed(monkeypatch, tmp_path):
     os.utime(ckpt, (later, later))  # a checkpoint newer than its .v4.json (a run made again in the same folder)
     sv.score([str(tmp_path)], 5, "cpu")
     assert calls == ["10", "5", "5"]
+
+
+def test_the_published_suite_tables_are_what_their_scripts_print_from_the_committed_runs(capsys):
+    """docs/benchmarks.md's learning table (warpgym's and SB3's) and its v4-beside-v5 table, row for row, as
+    ``suite_learning.py --report`` and ``suite_versions.py --report`` print them from docs/bench: a row whose JSON
+    changed without the page (or the other way round) fails here."""
+    import suite_learning as sl
+    import suite_versions as sv
+
+    root = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
+    with open(os.path.join(root, "docs", "benchmarks.md")) as f:
+        page = set(f.read().splitlines())
+    bench = os.path.join(root, "docs", "bench")
+    assert sl.report([os.path.join(bench, "suite_learning"), os.path.join(bench, "suite_sb3")]) == 0
+    assert sv.main(["--report", os.path.join(bench, "suite_versions.json")]) == 0
+    rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| ") and "---" not in line]
+    assert len(rows) >= 11 + 5 + 7 + 3  # eleven tasks, SB3's five, seven in v4, the three header lines
+    assert [r for r in rows if r not in page] == []
