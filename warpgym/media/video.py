@@ -218,8 +218,8 @@ def render_suite_clip(task, states: dict, outputs: dict[str, dict], dt: float, w
                       height: int = 480) -> dict[str, int]:
     """Draw the first world of a stored clip of one of Gymnasium's tasks (``dof_pos``, ``dof_vel``: MuJoCo's
     qpos and qvel, (steps, worlds, n)) with Gymnasium's own renderer of the task, into each output
-    (path -> ``{"fps": ..., "width": ...}``), in real time, the camera following a runner (or a roaming
-    humanoid). Returns path -> frames written."""
+    (path -> ``{"fps": ..., "width": ...}``), in real time, the camera following the root body where the task says so
+    (``camera_follows``: the runners). Returns path -> frames written."""
     from warpgym.media.render import SuiteView  # noqa: PLC0415
 
     missing = [k for k in ("dof_pos", "dof_vel") if k not in states]
@@ -227,7 +227,7 @@ def render_suite_clip(task, states: dict, outputs: dict[str, dict], dt: float, w
         raise ValueError(f"states lack {missing}: a clip of a suite task needs MuJoCo's qpos and qvel")
     plans = {path: suite_strides(dt, int(opt["fps"]), path.lower().endswith(".gif")) for path, opt in outputs.items()}
     writers = [VideoWriter(path, plans[path][1], opt.get("width"), plans[path][2]) for path, opt in outputs.items()]
-    view = SuiteView(task, "rgb_array", 1, width, height, follow=task.has_speed or task.roams)
+    view = SuiteView(task, "rgb_array", 1, width, height, follow=task.camera_follows)
     try:
         return _write_clip(writers, {p: plan[0] for p, plan in plans.items()}, np.asarray(states["dof_pos"]).shape[0],
                            lambda t: view.render(np.asarray(states["dof_pos"][t], dtype=np.float64),

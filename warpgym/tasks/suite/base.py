@@ -47,9 +47,6 @@ class GymTask:
     reset_kinematics: ClassVar[bool] = False  # the first observation or forward position needs body poses
     reset_com: ClassVar[bool] = False  # ... and com inertias and velocities
     has_speed: ClassVar[bool] = False  # a forward speed (info["episode"]["s"])
-    # the root body leaves where it started without a forward speed to show for it (a humanoid that stands up
-    # and steps away): a clip's camera follows it, as it follows a runner
-    roams: ClassVar[bool] = False
     # Gymnasium's v4 of the task (gym's v2/v3 definitions on MuJoCo's own bindings, where most published
     # figures come from): how many of its observation's first entries are v5's observation, so that a
     # v5 policy plays it unchanged. None where v4's observation is laid out otherwise (Ant, Humanoid,
@@ -61,6 +58,12 @@ class GymTask:
         """The info entries that are terms of the reward, in Gymnasium's names and signs (a cost is
         negative), each step's reward their sum (HumanoidStandup adds 1 a step beside them)."""
         return tuple(k for k in cls.info_keys if k.startswith("reward_") or k.endswith("_penalty"))
+
+    @property
+    def camera_follows(self) -> bool:
+        """Whether a clip's camera keeps the root body in frame: a runner leaves a fixed camera's frame
+        within seconds. A task whose robot moves off without a forward speed sets it as a class attribute."""
+        return self.has_speed
 
     def version_name(self, version: int) -> str:
         return self.name.rsplit("-v", 1)[0] + f"-v{version}"

@@ -34,7 +34,8 @@ class HumanoidStandup(GymTask):
     contact_forces: ClassVar = True
     reset_kinematics: ClassVar = True
     reset_com: ClassVar = True
-    roams: ClassVar = True
+    # no forward speed, but a policy that stands up steps away from where it lay: its clips follow the torso
+    camera_follows: ClassVar = True
 
     def observation_size(self, sim) -> int:
         return com_observation_size(self, sim)
