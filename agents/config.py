@@ -12,6 +12,8 @@ import math
 from dataclasses import asdict, dataclass, field, fields, replace
 from typing import Any, Callable
 
+from agents import data_parallel
+
 # Per-task starting points (Isaac Gym's rl_games settings for Ant and Humanoid, adapted to PPO here).
 PRESETS: dict[str, dict[str, Any]] = {
     "Ant": dict(net_dims=(256, 128, 64), horizon_len=16, batch_size=32768, repeat_times=4,
@@ -97,6 +99,12 @@ class Config:
     # first update compiles it (on an H100 about 11-16 s with an empty Inductor cache, 3-5 s with a warm one)
     compile_update: bool = False
     obs_clip: float = 5.0
+    # how several processes (torchrun, one per GPU) divide the work: agents/data_parallel.py. "split": num_envs
+    # and batch_size are the run's totals, so G GPUs run the one-GPU algorithm with shorter iterations
+    multi_gpu: str = "split"
+    # stop once a logged value reaches a number, "KEY=VALUE" (e.g. "eval/speed=9.5", "eval/return=5850"): the
+    # first row whose KEY is at least VALUE ends the run as its time limit would (rl_games' score_to_win)
+    target: str = ""
 
     seed: int = 0
     eval_gap: float = 30.0
@@ -145,6 +153,8 @@ class Config:
         for name in ("overlap", "compile_update", "normalize_obs", "tf32", "keep_checkpoints", "anneal_lr"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name}={getattr(self, name)!r} must be True or False")
+        data_parallel.check_mode(self.multi_gpu)
+        self.target_pair()
         if self.activation not in ("elu", "relu", "tanh"):
             raise ValueError(f"activation={self.activation!r}: choose 'elu', 'relu' or 'tanh'")
         marks = tuple(self.save_at)
@@ -154,20 +164,24 @@ class Config:
         self.save_at = tuple(sorted(float(t) for t in marks))
         return self
 
-    def check_batch(self, num_envs: int) -> int:
-        """Number of mini-batches per pass for this many envs; raises if they do not divide evenly."""
-        samples = num_envs * self.horizon_len
-        if self.batch_size > samples:
-            raise ValueError(
-                f"batch_size={self.batch_size} exceeds the {samples} samples of one rollout "
-                f"({num_envs} envs x horizon_len {self.horizon_len}): lower batch_size or raise num_envs"
-            )
-        if samples % self.batch_size:
-            raise ValueError(
-                f"batch_size={self.batch_size} does not divide the {samples} samples of one rollout "
-                f"({num_envs} envs x horizon_len {self.horizon_len}): pick a divisor, e.g. {samples // 4}"
-            )
-        return samples // self.batch_size
+    def check_batch(self, num_envs: int, processes: int = 1) -> int:
+        """Mini-batches per pass for this process's ``num_envs`` envs among ``processes`` (agents.data_parallel);
+        raises if they do not divide evenly."""
+        return data_parallel.minibatches(self.multi_gpu, num_envs, self.horizon_len, self.batch_size, processes)
+
+    def target_pair(self) -> tuple[str, float] | None:
+        """``target`` as (key, value), or None without one; raises on a malformed one."""
+        if not self.target:
+            return None
+        key, sep, value = str(self.target).partition("=")
+        try:
+            number = float(value)
+        except ValueError:
+            number = math.nan
+        if not (sep and key.strip() and math.isfinite(number)):
+            raise ValueError(f"target={self.target!r}: write KEY=VALUE with a logged key and a number, "
+                             "e.g. target=eval/speed=9.5 or target=eval/return=5850")
+        return key.strip(), number
 
     def to_dict(self) -> dict:
         d = asdict(self)

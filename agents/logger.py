@@ -130,3 +130,21 @@ def first_reaching(rows: list[dict], key: str, value: float) -> dict | None:
     """When (``time_s``, ``samples``) the logged ``key`` first reached ``value``, or None."""
     hit = next((r for r in rows if r.get(key) is not None and r[key] >= value), None)
     return None if hit is None else {"time_s": hit["time_s"], "samples": hit["samples"]}
+
+
+def time_to_target(rows: list[dict], key: str, value: float) -> dict | None:
+    """When a run's logged ``key`` (``eval/return``, ``eval/speed``, ``speed``, ...) first reached ``value``, or None.
+
+    ``time_s``: seconds since the process started, up to the moment that row's evaluation began (wall-clock,
+    everything counted). ``learning_s``: seconds since the first row, with every evaluation logged before the
+    hit left out, so that how often a run evaluates does not move it (on several GPUs the others wait for
+    rank 0's evaluation, so it is left out of theirs too); its start-up is ``time_s - learning_s``."""
+    hit = next((i for i, r in enumerate(rows) if r.get(key) is not None and r[key] >= value), None)
+    if hit is None:
+        return None
+    row, first = rows[hit], rows[0]
+    began = row["time_s"] - row.get("eval_s", 0.0)
+    start = first["time_s"] - first.get("eval_s", 0.0)
+    evaluating = sum(r.get("eval_s", 0.0) for r in rows[:hit])
+    return {"time_s": round(began, 3), "learning_s": round(began - start - evaluating, 3),
+            "samples": row["samples"], "iteration": row["iteration"], key: row[key]}

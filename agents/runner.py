@@ -41,7 +41,10 @@ class OnPolicyRunner:
         self.spec = spec = env_spec(env)
         self.device = spec.device
         self.workers = Workers()
-        self.num_minibatches = cfg.check_batch(spec.num_envs)
+        # this process's part of every mini-batch, as Config.multi_gpu divides the work (agents.data_parallel)
+        self.num_minibatches = cfg.check_batch(spec.num_envs, self.workers.size)
+        self.target = cfg.target_pair()
+        self.target_reached: dict | None = None  # the first row that reached Config.target
         torch.manual_seed(cfg.seed)
         if self.device.type == "cuda" and cfg.tf32:
             # TF32 matmuls: the policy's layers run on tensor cores; PPO does not notice the precision
@@ -185,8 +188,8 @@ class OnPolicyRunner:
                 self.timer.iterations += 1
                 self.samples += per_iter
                 finished = True
-                stop = self.log(stats, last_iter, wants_stop=self._stop_requested or
-                                (time_limit is not None and self.elapsed() >= time_limit))
+                stop = self.log(stats, last_iter, wants_stop=self._stop_requested or self.target_reached is not None
+                                or (time_limit is not None and self.elapsed() >= time_limit))
                 self.timer.lap("logging, evaluation, host read")
                 if self.iteration % self.cfg.save_gap == 0:
                     # The checkpoint's own row reaches disk first. Every process flushes here, not only
@@ -296,6 +299,12 @@ class OnPolicyRunner:
             row["time_s"] = round(self.elapsed(), 3)
             self.clock.restart()  # the iteration queued before the evaluation is timed without it
         self.history.append(row)
+        value = row.get(self.target[0]) if self.target else None
+        if value is not None and self.target_reached is None and value >= self.target[1]:
+            # rank 0 alone evaluates: its stop travels with the next iteration's statistics to every process
+            self.target_reached = {k: row[k] for k in ("iteration", "samples", "time_s", self.target[0])}
+            self.print(f"target {self.target[0]} >= {self.target[1]:g} reached at iteration {row['iteration']} "
+                       f"({row[self.target[0]]:.4g} at {row['time_s']:.1f} s): stopping")
         if self.logger:
             self.logger.log(row)
         self._logged_through = staged.iteration

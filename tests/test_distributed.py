@@ -2,6 +2,7 @@
 machine or on two "machines" (two torchrun agents on localhost), a lost worker stops the job, and
 a killed run resumes with another number of processes."""
 
+import json
 import os
 import signal
 import subprocess
@@ -72,11 +73,12 @@ def test_train_command_under_torchrun_on_the_cpu(tmp_path):
     done = torchrun("-m", "warpgym", "train", "--task", "Ant", "--device", "cpu", "--num-envs", "4",
                     "--max-iterations", "2", "--horizon-len", "4", "--episode-length", "20",
                     "--no-eval", "--no-plots", "--run-dir", str(run))
-    assert "x 2 processes" in done.stdout
-    summary = (run / "summary.json").read_text()
-    assert '"iterations": 2' in summary and '"workers": 2' in summary
+    # --multi-gpu split (the default): --num-envs is the run's total, 2 envs on each process
+    assert "x 2 processes, 2 envs each (--multi-gpu split: 4 in all)" in done.stdout
+    summary = json.loads((run / "summary.json").read_text())
+    assert (summary["iterations"], summary["workers"], summary["num_envs"], summary["num_envs_total"]) == (2, 2, 2, 4)
     rows = (run / "metrics.jsonl").read_text().splitlines()
-    assert len(rows) == 2 and '"samples": 64' in rows[1]  # 2 processes x 4 envs x 4 steps x 2 iterations
+    assert len(rows) == 2 and '"samples": 32' in rows[1]  # 2 processes x 2 envs x 4 steps x 2 iterations
 
 
 def test_a_silent_peer_is_noticed_and_a_finished_one_is_not():

@@ -117,6 +117,9 @@ BAD_FLAGS = [
      "--batch-size 48 does not divide the 64 samples of one rollout"),
     (["--num-envs", "8", "--horizon-len", "8", "--batch-size", "128"], "--batch-size 128 exceeds the 64 samples"),
     (["--video", "--no-eval"], "--video records the evaluation episode"),
+    (["--target", "eval/speed"], "--target 'eval/speed': write KEY=VALUE with a logged key and a number"),
+    (["--target", "eval/speed=fast"], "--target 'eval/speed=fast': write KEY=VALUE"),
+    (["--multi-gpu", "pairs"], "--multi-gpu: invalid choice: 'pairs' (choose from split, grow-batch, grow-steps)"),
 ]
 
 

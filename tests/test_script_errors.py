@@ -2,6 +2,7 @@
 that names it: no traceback, nothing measured first. (train.py's flags: tests/test_reliability.py;
 damaged checkpoints: tests/test_damaged_files.py.)"""
 
+import glob
 import os
 import subprocess
 import sys
@@ -40,6 +41,7 @@ CASES = [
     ("reliability_soak.py", ["--report", MISSING], None, f"--report {MISSING}: no such file"),
     ("reliability_soak.py", ["bogus"], None, "invalid choice: 'bogus'"),
     ("scaling.py", ["--out", MISSING, "--gpus", "0"], None, "--gpus 0: each is a number of GPUs, 1 or more"),
+    ("scaling.py", ["--report", MISSING], None, f"--report {MISSING}: no scaling_<task>.json there"),
     ("fidelity.py", ["--out", MISSING, "--replay", MISSING], None, f"--replay {MISSING}: not a finished run directory"),
     ("fidelity.py", ["--out", MISSING, "--probes", MISSING], None, f"--probes {MISSING}: no such checkpoint file"),
     ("fidelity.py", ["--report", MISSING], None, f"--report {MISSING}: no fidelity.json"),
@@ -61,8 +63,10 @@ def test_a_bad_input_is_named_in_one_line(tmp_path, name, args, missing, says):
         (tmp_path / missing).mkdir()
         (tmp_path / missing / "__init__.py").write_text(f"raise ImportError('No module named {missing}', name='{missing}')\n")
         env["PYTHONPATH"] = os.pathsep.join([str(tmp_path), env.get("PYTHONPATH", "")])
-    folder = "scripts" if os.path.exists(os.path.join(ROOT, "scripts", name)) else "benchmarks"
-    done = subprocess.run([sys.executable, os.path.join(ROOT, folder, name), *args], cwd=tmp_path, env=env,
+    found = glob.glob(os.path.join(ROOT, "scripts", name)) or glob.glob(os.path.join(ROOT, "benchmarks", "**", name),
+                                                                         recursive=True)
+    assert len(found) == 1, found
+    done = subprocess.run([sys.executable, found[0], *args], cwd=tmp_path, env=env,
                           capture_output=True, text=True, timeout=120)
     assert done.returncode != 0 and "Traceback" not in done.stderr, done.stderr[-2000:]
     assert says in done.stderr, done.stderr[-2000:]

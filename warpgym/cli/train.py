@@ -19,6 +19,7 @@ import time
 from dataclasses import fields
 
 from agents import Config, OnPolicyRunner
+from agents.data_parallel import envs_per_process
 from warpgym.cli import process_start_time, train_args, write_json
 from warpgym.cli.train_args import TASK_NAMES, with_flag_names
 
@@ -72,10 +73,13 @@ def check_resume(run_dir: str, saved: dict, task_flag: str | None) -> bool:
     return True
 
 
-def build_config(args, task: str, num_envs: int, device: str, saved: dict | None = None) -> Config:
-    """The task's preset, or the saved config of the run being resumed, then the flags given."""
+def build_config(args, task: str, num_envs: int, device: str, saved: dict | None = None, processes: int = 1) -> Config:
+    """The task's preset, or the saved config of the run being resumed, then the flags given; the training env
+    is this process's share of ``num_envs`` among ``processes`` (Config.multi_gpu)."""
     if saved is not None:
         known = {f.name for f in fields(Config)} - {"env_class", "env_args", "eval_env_class", "eval_env_args"}
+        # a run saved before Config.multi_gpu gave each process num_envs envs and mini-batches of batch_size
+        saved = {"multi_gpu": "grow-batch", **saved}
         cfg = Config(**{k: (tuple(v) if k == "net_dims" else v) for k, v in saved.items() if k in known})
     else:
         cfg = Config.for_task(task, seed=args.seed)
@@ -84,7 +88,8 @@ def build_config(args, task: str, num_envs: int, device: str, saved: dict | None
         "save_gap": args.save_gap, "eval_gap": args.eval_gap, "eval_envs": args.eval_envs,
         "batch_size": args.batch_size, "keep_checkpoints": args.keep_checkpoints or None,
         "overlap": args.overlap or None, "compile_update": args.compile_update or None,
-        "save_at": tuple(args.save_at) if args.save_at else None,
+        "save_at": tuple(args.save_at) if args.save_at else None, "target": args.target,
+        "multi_gpu": args.multi_gpu,
     }.items() if v is not None}
     if saved is None and "eval_envs" not in changes and device == "cpu":
         changes["eval_envs"] = 4
@@ -114,10 +119,11 @@ def build_config(args, task: str, num_envs: int, device: str, saved: dict | None
                   "substeps": args.substeps or defined.substeps,
                   "physics": defined.physics.replace(**(args.physics or {})).to_dict()}
         env_class = LocomotionVecEnv
+    local_envs = envs_per_process(cfg.multi_gpu, num_envs, processes)
     return cfg.replace(
         batch_size=batch,
         env_class=env_class,
-        env_args={**common, "num_envs": num_envs, "seed": args.seed},
+        env_args={**common, "num_envs": local_envs, "seed": args.seed},
         eval_env_class=env_class,
         eval_env_args={**common, "num_envs": cfg.eval_envs, "seed": args.seed + 1},
     )
@@ -128,8 +134,9 @@ def summarize(history: list[dict], device_name: str, cfg: Config) -> dict:
     from agents.logger import first_reaching, steady_median  # noqa: PLC0415
 
     rows = history[len(history) // 5 :]
+    workers = int(os.environ.get("WORLD_SIZE", "1"))
     out = {"device": device_name, "num_envs": cfg.env_args["num_envs"], "iterations": len(history),
-           "workers": int(os.environ.get("WORLD_SIZE", "1")),
+           "workers": workers, "num_envs_total": cfg.env_args["num_envs"] * workers, "multi_gpu": cfg.multi_gpu,
            "steady_samples_per_s_median": steady_median(history) or 0.0}
     phases = sorted({k for r in rows for k in r if k.startswith("phase/")} | {"iteration_s"})
     out["steady_phase_s_median"] = {k: steady_median(history, k) for k in phases if any(k in r for r in rows)}
@@ -320,9 +327,10 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
         run_dir = args.run_dir or os.path.join("runs", f"{task}-{time.strftime('%Y%m%d-%H%M%S')}")
         run_dir = same_on_every_worker(run_dir, device)  # a default name could differ by a second
     kind = "cuda" if device.startswith("cuda") else "cpu"
+    processes = int(os.environ.get("WORLD_SIZE", "1"))
     try:
-        cfg = build_config(args, task, num_envs, device, saved)
-        cfg.check_batch(num_envs)
+        cfg = build_config(args, task, num_envs, device, saved, processes)
+        cfg.check_batch(cfg.env_args["num_envs"], processes)
     except ValueError as e:
         raise SystemExit(f"error: {with_flag_names(str(e))}") from None
     if rank > 0:  # each process draws its own reset noise; rank 0 alone logs, evaluates and saves
@@ -342,8 +350,10 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
                    {"task": task, "device": device, "num_envs": num_envs, "seed": args.seed, **cfg.to_dict()})
     say = print if rank == 0 else (lambda *a, **k: None)
     workers = int(os.environ.get("WORLD_SIZE", "1"))
-    say(f"warpgym PPO | {task} | {num_envs} envs on {device} ({device_name})"
-        + (f" x {workers} processes" if workers > 1 else "") + f" | run dir {run_dir}", flush=True)
+    local_envs = cfg.env_args["num_envs"]
+    shares = (f" x {workers} processes, {local_envs} envs each (--multi-gpu {cfg.multi_gpu}: "
+              f"{local_envs * workers} in all)") if workers > 1 else ""
+    say(f"warpgym PPO | {task} | {num_envs} envs on {device} ({device_name}){shares} | run dir {run_dir}", flush=True)
     from warpgym.compile import log as compile_log, preload  # noqa: PLC0415
 
     timeline: list[tuple[float, str]] = []
@@ -361,7 +371,7 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
                                 "CPU cores; WARP_CACHE_PATH points Warp at a shared cache)"))
     if args.no_mathdx:
         preload.use_mathdx(False)
-    env = built(lambda: cfg.env_class(**cfg.env_args), f"training env: {task} x {num_envs}", phase)
+    env = built(lambda: cfg.env_class(**cfg.env_args), f"training env: {task} x {local_envs}", phase)
     eval_env = None if args.no_eval else built(lambda: cfg.eval_env_class(**cfg.eval_env_args),
                                                f"evaluation env: {task} x {cfg.eval_env_args['num_envs']}", phase)
     assert isinstance(env, (LocomotionVecEnv, SuiteVecEnv))
@@ -399,6 +409,8 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
     summary = summarize(history, device_name, cfg)
     summary["solver_load"] = env.sim.solver_load()  # this process's envs, over the whole run
     summary["kept_checkpoints"] = runner.kept
+    if cfg.target:
+        summary["target"] = {"target": cfg.target, "reached": runner.target_reached}
     # the capture the rollouts had: "off" where the device cannot capture or a capture failed and fell back
     summary["rollout_graph"] = runner.collector.capture
     summary["startup"] = {"timeline": timeline, "kernel_cache": cache, "cached_modules_at_start": cached,

@@ -6,6 +6,7 @@ import argparse
 import math
 
 from agents.config import PRESETS
+from agents.data_parallel import MODES as MULTI_GPU_MODES
 
 TASK_NAMES = {t.lower(): t for t in PRESETS}
 
@@ -40,6 +41,14 @@ def parse_args(argv=None, description: str | None = None):
     ap.add_argument("--save-at", type=float, nargs="+", default=None, metavar="SECONDS",
                     help="also keep checkpoint-<iteration>.pt at the first iteration after each of these "
                          "wall-clock seconds since start, e.g. --save-at 60 120 (summary.json lists them)")
+    ap.add_argument("--target", default=None, metavar="KEY=VALUE",
+                    help="stop once a logged value reaches VALUE, e.g. --target eval/speed=9.5 (an evaluation's "
+                         "forward speed) or --target eval/return=5850; summary.json records the row that did")
+    ap.add_argument("--multi-gpu", default=None, choices=MULTI_GPU_MODES,
+                    help="under torchrun, how the GPUs divide the work (agents/data_parallel.py): split (default: "
+                         "--num-envs and --batch-size are the run's totals, the one-GPU algorithm in shorter "
+                         "iterations), grow-batch (each GPU --num-envs envs, mini-batches G times larger) or "
+                         "grow-steps (each GPU --num-envs envs, G times the mini-batch steps)")
     ap.add_argument("--keep-checkpoints", action="store_true",
                     help="keep checkpoint-<iteration>.pt at every save, not only the latest checkpoint.pt")
     ap.add_argument("--video", action="store_true",
@@ -140,8 +149,17 @@ def check_values(ap, args) -> None:
             ap.error(f"--save-at {v}: must be non-negative seconds since start, e.g. --save-at 60 120")
     if args.task is not None and args.task.lower() not in TASK_NAMES:
         ap.error(f"--task {args.task!r}: choose one of {list(TASK_NAMES.values())}")
+    if args.target is not None:
+        from agents.config import Config  # noqa: PLC0415
+
+        try:
+            Config(target=args.target).target_pair()
+        except ValueError:
+            ap.error(f"--target {args.target!r}: write KEY=VALUE with a logged key and a number, e.g. "
+                     "--target eval/speed=9.5 or --target eval/return=5850")
     if args.resume is not None:
-        given = [f for f in ("num_envs", "horizon_len", "episode_length", "substeps") if getattr(args, f) is not None]
+        given = [f for f in ("num_envs", "horizon_len", "episode_length", "substeps", "multi_gpu")
+                 if getattr(args, f) is not None]
         if given or args.physics:
             names = ", ".join([flag(f) for f in given] + (["--physics"] if args.physics else []))
             ap.error(f"{names}: a resumed run keeps the envs it was started with; drop {names} "

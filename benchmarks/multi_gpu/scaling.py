@@ -1,0 +1,371 @@
+"""Several GPUs on one host: how much sooner each way of dividing the work reaches a target.
+
+    python benchmarks/multi_gpu/scaling.py --out OUT --task Ant --gpus 1 2 4 --modes split grow-batch --seeds 0 1
+    python benchmarks/multi_gpu/scaling.py --out OUT --task Humanoid-v5 --gpus 1 4 --seconds 600
+    python benchmarks/multi_gpu/scaling.py --report OUT [OUT2 ...]   # the table and figures again, runs joined
+
+One `warpgym train` per GPU count, mode (``--multi-gpu``, agents/data_parallel.py) and seed, G GPUs under
+`torchrun --nproc_per_node=G`, with the same flags; one GPU is every mode's baseline. The jobs share the host
+(gpu_jobs.py): each waits for as many free GPUs as it needs and gets their share of the cores, so the 1-GPU
+baselines run side by side with each other and with multi-GPU jobs, as busy a host as a 4-GPU run's. A run
+evaluates (64 envs, deterministic policy) every --eval-gap seconds and stops at its last target (`train
+--target`) or after --seconds. The time to each target (agents.logger.time_to_target) is read two ways:
+from the process start (wall-clock, start-up and evaluations included) and the learning time, from the first
+iteration with the evaluations left out; the goal's ratio is G GPUs' median learning time over one GPU's.
+
+Writes, as the runs end, OUT/scaling_<task>.json (every run: its times, samples/s, phases, last evaluation)
+and at the end OUT/scaling_<task>.md (the table), OUT/<task>_gpus_<key>_vs_time.png and _vs_samples.png, and
+OUT/runs_<task>.tar.gz (each run's metrics, summary, config and log; no checkpoints).
+"""
+
+from __future__ import annotations
+
+import argparse
+import glob
+import json
+import math
+import os
+import shutil
+import statistics
+import sys
+import tarfile
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+sys.path[:0] = [ROOT, HERE]
+
+from gpu_jobs import Job, run_jobs  # noqa: E402
+
+# the issue's targets; a suite task without one here is timed to Tianshou's (or SLM-Lab's) figure
+TARGETS = {"Ant": ("eval/speed", (8.0, 9.5)), "Humanoid": ("eval/speed", (6.0,)),
+           "Humanoid-v5": ("eval/return", (10000.0,)), "Ant-v5": ("eval/return", (5850.0,))}
+
+
+def default_targets(task: str) -> tuple[str, tuple[float, ...]]:
+    if task in TARGETS:
+        return TARGETS[task]
+    sys.path.insert(0, os.path.dirname(HERE))
+    from suite_learning import REFERENCE  # noqa: PLC0415
+
+    return "eval/return", (REFERENCE[task],)
+
+
+def parse_targets(text: str) -> tuple[str, tuple[float, ...]]:
+    """``eval/speed=8,9.5`` -> ("eval/speed", (8.0, 9.5))."""
+    key, _, values = text.partition("=")
+    try:
+        numbers = tuple(sorted(float(v) for v in values.split(",")))
+    except ValueError:
+        numbers = ()
+    if not key or not numbers or not all(math.isfinite(v) for v in numbers):
+        raise ValueError(f"--targets {text!r}: write KEY=V1,V2 with a logged key, e.g. eval/speed=8,9.5")
+    return key, numbers
+
+
+def run_name(gpus: int, mode: str, seed: int) -> str:
+    return f"gpu{gpus}-seed{seed}" if gpus == 1 else f"gpu{gpus}-{mode}-seed{seed}"
+
+
+def jobs_for(args, runs: str, key: str, last: float) -> list[Job]:
+    """The 1-GPU baselines first (one per --baseline-seeds), then each GPU count's modes and seeds."""
+    flags = ["--task", args.task, "--time-limit", str(args.seconds), "--eval-gap", str(args.eval_gap),
+             "--target", f"{key}={last:g}", "--no-plots", *(["--num-envs", str(args.num_envs)] if args.num_envs else []),
+             *args.train_flags.split()]
+    plan = [(1, args.modes[0], s) for s in args.baseline_seeds] if 1 in args.gpus else []
+    plan += [(g, m, s) for g in sorted(set(args.gpus) - {1}) for m in args.modes for s in args.seeds]
+    jobs = []
+    for gpus, mode, seed in plan:
+        name = run_name(gpus, mode, seed)
+        d = os.path.join(runs, name)
+        launch = [sys.executable] if gpus == 1 else [sys.executable, "-m", "torch.distributed.run", "--standalone",
+                                                     f"--nproc_per_node={gpus}"]
+        jobs.append(Job(name, gpus, [*launch, os.path.join(ROOT, "scripts", "train.py"), *flags, "--seed", str(seed),
+                                     "--multi-gpu", mode, "--run-dir", d], d + ".log", cwd=ROOT))
+    return jobs
+
+
+def run_row(run_dir: str, key: str, values: tuple[float, ...]) -> dict:
+    """One run's times to each target, throughput and last evaluation, from its files."""
+    from agents.logger import read_metrics, time_to_target  # noqa: PLC0415
+
+    name = os.path.basename(run_dir)
+    gpus = int(name[3:].split("-")[0])
+    mode = "-" if gpus == 1 else name.split("-", 1)[1].rsplit("-seed", 1)[0]
+    row = {"name": name, "gpus": gpus, "mode": mode, "seed": int(name.rsplit("seed", 1)[1])}
+    try:
+        rows = read_metrics(run_dir)
+        with open(os.path.join(run_dir, "summary.json")) as f:
+            summary = json.load(f)
+    except (FileNotFoundError, ValueError) as e:
+        return {**row, "error": str(e)}
+    evals = [r for r in rows if r.get(key) is not None]
+    row.update({
+        "device": summary.get("device"), "num_envs_per_gpu": summary.get("num_envs"),
+        "num_envs_total": summary.get("num_envs_total"), "iterations": summary.get("iterations"),
+        "samples_per_s": summary.get("steady_samples_per_s_median"),
+        "iteration_ms": 1e3 * (summary.get("steady_phase_s_median") or {}).get("iteration_s", math.nan),
+        "phase_ms": {k[len("phase/"):-2]: 1e3 * v for k, v in (summary.get("steady_phase_s_median") or {}).items()
+                     if k.startswith("phase/") and v is not None},
+        "first_iteration_s": summary.get("first_iteration_time_s"),
+        "to_target": {f"{v:g}": time_to_target(rows, key, v) for v in values},
+        "last": {k: evals[-1].get(k) for k in ("time_s", "samples", key)} if evals else None,
+        "evaluations": len(evals), "evaluation_s": round(sum(r.get("eval_s", 0.0) for r in rows), 2),
+    })
+    return row
+
+
+def atomic_json(path: str, doc: dict) -> None:
+    with open(path + ".tmp", "w") as f:
+        json.dump(doc, f, indent=1)
+    os.replace(path + ".tmp", path)
+
+
+def median_or_inf(values: list[float | None]) -> float:
+    """A run that missed the target counts as slower than every run that made it."""
+    return statistics.median([math.inf if v is None else v for v in values]) if values else math.nan
+
+
+def groups(doc: dict) -> dict[tuple[int, str], list[dict]]:
+    out: dict[tuple[int, str], list[dict]] = {}
+    for r in doc["runs"]:
+        if "error" not in r:
+            out.setdefault((r["gpus"], r["mode"]), []).append(r)
+    return dict(sorted(out.items()))
+
+
+def summarize(doc: dict) -> list[dict]:
+    """One line per (GPUs, mode): medians over seeds, and the ratios to one GPU's medians."""
+    lines = []
+    base: dict[str, float] = {}
+    base_rate = math.nan
+    for (gpus, mode), runs in groups(doc).items():
+        line = {"gpus": gpus, "mode": mode, "seeds": sorted(r["seed"] for r in runs),
+                "samples_per_s": statistics.median(r["samples_per_s"] or 0.0 for r in runs),
+                "iteration_ms": statistics.median(r["iteration_ms"] for r in runs),
+                "first_iteration_s": statistics.median(r["first_iteration_s"] or math.nan for r in runs),
+                "targets": {}}
+        if gpus == 1:
+            base_rate = line["samples_per_s"]
+        line["samples_speedup"] = line["samples_per_s"] / base_rate if base_rate else math.nan
+        for v in doc["targets"]["values"]:
+            hits = [r["to_target"].get(f"{v:g}") for r in runs]
+            learn = median_or_inf([h["learning_s"] if h else None for h in hits])
+            wall = median_or_inf([h["time_s"] if h else None for h in hits])
+            if gpus == 1:
+                base[f"{v:g}"] = learn
+            ref = base.get(f"{v:g}", math.nan)
+            line["targets"][f"{v:g}"] = {
+                "reached": sum(h is not None for h in hits), "runs": len(hits),
+                "learning_s": [h["learning_s"] if h else None for h in hits], "median_learning_s": learn,
+                "median_time_s": wall, "ratio": learn / ref if math.isfinite(learn) and ref and math.isfinite(ref)
+                else None}
+        lines.append(line)
+    return lines
+
+
+GOAL = {2: 0.7, 4: 0.5}  # issue 54: G GPUs' median learning time to target at most this share of one GPU's
+
+
+def seconds(v: float) -> str:
+    return "not reached" if v == math.inf else ("-" if v is None or math.isnan(v) else f"{v:.1f} s")
+
+
+def markdown(doc: dict, lines: list[dict]) -> str:
+    key, values = doc["targets"]["key"], doc["targets"]["values"]
+    devices = sorted({r.get("device") for r in doc["runs"] if r.get("device")})
+    out = [f"{doc['task']}: time to {key} " + " and ".join(f"{v:g}" for v in values)
+           + f"; runs of at most {doc['seconds']:g} s, evaluated every {doc['eval_gap']:g} s; "
+           f"{', '.join(devices)} ({doc['host_gpus']} GPUs of one host), {doc['date']}", "",
+           "| GPUs | mode | envs per GPU | samples/s | x 1 GPU | iteration ms | first iteration | "
+           + " | ".join(f"{key} {v:g}: learning time, each seed | median (ratio; goal)" for v in values) + " |",
+           "|---:|---|---:|---:|---:|---:|---:|" + "---|---|" * len(values)]
+    for line in lines:
+        runs = groups(doc)[(line["gpus"], line["mode"])]
+        envs = "/".join(sorted({str(r["num_envs_per_gpu"]) for r in runs}))
+        cells = []
+        for v in values:
+            t = line["targets"][f"{v:g}"]
+            each = ", ".join(seconds(s) if s is not None else "-" for s in t["learning_s"])
+            ratio = "" if t["ratio"] is None else f" ({t['ratio']:.2f}x"
+            goal = GOAL.get(line["gpus"])
+            if ratio:
+                ratio += (f"; <= {goal}: {'met' if t['ratio'] <= goal else 'not met'})" if goal else ")")
+            cells.append(f"{each} | {seconds(t['median_learning_s'])}{ratio}, {t['reached']} of {t['runs']}")
+        out.append(f"| {line['gpus']} | {line['mode']} | {envs} | {line['samples_per_s'] / 1e6:.3f} M | "
+                   f"{'-' if math.isnan(line['samples_speedup']) else format(line['samples_speedup'], '.2f') + 'x'} | {line['iteration_ms']:.1f} | {line['first_iteration_s']:.1f} s | "
+                   + " | ".join(cells) + " |")
+    out += ["", "Learning time: from the run's first iteration to the start of the first evaluation that reached the "
+            "target, evaluations left out; a seed that missed counts as slower than every seed that made it. "
+            "From the process start (wall-clock, start-up and evaluations included), medians: "
+            + "; ".join(f"{ln['gpus']} GPU{'s' if ln['gpus'] > 1 else ''} {ln['mode']}: "
+                        + ", ".join(seconds(ln['targets'][f'{v:g}']['median_time_s']) for v in values)
+                        for ln in lines) + "."]
+    return "\n".join(out) + "\n"
+
+
+def figures(doc: dict, runs_dir: str, out: str) -> list[str]:
+    """The target's key against wall-clock time since start and against samples, every run, one colour per
+    (GPUs, mode)."""
+    try:
+        import matplotlib  # noqa: PLC0415
+    except ImportError:
+        print("matplotlib is not installed: no figures (draw them later with --report)", flush=True)
+        return []
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt  # noqa: PLC0415
+
+    from agents.logger import read_metrics  # noqa: PLC0415
+
+    key, values = doc["targets"]["key"], doc["targets"]["values"]
+    paths = []
+    for axis, label in (("time_s", "wall-clock time since process start [s]"), ("samples", "samples (env steps)")):
+        fig, ax = plt.subplots(figsize=(7.5, 4.5))
+        for i, ((gpus, mode), runs) in enumerate(groups(doc).items()):
+            for j, r in enumerate(runs):
+                rows = [x for x in read_metrics(os.path.join(runs_dir, r["name"])) if x.get(key) is not None]
+                ax.plot([x[axis] for x in rows], [x[key] for x in rows], color=f"C{i}", lw=1.2, alpha=0.8,
+                        label=(f"{gpus} GPU" + ("s, " + mode if gpus > 1 else "")) if j == 0 else None)
+        for v in values:
+            ax.axhline(v, color="grey", ls=":", lw=0.8)
+        ax.set_xlabel(label)
+        ax.set_ylabel(f"{key} (deterministic policy)")
+        ax.set_title(f"{doc['task']}: PPO on 1 to {max(r['gpus'] for r in doc['runs'])} GPUs")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+        fig.tight_layout()
+        path = os.path.join(out, f"{doc['task'].lower()}_gpus_{key.replace('/', '_')}_vs_{axis.split('_')[0]}.png")
+        fig.savefig(path, dpi=110)
+        plt.close(fig)
+        paths.append(path)
+    return paths
+
+
+def write_report(doc: dict, runs_dir: str, out: str) -> str:
+    doc["summary"] = summarize(doc)
+    atomic_json(os.path.join(out, f"scaling_{doc['task']}.json"), doc)
+    table = markdown(doc, doc["summary"])
+    with open(os.path.join(out, f"scaling_{doc['task']}.md"), "w") as f:
+        f.write(table)
+    figures(doc, runs_dir, out)
+    return table
+
+
+def report(folders: list[str]) -> int:
+    """Join the runs of one or more outputs for one task (a grid split over calls) into the first's report."""
+    docs = []
+    for folder in folders:
+        found = sorted(glob.glob(os.path.join(folder, "scaling_*.json")))
+        if not found:
+            raise SystemExit(f"--report {folder}: no scaling_<task>.json there")
+        with open(found[0]) as f:
+            docs.append((folder, json.load(f)))
+    first = docs[0][1]
+    for folder, doc in docs[1:]:
+        if (doc["task"], doc["targets"]) != (first["task"], first["targets"]):
+            raise SystemExit(f"--report: {folder} times {doc['task']} to {doc['targets']}, the first output "
+                             f"{first['task']} to {first['targets']}: join runs of one task and targets")
+    out = docs[0][0]
+    runs_dir = os.path.join(out, f"runs_{first['task']}")
+    for folder, doc in reversed(docs):  # a run in several outputs: the first output's files are kept
+        with tarfile.open(os.path.join(folder, f"runs_{doc['task']}.tar.gz")) as tar:
+            tar.extractall(out, filter="data")
+    names = {r["name"] for r in first["runs"]}
+    first["runs"] += [r for _, doc in docs[1:] for r in doc["runs"] if r["name"] not in names]
+    print(write_report(first, runs_dir, out), flush=True)
+    shutil.rmtree(runs_dir)
+    return 0
+
+
+def main(argv=None) -> int:
+    from agents.data_parallel import MODES  # noqa: PLC0415
+
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--out", help="output folder")
+    ap.add_argument("--report", nargs="+", metavar="OUT", help="write the table and figures again from these outputs")
+    ap.add_argument("--task", default="Ant")
+    ap.add_argument("--gpus", type=int, nargs="+", default=[1, 2, 4],
+                    help="GPU counts (default: 1 2 4); without 1 there is no baseline here, and the ratios come when "
+                         "--report joins this output with one that has it")
+    ap.add_argument("--modes", nargs="+", default=["split"], choices=MODES, help="--multi-gpu modes to compare")
+    ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1], help="seeds of each multi-GPU setting")
+    ap.add_argument("--baseline-seeds", type=int, nargs="+", default=None, help="seeds of the 1-GPU runs (default: --seeds)")
+    ap.add_argument("--targets", default=None, metavar="KEY=V1,V2",
+                    help="what to time, e.g. eval/speed=8,9.5 (default: the task's, TARGETS above)")
+    ap.add_argument("--num-envs", type=int, default=None,
+                    help="train's --num-envs (default: train's; under split the total, else per GPU)")
+    ap.add_argument("--seconds", type=float, default=180.0, help="the longest a run may train (default 180)")
+    ap.add_argument("--eval-gap", type=float, default=5.0, help="seconds between evaluations (default 5)")
+    ap.add_argument("--train-flags", default="", help="more `warpgym train` flags for every run, quoted")
+    ap.add_argument("--device", choices=("cuda", "cpu"), default="cuda",
+                    help="cpu: a rehearsal of the whole benchmark on the CPU, each 'GPU' a share of the cores (to "
+                         "check a grid before a GPU machine runs it; its times mean nothing)")
+    args = ap.parse_args(argv)
+    if args.report:
+        return report(args.report)
+    if not args.out:
+        ap.error("--out is required (or --report OUT)")
+    if min(args.gpus) < 1:
+        ap.error(f"--gpus {' '.join(map(str, args.gpus))}: each is a number of GPUs, 1 or more")
+    if not (args.seconds > 0 and args.eval_gap > 0) or (args.num_envs is not None and args.num_envs < 1):
+        ap.error(f"--seconds {args.seconds}, --eval-gap {args.eval_gap}, --num-envs {args.num_envs}: must be positive")
+    from agents.config import PRESETS  # noqa: PLC0415
+
+    if args.task not in PRESETS:
+        ap.error(f"--task {args.task}: choose one of {', '.join(PRESETS)}")
+    try:
+        key, values = parse_targets(args.targets) if args.targets else default_targets(args.task)
+    except ValueError as e:
+        ap.error(str(e))
+    args.baseline_seeds = args.baseline_seeds or args.seeds
+
+    import torch  # noqa: PLC0415
+
+    available = torch.cuda.device_count() if args.device == "cuda" else max(args.gpus)
+    if args.device == "cpu":
+        args.train_flags += " --device cpu"
+    if max(args.gpus) > available:
+        raise SystemExit(f"--gpus {' '.join(map(str, args.gpus))}: this host has {available} GPU(s); pass counts up "
+                         f"to {available}" + (" (scaling.py measures GPUs: run it on a GPU machine)" if not available
+                                               else ""))
+    out = os.path.abspath(args.out)
+    runs = os.path.join(out, f"runs_{args.task}")
+    os.makedirs(runs, exist_ok=True)
+    say = lambda s: print(f"[{time.strftime('%H:%M:%S')}] {s}", flush=True)  # noqa: E731
+    doc = {"task": args.task, "targets": {"key": key, "values": list(values)}, "seconds": args.seconds,
+           "eval_gap": args.eval_gap, "num_envs": args.num_envs, "train_flags": args.train_flags,
+           "host_gpus": available, "date": time.strftime("%Y-%m-%d"), "runs": []}
+
+    say(f"warm-up: {args.task} compiles its kernels once, so every timed run starts on a warm cache")
+    warm = os.path.join(runs, "warmup")
+    codes = run_jobs([Job("warmup", 1, [sys.executable, os.path.join(ROOT, "scripts", "train.py"), "--task", args.task,
+                                        "--num-envs", "256" if args.device == "cuda" else "8", "--max-iterations", "3",
+                                        "--eval-gap", "0", *(["--device", "cpu"] if args.device == "cpu" else []),
+                                        "--run-dir", warm, "--no-plots"], warm + ".log", cwd=ROOT)], available, say=say)
+    if codes["warmup"] != 0:
+        with open(warm + ".log") as f:
+            raise SystemExit(f"the warm-up run failed ({codes['warmup']}):\n{f.read()[-3000:]}")
+    shutil.rmtree(warm)
+
+    def done(job: Job, code: int) -> None:
+        row = run_row(os.path.join(runs, job.name), key, values)
+        row["exit_code"] = code
+        doc["runs"].append(row)
+        atomic_json(os.path.join(out, f"scaling_{args.task}.json"), doc)  # what ended is kept, whatever follows
+        hits = ", ".join(f"{v}: {h['learning_s']:.1f} s" if h else f"{v}: -" for v, h in row.get("to_target", {}).items())
+        say(f"{job.name}: {hits or row.get('error')}")
+
+    run_jobs(jobs_for(args, runs, key, max(values)), available, on_done=done, say=say)
+    for f in glob.glob(os.path.join(runs, "*", "*.pt")):
+        os.remove(f)
+    for f in glob.glob(os.path.join(runs, "*", "tensorboard")):
+        shutil.rmtree(f)
+    print(write_report(doc, runs, out), flush=True)
+    with tarfile.open(os.path.join(out, f"runs_{args.task}.tar.gz"), "w:gz") as tar:
+        tar.add(runs, arcname=f"runs_{args.task}")
+    shutil.rmtree(runs)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,141 @@
+"""Several GPUs, on the CPU: how each --multi-gpu mode divides a run's work, a run that stops at its target,
+the time to a target read from a run's rows, and the benchmark's job packing and table."""
+
+import json
+import math
+import os
+import subprocess
+import sys
+
+import pytest
+
+from agents import Config, OnPolicyRunner
+from agents.data_parallel import envs_per_process, minibatches
+from agents.logger import time_to_target
+from point_mass import PointMassVecEnv
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(ROOT, "benchmarks", "multi_gpu"))
+
+import gpu_jobs  # noqa: E402
+import scaling  # noqa: E402
+
+
+@pytest.mark.parametrize(("mode", "envs", "steps", "samples_per_step"), [
+    # 8192 Ants, horizon 16, mini-batch 32768 (the Ant's preset), on 4 GPUs
+    ("split", 2048, 4, 32768),        # the one-GPU run: 4 steps of 32768 samples, each GPU a quarter of them
+    ("grow-batch", 8192, 4, 131072),  # 4x the envs, each step 4x the samples
+    ("grow-steps", 8192, 16, 32768),  # 4x the envs, 4x the steps of the one-GPU size
+])
+def test_each_mode_divides_the_envs_and_the_mini_batches_as_documented(mode, envs, steps, samples_per_step):
+    local = envs_per_process(mode, 8192, 4)
+    assert local == envs
+    assert minibatches(mode, local, 16, 32768, 4) == steps
+    assert steps * samples_per_step == 4 * local * 16  # every sample of the iteration, once per pass
+    # one process: every mode is the one-GPU run
+    assert envs_per_process(mode, 8192, 1) == 8192 and minibatches(mode, 8192, 16, 32768, 1) == 4
+
+
+def test_a_split_that_does_not_divide_names_the_value_and_the_fix():
+    with pytest.raises(ValueError, match=r"num_envs=8193 does not split over 4 processes .* e.g. 8192"):
+        envs_per_process("split", 8193, 4)
+    with pytest.raises(ValueError, match=r"batch_size=100 does not split over 3 processes"):
+        minibatches("split", 64, 16, 100, 3)
+    with pytest.raises(ValueError, match=r"batch_size=4096 exceeds the 2048 samples of one rollout \(2 processes x 64"):
+        minibatches("grow-steps", 64, 16, 4096, 2)
+    with pytest.raises(ValueError, match="multi_gpu='pairs': choose one of split, grow-batch, grow-steps"):
+        Config(multi_gpu="pairs").validated()
+
+
+def test_a_run_stops_at_its_target_and_records_the_row_that_reached_it():
+    cfg = Config(net_dims=(8,), horizon_len=4, batch_size=32, repeat_times=1, eval_gap=1e9, save_gap=10**6,
+                 target="return=-1e9")  # any finished episode reaches it
+    runner = OnPolicyRunner(PointMassVecEnv(8, episode_length=8), cfg, print_fn=lambda s: None)
+    history = runner.learn(max_iterations=100)
+    hit = runner.target_reached
+    assert hit is not None and history[hit["iteration"] - 1]["return"] == hit["return"]
+    # reached in the row of iteration 2 (the first with finished episodes), logged during iteration 3, whose
+    # statistics are on their way already: the stop travels with iteration 4's, read during iteration 5, as a
+    # stop request does (every process stops after the same iteration)
+    assert hit["iteration"] == 2 and len(history) == 5
+    never = Config(net_dims=(8,), horizon_len=4, batch_size=32, repeat_times=1, eval_gap=1e9, target="return=1e9")
+    assert len(OnPolicyRunner(PointMassVecEnv(8), never, print_fn=lambda s: None).learn(max_iterations=6)) == 6
+    with pytest.raises(ValueError, match="target='speed': write KEY=VALUE"):
+        Config(target="speed").validated()
+
+
+def test_time_to_target_leaves_out_the_evaluations_before_it():
+    rows = [{"iteration": 1, "samples": 10, "time_s": 20.0},
+            {"iteration": 2, "samples": 20, "time_s": 23.0, "eval_s": 2.0, "eval/speed": 3.0},  # evaluated 21-23
+            {"iteration": 3, "samples": 30, "time_s": 24.0},
+            {"iteration": 4, "samples": 40, "time_s": 28.0, "eval_s": 2.5, "eval/speed": 8.4}]  # evaluated 25.5-28
+    hit = time_to_target(rows, "eval/speed", 8.0)
+    assert hit == {"time_s": 25.5, "learning_s": 3.5, "samples": 40, "iteration": 4, "eval/speed": 8.4}
+    assert time_to_target(rows, "eval/speed", 3.0)["learning_s"] == 1.0
+    assert time_to_target(rows, "eval/speed", 9.0) is None
+
+
+def test_jobs_share_the_gpus_side_by_side_and_never_overtake(tmp_path):
+    """Four jobs on two 'GPUs': two 1-GPU jobs side by side, then a 2-GPU job alone, then a 1-GPU job; each
+    child sees only its own GPUs and cores."""
+    probe = ("import os, sys, time, json; time.sleep(float(sys.argv[1])); "
+             "json.dump({'gpus': os.environ['CUDA_VISIBLE_DEVICES'], 'cores': sorted(os.sched_getaffinity(0)), "
+             "'nvls': os.environ['NCCL_NVLS_ENABLE'], 'end': time.time()}, open(sys.argv[2], 'w'))")
+    plan = [("a", 1, 1.0), ("b", 1, 1.0), ("c", 2, 0.2), ("d", 1, 0.2)]
+    jobs = [gpu_jobs.Job(n, g, [sys.executable, "-c", probe, str(s), str(tmp_path / f"{n}.json")],
+                         str(tmp_path / f"{n}.log")) for n, g, s in plan]
+    ended = []
+    codes = gpu_jobs.run_jobs(jobs, 2, on_done=lambda j, c: ended.append(j.name), say=lambda s: None, poll=0.05,
+                              cores=[0, 1])
+    assert codes == {n: 0 for n, _, _ in plan}
+    seen = {n: json.loads((tmp_path / f"{n}.json").read_text()) for n, _, _ in plan}
+    assert {seen["a"]["gpus"], seen["b"]["gpus"]} == {"0", "1"} and seen["c"]["gpus"] == "0,1"
+    assert {tuple(seen["a"]["cores"]), tuple(seen["b"]["cores"])} == {(0,), (1,)} and seen["c"]["cores"] == [0, 1]
+    assert all(s["nvls"] == "0" for s in seen.values())
+    assert seen["c"]["end"] > max(seen["a"]["end"], seen["b"]["end"])  # the 2-GPU job waited for both
+    assert ended.index("d") > ended.index("c")  # the last 1-GPU job did not overtake it
+    with pytest.raises(SystemExit, match="need more GPUs than the 2 given"):
+        gpu_jobs.run_jobs([gpu_jobs.Job("big", 4, ["true"], str(tmp_path / "big.log"))], 2, cores=[0, 1])
+
+
+def fake_run(folder, name, speeds, first=20.0, step=1.0, eval_s=0.5, rate=1e6):
+    """A run directory as `warpgym train` leaves it: an evaluation each row, speeds as given."""
+    d = folder / name
+    d.mkdir(parents=True)
+    rows, t = [], first
+    for i, v in enumerate(speeds, 1):
+        rows.append({"iteration": i, "samples": 1000 * i, "time_s": t + eval_s, "eval_s": eval_s, "eval/speed": v})
+        t += step + eval_s
+    (d / "metrics.jsonl").write_text("".join(json.dumps(r) + "\n" for r in rows))
+    (d / "summary.json").write_text(json.dumps({
+        "device": "GPU", "num_envs": 64, "num_envs_total": 64, "iterations": len(rows),
+        "steady_samples_per_s_median": rate, "steady_phase_s_median": {"iteration_s": 0.1, "phase/collect_s": 0.08},
+        "first_iteration_time_s": first + eval_s}))
+    return str(d)
+
+
+def test_the_table_takes_medians_over_seeds_and_ratios_to_one_gpu(tmp_path):
+    doc = {"task": "Ant", "targets": {"key": "eval/speed", "values": [8.0]}, "seconds": 60, "eval_gap": 1,
+           "host_gpus": 4, "date": "2026-11-26", "runs": []}
+    # one GPU reaches 8 at the 11th row (10 s of learning) and 13th (12 s); two GPUs at the 6th (5 s) and
+    # never; four GPUs at the 4th (3 s) in both seeds
+    plan = {"gpu1-seed0": [1] * 10 + [8], "gpu1-seed1": [1] * 12 + [9], "gpu2-split-seed0": [1] * 5 + [8],
+            "gpu2-split-seed1": [1] * 20, "gpu4-split-seed0": [1] * 3 + [8], "gpu4-split-seed1": [1] * 3 + [8.5]}
+    for name, speeds in plan.items():
+        doc["runs"].append(scaling.run_row(fake_run(tmp_path, name, speeds), "eval/speed", (8.0,)))
+    lines = {(ln["gpus"], ln["mode"]): ln["targets"]["8"] for ln in scaling.summarize(doc)}
+    assert lines[(1, "-")]["median_learning_s"] == pytest.approx(11.0)
+    assert lines[(2, "split")]["median_learning_s"] == math.inf and lines[(2, "split")]["ratio"] is None
+    assert lines[(2, "split")]["reached"] == 1 and lines[(4, "split")]["ratio"] == pytest.approx(3.0 / 11.0)
+    table = scaling.markdown(doc, scaling.summarize(doc))
+    assert "| 4 | split | 64 |" in table and "(0.27x; <= 0.5: met), 2 of 2" in table
+    assert "not reached, 1 of 2" in table
+
+
+def test_the_benchmark_names_a_wrong_flag_before_it_starts_anything():
+    for flags, says in ((["--gpus", "0", "2"], "--gpus 0 2: each is a number of GPUs, 1 or more"),
+                        (["--targets", "eval/speed"], "--targets 'eval/speed': write KEY=V1,V2"),
+                        (["--task", "Hopper"], "--task Hopper: choose one of Ant, Humanoid")):
+        done = subprocess.run([sys.executable, os.path.join(ROOT, "benchmarks", "multi_gpu", "scaling.py"), "--out",
+                               "/nowhere", *flags], capture_output=True, text=True, timeout=120)
+        assert done.returncode == 2 and says in done.stderr, done.stderr[-2000:]
