@@ -26,6 +26,7 @@ import json
 import math
 import os
 import shutil
+import signal
 import statistics
 import sys
 import tarfile
@@ -328,6 +329,8 @@ def main(argv=None) -> int:
         raise SystemExit(f"--gpus {' '.join(map(str, args.gpus))}: this host has {available} GPU(s); pass counts up "
                          f"to {available}" + (" (scaling.py measures GPUs: run it on a GPU machine)" if not available
                                                else ""))
+    # a SIGTERM (a time limit's) ends the jobs too, and what finished is already in the JSON
+    signal.signal(signal.SIGTERM, lambda signum, frame: sys.exit(128 + signum))
     out = os.path.abspath(args.out)
     runs = os.path.join(out, f"runs_{args.task}")
     os.makedirs(runs, exist_ok=True)
