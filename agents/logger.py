@@ -132,19 +132,26 @@ def first_reaching(rows: list[dict], key: str, value: float) -> dict | None:
     return None if hit is None else {"time_s": hit["time_s"], "samples": hit["samples"]}
 
 
+def learning_clock(rows: list[dict]) -> list[float]:
+    """Each row's learning time: seconds since the first row up to the moment the row was logged (or its
+    evaluation began), with the evaluations logged before it left out, so that how often a run evaluates
+    does not move it (on several GPUs the others wait for rank 0's evaluation, so it is left out of theirs too)."""
+    out, evaluating = [], 0.0
+    start = rows[0]["time_s"] - rows[0].get("eval_s", 0.0) if rows else 0.0
+    for r in rows:
+        out.append(round(r["time_s"] - r.get("eval_s", 0.0) - start - evaluating, 3))
+        evaluating += r.get("eval_s", 0.0)
+    return out
+
+
 def time_to_target(rows: list[dict], key: str, value: float) -> dict | None:
     """When a run's logged ``key`` (``eval/return``, ``eval/speed``, ``speed``, ...) first reached ``value``, or None.
 
     ``time_s``: seconds since the process started, up to the moment that row's evaluation began (wall-clock,
-    everything counted). ``learning_s``: seconds since the first row, with every evaluation logged before the
-    hit left out, so that how often a run evaluates does not move it (on several GPUs the others wait for
-    rank 0's evaluation, so it is left out of theirs too); its start-up is ``time_s - learning_s``."""
+    everything counted); ``learning_s``: its ``learning_clock``; the run's start-up is ``time_s - learning_s``."""
     hit = next((i for i, r in enumerate(rows) if r.get(key) is not None and r[key] >= value), None)
     if hit is None:
         return None
-    row, first = rows[hit], rows[0]
-    began = row["time_s"] - row.get("eval_s", 0.0)
-    start = first["time_s"] - first.get("eval_s", 0.0)
-    evaluating = sum(r.get("eval_s", 0.0) for r in rows[:hit])
-    return {"time_s": round(began, 3), "learning_s": round(began - start - evaluating, 3),
+    row = rows[hit]
+    return {"time_s": round(row["time_s"] - row.get("eval_s", 0.0), 3), "learning_s": learning_clock(rows[:hit + 1])[-1],
             "samples": row["samples"], "iteration": row["iteration"], key: row[key]}

@@ -2,6 +2,7 @@
 
 import json
 import os
+import shutil
 import sys
 
 import pytest
@@ -460,4 +461,21 @@ def test_the_published_suite_tables_are_what_their_scripts_print_from_the_commit
     assert sv.main(["--report", os.path.join(bench, "suite_versions.json")]) == 0
     rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| ") and "---" not in line]
     assert len(rows) >= 11 + 5 + 7 + 3  # eleven tasks, SB3's five, seven in v4, the three header lines
+    assert [r for r in rows if r not in page] == []
+
+
+def test_the_published_multi_gpu_table_is_what_scaling_prints_from_the_committed_runs(tmp_path, capsys):
+    """docs/benchmarks.md's time-to-target table for several GPUs, row for row, as ``benchmarks/multi_gpu/scaling.py
+    --report`` prints it from the runs' metrics committed in docs/bench/multi_gpu (read again, not from the JSON's
+    numbers): a number changed on the page or in the reading of the runs fails here."""
+    root = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
+    sys.path.insert(0, os.path.join(root, "benchmarks", "multi_gpu"))
+    import scaling
+
+    shutil.copytree(os.path.join(root, "docs", "bench", "multi_gpu"), tmp_path / "mg")
+    assert scaling.main(["--report", str(tmp_path / "mg")]) == 0
+    rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| ") and "---" not in line]
+    with open(os.path.join(root, "docs", "benchmarks.md")) as f:
+        page = set(f.read().splitlines())
+    assert len(rows) == 1 + 7  # the header, one GPU and six multi-GPU settings
     assert [r for r in rows if r not in page] == []

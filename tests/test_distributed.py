@@ -167,7 +167,8 @@ def test_a_killed_worker_stops_the_job_and_the_run_resumes_on_one_process(tmp_pa
     start = saved["iteration"]
     # a save-gap checkpoint (a multiple of 3), or rank 0's own save when torchrun's SIGTERM reaches it after an
     # iteration it finished before the peer died: either way whole iterations of both processes
-    assert start >= 3 and saved["samples"] == start * 32, (start, saved["samples"])  # 2 processes x 4 envs x 4 steps
+    # --multi-gpu split: --num-envs 4 is the run's total, 2 processes x 2 envs x 4 steps an iteration
+    assert start >= 3 and saved["samples"] == start * 16, (start, saved["samples"])
     # the same run on one process: it goes on from the checkpoint, and rows after it are logged once
     done = subprocess.run([sys.executable, "scripts/train.py", "--resume", str(run), "--max-iterations",
                            str(start + 3)], cwd=ROOT, capture_output=True, text=True, timeout=300, env=ENV)
@@ -175,7 +176,7 @@ def test_a_killed_worker_stops_the_job_and_the_run_resumes_on_one_process(tmp_pa
     assert f"resumed at iteration {start}" in done.stdout
     rows = read_metrics(str(run))
     assert [r["iteration"] for r in rows] == list(range(1, start + 4))
-    assert [r["samples"] for r in rows[start:]] == [start * 32 + 16 * k for k in (1, 2, 3)]  # now 1 x 4 x 4
+    assert [r["samples"] for r in rows[start:]] == [start * 16 + 16 * k for k in (1, 2, 3)]  # now 1 process x 4 envs
     assert load(str(run / "checkpoint.pt"), torch.device("cpu"))["iteration"] == start + 3
 
 

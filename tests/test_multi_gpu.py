@@ -115,21 +115,27 @@ def fake_run(folder, name, speeds, first=20.0, step=1.0, eval_s=0.5, rate=1e6):
 
 
 def test_the_table_takes_medians_over_seeds_and_ratios_to_one_gpu(tmp_path):
-    doc = {"task": "Ant", "targets": {"key": "eval/speed", "values": [8.0]}, "seconds": 60, "eval_gap": 1,
+    doc = {"task": "Ant", "targets": {"key": "eval/speed", "values": [8.0, 9.0]}, "seconds": 60, "eval_gap": 1,
            "host_gpus": 4, "date": "2026-11-26", "runs": []}
-    # one GPU reaches 8 at the 11th row (10 s of learning) and 13th (12 s); two GPUs at the 6th (5 s) and
-    # never; four GPUs at the 4th (3 s) in both seeds
+    # a row a second of learning: one GPU reaches 8 after 10 s and 12 s, 9 only in seed 1 (seed 0 stops after
+    # 10 s); two GPUs reach 8 after 5 s in seed 0, seed 1 never in its 19 s; four GPUs 8 after 3 s, 9 after 4 s
     plan = {"gpu1-seed0": [1] * 10 + [8], "gpu1-seed1": [1] * 12 + [9], "gpu2-split-seed0": [1] * 5 + [8],
-            "gpu2-split-seed1": [1] * 20, "gpu4-split-seed0": [1] * 3 + [8], "gpu4-split-seed1": [1] * 3 + [8.5]}
+            "gpu2-split-seed1": [1] * 20, "gpu4-split-seed0": [1] * 3 + [8, 9], "gpu4-split-seed1": [1] * 3 + [8.5, 9.5]}
     for name, speeds in plan.items():
-        doc["runs"].append(scaling.run_row(fake_run(tmp_path, name, speeds), "eval/speed", (8.0,)))
-    lines = {(ln["gpus"], ln["mode"]): ln["targets"]["8"] for ln in scaling.summarize(doc)}
-    assert lines[(1, "-")]["median_learning_s"] == pytest.approx(11.0)
-    assert lines[(2, "split")]["median_learning_s"] == math.inf and lines[(2, "split")]["ratio"] is None
-    assert lines[(2, "split")]["reached"] == 1 and lines[(4, "split")]["ratio"] == pytest.approx(3.0 / 11.0)
+        doc["runs"].append(scaling.run_row(fake_run(tmp_path, name, speeds), "eval/speed", (8.0, 9.0)))
+    lines = {(ln["gpus"], ln["mode"]): ln["targets"] for ln in scaling.summarize(doc)}
+    one, two, four = lines[(1, "-")], lines[(2, "split")], lines[(4, "split")]
+    assert (one["8"]["median_learning_s"], one["8"]["exact"]) == (pytest.approx(11.0), True)
+    assert (four["8"]["ratio"], four["8"]["ratio_is"]) == (pytest.approx(3.0 / 11.0), "=")
+    # a median that falls on a seed that missed is a lower bound: the missing seed counts with the time it had
+    assert (two["8"]["median_learning_s"], two["8"]["exact"]) == (pytest.approx(12.0), False)
+    assert (two["8"]["ratio"], two["8"]["ratio_is"]) == (pytest.approx(12.0 / 11.0), ">")
+    assert (one["9"]["median_learning_s"], one["9"]["exact"]) == (pytest.approx(11.0), False)  # 12 s and > 10 s
+    assert (four["9"]["ratio"], four["9"]["ratio_is"]) == (pytest.approx(4.0 / 11.0), "<")
     table = scaling.markdown(doc, scaling.summarize(doc))
-    assert "| 4 | split | 64 |" in table and "(0.27x; <= 0.5: met), 2 of 2" in table
-    assert "not reached, 1 of 2" in table
+    assert "| 4 | split | 64 |" in table and "3.0 s (0.27x; <= 0.5: met), 2 of 2" in table
+    assert "5.0 s, > 19 s | > 12.0 s (> 1.09x; <= 0.7: not met), 1 of 2" in table
+    assert "4.0 s (< 0.36x; <= 0.5: met), 2 of 2" in table and "> 10 s, 12.0 s | > 11.0 s, 1 of 2" in table
 
 
 def test_the_benchmark_names_a_wrong_flag_before_it_starts_anything():

@@ -119,7 +119,7 @@ BAD_FLAGS = [
     (["--video", "--no-eval"], "--video records the evaluation episode"),
     (["--target", "eval/speed"], "--target 'eval/speed': write KEY=VALUE with a logged key and a number"),
     (["--target", "eval/speed=fast"], "--target 'eval/speed=fast': write KEY=VALUE"),
-    (["--multi-gpu", "pairs"], "--multi-gpu: invalid choice: 'pairs' (choose from split, grow-batch, grow-steps)"),
+    (["--multi-gpu", "pairs"], "argument --multi-gpu: invalid choice: 'pairs'"),
 ]
 
 

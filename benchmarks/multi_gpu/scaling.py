@@ -15,7 +15,7 @@ iteration with the evaluations left out; the goal's ratio is G GPUs' median lear
 
 Writes, as the runs end, OUT/scaling_<task>.json (every run: its times, samples/s, phases, last evaluation)
 and at the end OUT/scaling_<task>.md (the table), OUT/<task>_gpus_<key>_vs_time.png and _vs_samples.png, and
-OUT/runs_<task>.tar.gz (each run's metrics, summary, config and log; no checkpoints).
+OUT/runs_<task>.tar.gz (each run's metrics.jsonl, summary, config and log; no checkpoints).
 """
 
 from __future__ import annotations
@@ -64,8 +64,17 @@ def parse_targets(text: str) -> tuple[str, tuple[float, ...]]:
     return key, numbers
 
 
-def run_name(gpus: int, mode: str, seed: int) -> str:
-    return f"gpu{gpus}-seed{seed}" if gpus == 1 else f"gpu{gpus}-{mode}-seed{seed}"
+def run_name(gpus: int, mode: str, seed: int, label: str = "") -> str:
+    """gpu1-seed0, gpu4-split-seed0; with a label (runs made with other flags) gpu1-+16k-seed0, gpu4-split+16k-seed0."""
+    setting = ("" if gpus == 1 else mode) + (f"+{label}" if label else "")
+    return f"gpu{gpus}-{setting}-seed{seed}" if setting else f"gpu{gpus}-seed{seed}"
+
+
+def parse_name(name: str) -> tuple[int, str, int]:
+    """run_name's (GPUs, setting, seed); one GPU's setting is "-", or "-+label"."""
+    head, _, seed = name.rpartition("-seed")
+    gpus, _, setting = head.partition("-")
+    return int(gpus[3:]), (setting if not setting.startswith("+") else "-" + setting) or "-", int(seed)
 
 
 def jobs_for(args, runs: str, key: str, last: float) -> list[Job]:
@@ -77,7 +86,7 @@ def jobs_for(args, runs: str, key: str, last: float) -> list[Job]:
     plan += [(g, m, s) for g in sorted(set(args.gpus) - {1}) for m in args.modes for s in args.seeds]
     jobs = []
     for gpus, mode, seed in plan:
-        name = run_name(gpus, mode, seed)
+        name = run_name(gpus, mode, seed, args.label)
         d = os.path.join(runs, name)
         launch = [sys.executable] if gpus == 1 else [sys.executable, "-m", "torch.distributed.run", "--standalone",
                                                      f"--nproc_per_node={gpus}"]
@@ -88,12 +97,11 @@ def jobs_for(args, runs: str, key: str, last: float) -> list[Job]:
 
 def run_row(run_dir: str, key: str, values: tuple[float, ...]) -> dict:
     """One run's times to each target, throughput and last evaluation, from its files."""
-    from agents.logger import read_metrics, time_to_target  # noqa: PLC0415
+    from agents.logger import learning_clock, read_metrics, time_to_target  # noqa: PLC0415
 
     name = os.path.basename(run_dir)
-    gpus = int(name[3:].split("-")[0])
-    mode = "-" if gpus == 1 else name.split("-", 1)[1].rsplit("-seed", 1)[0]
-    row = {"name": name, "gpus": gpus, "mode": mode, "seed": int(name.rsplit("seed", 1)[1])}
+    gpus, mode, seed = parse_name(name)
+    row = {"name": name, "gpus": gpus, "mode": mode, "seed": seed}
     try:
         rows = read_metrics(run_dir)
         with open(os.path.join(run_dir, "summary.json")) as f:
@@ -110,6 +118,8 @@ def run_row(run_dir: str, key: str, values: tuple[float, ...]) -> dict:
                      if k.startswith("phase/") and v is not None},
         "first_iteration_s": summary.get("first_iteration_time_s"),
         "to_target": {f"{v:g}": time_to_target(rows, key, v) for v in values},
+        # the learning time the whole run had: a target it missed lies beyond it
+        "learned_s": learning_clock(rows)[-1] if rows else 0.0,
         "last": {k: evals[-1].get(k) for k in ("time_s", "samples", key)} if evals else None,
         "evaluations": len(evals), "evaluation_s": round(sum(r.get("eval_s", 0.0) for r in rows), 2),
     })
@@ -122,9 +132,28 @@ def atomic_json(path: str, doc: dict) -> None:
     os.replace(path + ".tmp", path)
 
 
-def median_or_inf(values: list[float | None]) -> float:
-    """A run that missed the target counts as slower than every run that made it."""
-    return statistics.median([math.inf if v is None else v for v in values]) if values else math.nan
+def censored_median(hits: list[dict | None], bounds: list[float]) -> tuple[float, bool]:
+    """The median learning time over seeds and whether it is exact. A seed that missed the target took longer
+    than the learning time it had (its bound): if the median falls on such a seed, the median of the values
+    with those bounds in their place is a lower bound, returned with False."""
+    exact = [h["learning_s"] if h else math.inf for h in hits]
+    median = statistics.median(exact)
+    if math.isfinite(median):
+        return median, True
+    return statistics.median(h["learning_s"] if h else b for h, b in zip(hits, bounds)), False
+
+
+def ratio_of(line: dict, base: dict | None) -> tuple[float | None, str]:
+    """G GPUs' median over one GPU's, with '=', '<' or '>' where one of them is only a bound."""
+    if base is None:
+        return None, ""
+    if line["exact"] and base["exact"]:
+        return line["median_learning_s"] / base["median_learning_s"], "="
+    if line["exact"]:  # one GPU's median is beyond its bound: the ratio is below this
+        return line["median_learning_s"] / base["median_learning_s"], "<"
+    if base["exact"]:
+        return line["median_learning_s"] / base["median_learning_s"], ">"
+    return None, ""
 
 
 def groups(doc: dict) -> dict[tuple[int, str], list[dict]]:
@@ -138,7 +167,7 @@ def groups(doc: dict) -> dict[tuple[int, str], list[dict]]:
 def summarize(doc: dict) -> list[dict]:
     """One line per (GPUs, mode): medians over seeds, and the ratios to one GPU's medians."""
     lines = []
-    base: dict[str, float] = {}
+    base: dict[str, dict] = {}
     base_rate = math.nan
     for (gpus, mode), runs in groups(doc).items():
         line = {"gpus": gpus, "mode": mode, "seeds": sorted(r["seed"] for r in runs),
@@ -151,16 +180,16 @@ def summarize(doc: dict) -> list[dict]:
         line["samples_speedup"] = line["samples_per_s"] / base_rate if base_rate else math.nan
         for v in doc["targets"]["values"]:
             hits = [r["to_target"].get(f"{v:g}") for r in runs]
-            learn = median_or_inf([h["learning_s"] if h else None for h in hits])
-            wall = median_or_inf([h["time_s"] if h else None for h in hits])
+            learn, exact = censored_median(hits, [r.get("learned_s", 0.0) for r in runs])
+            walls = [h["time_s"] if h else math.inf for h in hits]
+            t = {"reached": sum(h is not None for h in hits), "runs": len(hits),
+                 "learning_s": [h["learning_s"] if h else None for h in hits],
+                 "bounds_s": [None if h else r.get("learned_s") for h, r in zip(hits, runs)],
+                 "median_learning_s": learn, "exact": exact, "median_time_s": statistics.median(walls)}
             if gpus == 1:
-                base[f"{v:g}"] = learn
-            ref = base.get(f"{v:g}", math.nan)
-            line["targets"][f"{v:g}"] = {
-                "reached": sum(h is not None for h in hits), "runs": len(hits),
-                "learning_s": [h["learning_s"] if h else None for h in hits], "median_learning_s": learn,
-                "median_time_s": wall, "ratio": learn / ref if math.isfinite(learn) and ref and math.isfinite(ref)
-                else None}
+                base[f"{v:g}"] = t
+            t["ratio"], t["ratio_is"] = ratio_of(t, base.get(f"{v:g}"))
+            line["targets"][f"{v:g}"] = t
         lines.append(line)
     return lines
 
@@ -170,6 +199,23 @@ GOAL = {2: 0.7, 4: 0.5}  # issue 54: G GPUs' median learning time to target at m
 
 def seconds(v: float) -> str:
     return "not reached" if v == math.inf else ("-" if v is None or math.isnan(v) else f"{v:.1f} s")
+
+
+def verdict(ratio: float, bound: str, goal: float | None) -> str:
+    """'met', 'not met', or 'open' where a bound leaves it undecided."""
+    if goal is None:
+        return ""
+    if (bound in "=<" and ratio <= goal) or (bound == "=" and ratio > goal) or (bound == ">" and ratio > goal):
+        return f"; <= {goal}: " + ("met" if ratio <= goal else "not met")
+    return f"; <= {goal}: open"
+
+
+def target_cells(t: dict, gpus: int) -> str:
+    each = ", ".join(seconds(s) if s is not None else f"> {b:.0f} s" for s, b in zip(t["learning_s"], t["bounds_s"]))
+    median = seconds(t["median_learning_s"]) if t["exact"] else f"> {t['median_learning_s']:.1f} s"
+    ratio = "" if t["ratio"] is None else \
+        f" ({'' if t['ratio_is'] == '=' else t['ratio_is'] + ' '}{t['ratio']:.2f}x{verdict(t['ratio'], t['ratio_is'], GOAL.get(gpus))})"
+    return f"{each} | {median}{ratio}, {t['reached']} of {t['runs']}"
 
 
 def markdown(doc: dict, lines: list[dict]) -> str:
@@ -184,24 +230,22 @@ def markdown(doc: dict, lines: list[dict]) -> str:
     for line in lines:
         runs = groups(doc)[(line["gpus"], line["mode"])]
         envs = "/".join(sorted({str(r["num_envs_per_gpu"]) for r in runs}))
-        cells = []
-        for v in values:
-            t = line["targets"][f"{v:g}"]
-            each = ", ".join(seconds(s) if s is not None else "-" for s in t["learning_s"])
-            ratio = "" if t["ratio"] is None else f" ({t['ratio']:.2f}x"
-            goal = GOAL.get(line["gpus"])
-            if ratio:
-                ratio += (f"; <= {goal}: {'met' if t['ratio'] <= goal else 'not met'})" if goal else ")")
-            cells.append(f"{each} | {seconds(t['median_learning_s'])}{ratio}, {t['reached']} of {t['runs']}")
-        out.append(f"| {line['gpus']} | {line['mode']} | {envs} | {line['samples_per_s'] / 1e6:.3f} M | "
-                   f"{'-' if math.isnan(line['samples_speedup']) else format(line['samples_speedup'], '.2f') + 'x'} | {line['iteration_ms']:.1f} | {line['first_iteration_s']:.1f} s | "
-                   + " | ".join(cells) + " |")
+        speedup = "-" if math.isnan(line["samples_speedup"]) else f"{line['samples_speedup']:.2f}x"
+        out.append(f"| {line['gpus']} | {line['mode']} | {envs} | {line['samples_per_s'] / 1e6:.3f} M | {speedup} | "
+                   f"{line['iteration_ms']:.1f} | {line['first_iteration_s']:.1f} s | "
+                   + " | ".join(target_cells(line["targets"][f"{v:g}"], line["gpus"]) for v in values) + " |")
+    notes = [f"{r['name']}: {r['note']}" for r in doc["runs"] if r.get("note")]
+    flags = sorted({(r["mode"], r.get("num_envs"), r.get("train_flags", "")) for r in doc["runs"]
+                    if r.get("num_envs") or r.get("train_flags")})
     out += ["", "Learning time: from the run's first iteration to the start of the first evaluation that reached the "
-            "target, evaluations left out; a seed that missed counts as slower than every seed that made it. "
+            "target, evaluations left out; \"> T\": a seed that missed it in the T s of learning it had, and a median "
+            "that falls on such seeds, a lower bound (a ratio against it an upper bound, \"<\"). "
             "From the process start (wall-clock, start-up and evaluations included), medians: "
             + "; ".join(f"{ln['gpus']} GPU{'s' if ln['gpus'] > 1 else ''} {ln['mode']}: "
                         + ", ".join(seconds(ln['targets'][f'{v:g}']['median_time_s']) for v in values)
                         for ln in lines) + "."]
+    out += [f"{mode}: --num-envs {n or 'default'} {f}".rstrip() + "." for mode, n, f in flags]
+    out += [f"{n}." for n in notes]
     return "\n".join(out) + "\n"
 
 
@@ -216,16 +260,20 @@ def figures(doc: dict, runs_dir: str, out: str) -> list[str]:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt  # noqa: PLC0415
 
-    from agents.logger import read_metrics  # noqa: PLC0415
+    from agents.logger import learning_clock, read_metrics  # noqa: PLC0415
 
     key, values = doc["targets"]["key"], doc["targets"]["values"]
     paths = []
-    for axis, label in (("time_s", "wall-clock time since process start [s]"), ("samples", "samples (env steps)")):
+    axes = (("time", "learning time: wall-clock seconds since the first iteration, evaluations left out"),
+            ("samples", "samples (env steps)"))
+    for axis, label in axes:
         fig, ax = plt.subplots(figsize=(7.5, 4.5))
         for i, ((gpus, mode), runs) in enumerate(groups(doc).items()):
             for j, r in enumerate(runs):
-                rows = [x for x in read_metrics(os.path.join(runs_dir, r["name"])) if x.get(key) is not None]
-                ax.plot([x[axis] for x in rows], [x[key] for x in rows], color=f"C{i}", lw=1.2, alpha=0.8,
+                rows = read_metrics(os.path.join(runs_dir, r["name"]))
+                xs = learning_clock(rows) if axis == "time" else [x["samples"] for x in rows]
+                pts = [(x, row[key]) for x, row in zip(xs, rows) if row.get(key) is not None]
+                ax.plot([p[0] for p in pts], [p[1] for p in pts], color=f"C{i}", lw=1.2, alpha=0.8,
                         label=(f"{gpus} GPU" + ("s, " + mode if gpus > 1 else "")) if j == 0 else None)
         for v in values:
             ax.axhline(v, color="grey", ls=":", lw=0.8)
@@ -235,7 +283,7 @@ def figures(doc: dict, runs_dir: str, out: str) -> list[str]:
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
         fig.tight_layout()
-        path = os.path.join(out, f"{doc['task'].lower()}_gpus_{key.replace('/', '_')}_vs_{axis.split('_')[0]}.png")
+        path = os.path.join(out, f"{doc['task'].lower()}_gpus_{key.replace('/', '_')}_vs_{axis}.png")
         fig.savefig(path, dpi=110)
         plt.close(fig)
         paths.append(path)
@@ -262,10 +310,11 @@ def report(folders: list[str]) -> int:
         with open(found[0]) as f:
             docs.append((folder, json.load(f)))
     first = docs[0][1]
+    same = ("task", "targets", "seconds", "eval_gap")
     for folder, doc in docs[1:]:
-        if (doc["task"], doc["targets"]) != (first["task"], first["targets"]):
-            raise SystemExit(f"--report: {folder} times {doc['task']} to {doc['targets']}, the first output "
-                             f"{first['task']} to {first['targets']}: join runs of one task and targets")
+        if [doc[k] for k in same] != [first[k] for k in same]:
+            raise SystemExit(f"--report: {folder} has {', '.join(f'{k} {doc[k]}' for k in same)} and the first output "
+                             f"{', '.join(f'{k} {first[k]}' for k in same)}: join runs timed alike")
     out = docs[0][0]
     runs_dir = os.path.join(out, f"runs_{first['task']}")
     for folder, doc in reversed(docs):  # a run in several outputs: the first output's files are kept
@@ -273,9 +322,22 @@ def report(folders: list[str]) -> int:
             tar.extractall(out, filter="data")
     names = {r["name"] for r in first["runs"]}
     first["runs"] += [r for _, doc in docs[1:] for r in doc["runs"] if r["name"] not in names]
+    key, values = first["targets"]["key"], tuple(first["targets"]["values"])
+    for r in first["runs"]:  # read again from the runs' files, as this version of the script reads them
+        r.update(run_row(os.path.join(runs_dir, r["name"]), key, values))
     print(write_report(first, runs_dir, out), flush=True)
+    if len(docs) > 1:  # the first output now holds every run: its report can be drawn again alone
+        pack_runs(runs_dir, out, first["task"])
     shutil.rmtree(runs_dir)
     return 0
+
+
+def pack_runs(runs_dir: str, out: str, task: str) -> None:
+    path = os.path.join(out, f"runs_{task}.tar.gz")
+    with tarfile.open(path + ".tmp", "w:gz") as tar:
+        tar.add(runs_dir, arcname=f"runs_{task}",
+                filter=lambda ti: None if ti.name.endswith((".pt", "metrics.csv")) or "/tensorboard" in ti.name else ti)
+    os.replace(path + ".tmp", path)
 
 
 def main(argv=None) -> int:
@@ -298,6 +360,8 @@ def main(argv=None) -> int:
     ap.add_argument("--seconds", type=float, default=180.0, help="the longest a run may train (default 180)")
     ap.add_argument("--eval-gap", type=float, default=5.0, help="seconds between evaluations (default 5)")
     ap.add_argument("--train-flags", default="", help="more `warpgym train` flags for every run, quoted")
+    ap.add_argument("--label", default="", help="a name for runs made with other flags (--num-envs, --train-flags), "
+                                               "added to their setting (split+LABEL), so --report keeps them apart")
     ap.add_argument("--device", choices=("cuda", "cpu"), default="cuda",
                     help="cpu: a rehearsal of the whole benchmark on the CPU, each 'GPU' a share of the cores (to "
                          "check a grid before a GPU machine runs it; its times mean nothing)")
@@ -319,6 +383,8 @@ def main(argv=None) -> int:
     except ValueError as e:
         ap.error(str(e))
     args.baseline_seeds = args.baseline_seeds or args.seeds
+    if any(c in args.label for c in "-/ ") or "seed" in args.label:
+        ap.error(f"--label {args.label!r}: letters, digits, '+' and '_' only, e.g. --label 16k")
 
     import torch  # noqa: PLC0415
 
@@ -352,20 +418,15 @@ def main(argv=None) -> int:
 
     def done(job: Job, code: int) -> None:
         row = run_row(os.path.join(runs, job.name), key, values)
-        row["exit_code"] = code
+        row.update(exit_code=code, num_envs=args.num_envs, train_flags=args.train_flags)
         doc["runs"].append(row)
         atomic_json(os.path.join(out, f"scaling_{args.task}.json"), doc)  # what ended is kept, whatever follows
         hits = ", ".join(f"{v}: {h['learning_s']:.1f} s" if h else f"{v}: -" for v, h in row.get("to_target", {}).items())
         say(f"{job.name}: {hits or row.get('error')}")
 
     run_jobs(jobs_for(args, runs, key, max(values)), available, on_done=done, say=say)
-    for f in glob.glob(os.path.join(runs, "*", "*.pt")):
-        os.remove(f)
-    for f in glob.glob(os.path.join(runs, "*", "tensorboard")):
-        shutil.rmtree(f)
     print(write_report(doc, runs, out), flush=True)
-    with tarfile.open(os.path.join(out, f"runs_{args.task}.tar.gz"), "w:gz") as tar:
-        tar.add(runs, arcname=f"runs_{args.task}")
+    pack_runs(runs, out, args.task)
     shutil.rmtree(runs)
     return 0
 
