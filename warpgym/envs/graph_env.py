@@ -17,6 +17,10 @@ from warpgym.sim.checks import check_float_tensor
 
 
 class GraphVecEnv(VectorEnv):
+    """The common part of warpgym's vector envs. An env class derived from it names ``VectorEnv`` among its own
+    direct bases too: skrl's ``wrap_env`` (auto) looks for a Gymnasium class among an env class's direct bases
+    only, and finding ``GraphVecEnv`` there refused the env (tests/test_learner_entry_points.py)."""
+
     # Set by the subclass before _alloc_common and _expose: sim (with launch/capture), num_envs,
     # num_actions, device.
     FAULTS = ("nan_actions", "diverged_resets", "solver_overflows")  # fault_counters' names, in _fault_totals' order
@@ -110,6 +114,13 @@ class GraphVecEnv(VectorEnv):
             self._graph = self.sim.capture(self._launch_step)
         self.sim.launch(self._graph, self._launch_step)
         return self.obs, self.reward, self.terminated, self.truncated, self.info
+
+    def call(self, name: str, *args, **kwargs):
+        """Gymnasium's ``SyncVectorEnv.call``, which learners use to reach the sub-environments (skrl's wrapper
+        renders through ``call("render")``). warpgym's worlds are not separate envs, so the call goes to this env:
+        a method's result (``render``: its tuple of frames, one per drawn world), or an attribute's value."""
+        value = getattr(self, name)
+        return value(*args, **kwargs) if callable(value) else value
 
     def fault_counters(self) -> dict[str, torch.Tensor]:
         """Running totals since the env was built of things that should never happen (agents.protocol):

@@ -11,7 +11,7 @@ import numpy as np
 import warp as wp
 from gymnasium import logger as gymnasium_logger
 from gymnasium import spaces
-from gymnasium.vector import AutoresetMode
+from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from kernels.actions import apply_actions
@@ -23,7 +23,9 @@ from warpgym.sim.simulator import Sim
 from warpgym.tasks import LocomotionTask, get_task
 
 
-class LocomotionVecEnv(GraphVecEnv):
+# VectorEnv is named again beside GraphVecEnv (which is one): skrl's wrap_env(env) and other learners tell a
+# Gymnasium env by its class's direct bases (see GraphVecEnv)
+class LocomotionVecEnv(GraphVecEnv, VectorEnv):
     """``num_envs`` copies of a locomotion task on one device; tensors in, tensors out.
 
     Args:

@@ -12,7 +12,7 @@ import numpy as np
 import warp as wp
 from gymnasium import logger as gymnasium_logger
 from gymnasium import spaces
-from gymnasium.vector import AutoresetMode
+from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from kernels.gym_params import GymEpisodes, MjView
@@ -24,7 +24,9 @@ from warpgym.tasks.suite import GymTask, get_suite_task
 from warpgym.tasks.suite.base import MAX_TERMS
 
 
-class SuiteVecEnv(GraphVecEnv):
+# VectorEnv is named again beside GraphVecEnv (which is one): skrl's wrap_env(env) and other learners tell a
+# Gymnasium env by its class's direct bases (see GraphVecEnv)
+class SuiteVecEnv(GraphVecEnv, VectorEnv):
     """``num_envs`` worlds of one of Gymnasium's MuJoCo tasks; tensors in, tensors out. Actions are not
     clipped: MuJoCo clamps the controls to their range and the control cost is charged on the actions as
     given, as in Gymnasium (``unit_actions`` below maps [-1, 1] onto the ranges instead).
