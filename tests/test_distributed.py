@@ -81,6 +81,21 @@ def test_train_command_under_torchrun_on_the_cpu(tmp_path):
     assert len(rows) == 2 and '"samples": 32' in rows[1]  # 2 processes x 2 envs x 4 steps x 2 iterations
 
 
+def test_a_suite_task_trained_by_torchrun_is_scored_in_gymnasiums_env(tmp_path):
+    """torchrun -m warpgym train on one of Gymnasium's tasks, its checkpoint played by warpgym eval in
+    gymnasium.make's env from the same starts as in warpgym's: the returns agree."""
+    run = tmp_path / "hopper"
+    torchrun("-m", "warpgym", "train", "--task", "Hopper-v5", "--device", "cpu", "--num-envs", "8",
+             "--max-iterations", "3", "--horizon-len", "8", "--no-plots", "--run-dir", str(run))
+    done = subprocess.run([sys.executable, "-m", "warpgym", "eval", str(run), "--episodes", "2", "--seeds", "0",
+                           "--json", str(tmp_path / "eval.json")], cwd=ROOT, capture_output=True, text=True,
+                          timeout=300, env=ENV)
+    assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
+    scored = json.loads((tmp_path / "eval.json").read_text())
+    assert scored["task"] == "Hopper-v5" and scored["samples"] == 3 * 8 * 8 and scored["episodes"] == 2
+    assert scored["same_starts"] and abs(scored["gymnasium_over_warpgym"] - 1.0) < 1e-3
+
+
 def test_a_silent_peer_is_noticed_and_a_finished_one_is_not():
     store = dist.TCPStore("127.0.0.1", 0, is_master=True, wait_for_workers=False, timeout=timedelta(seconds=10))
     lost: list[tuple[int, str]] = []
