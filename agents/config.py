@@ -58,6 +58,11 @@ PRESETS.update({
 })
 
 
+def _is_number(v) -> bool:
+    """A finite int or float (True and False are not numbers here)."""
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+
+
 @dataclass
 class Config:
     agent: str = "AgentPPO"
@@ -139,22 +144,24 @@ class Config:
             raise ValueError(f"net_dims={self.net_dims!r} must be a non-empty sequence of positive layer widths")
         for name, lo, hi in (("gamma", 0.0, 1.0), ("lambda_gae", 0.0, 1.0), ("clip_ratio", 0.0, 1.0)):
             v = getattr(self, name)
-            if not (lo < v <= hi):
-                raise ValueError(f"{name}={v!r} must lie in ({lo}, {hi}]")
+            if not (_is_number(v) and lo < v <= hi):
+                raise ValueError(f"{name}={v!r} must be a number in ({lo}, {hi}], e.g. {name}={getattr(Config, name)}")
         for name in ("learning_rate", "init_noise_std", "reward_scale", "max_grad_norm", "obs_clip"):
             v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-                raise ValueError(f"{name}={v!r} must be a positive number")
+            if not (_is_number(v) and v > 0):
+                raise ValueError(f"{name}={v!r} must be a positive number, e.g. {name}={getattr(Config, name)}")
         for name in ("value_clip", "value_coef", "entropy_coef", "bounds_coef", "desired_kl", "eval_gap",
                      "normalize_until"):
             v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
-                raise ValueError(f"{name}={v!r} must be a non-negative number")
+            if not (_is_number(v) and v >= 0):
+                raise ValueError(f"{name}={v!r} must be 0 or a positive number, e.g. {name}={getattr(Config, name)}")
         for name in ("overlap", "compile_update", "normalize_obs", "tf32", "keep_checkpoints", "anneal_lr"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name}={getattr(self, name)!r} must be True or False")
         data_parallel.check_mode(self.multi_gpu)
         self.target_pair()
+        if not isinstance(self.target, str):
+            raise ValueError(f"target={self.target!r}: write KEY=VALUE, e.g. target=eval/speed=9.5")
         if self.activation not in ("elu", "relu", "tanh"):
             raise ValueError(f"activation={self.activation!r}: choose 'elu', 'relu' or 'tanh'")
         marks = tuple(self.save_at)

@@ -182,13 +182,42 @@ def _mean(values: list[float]) -> float:
     return sum(values) / len(values)
 
 
-def table(runs: list[dict], peer: bool = False) -> str:
-    """One row per task: the marks' returns in Gymnasium's env (mean of seeds) and the rest of the issue's
-    columns. ``peer``: runs of a learner that trains in Gymnasium's env itself (no ratio to show)."""
+def by_task_of(runs: list[dict]) -> dict[str, list[dict]]:
     by_task: dict[str, list[dict]] = {}
     for r in runs:
         if "error" not in r:
             by_task.setdefault(r["task"], []).append(r)
+    return dict(sorted(by_task.items()))
+
+
+def minutes_to(rs: list[dict], ref: float, key: str = "target") -> str:
+    """The seeds' mean minutes to the first evaluation reaching ``ref`` ("target") or half of it ("half"), read
+    from the evaluations each run's JSON holds (so that a corrected reference needs no new runs), and how many
+    seeds reached it."""
+    hits = [(reaching(r["evals"], ref) if "evals" in r else r["first_eval_reaching"]).get(key) for r in rs]
+    done = [h["time_s"] / 60 for h in hits if h]
+    return f"{_mean(done):.1f} ({len(done)}/{len(rs)})" if done else f"not reached (0/{len(rs)})"
+
+
+def readme_table(runs: list[dict]) -> str:
+    """The README's table: each task's return in Gymnasium's env at its last mark (each seed's and their mean),
+    the published figure, and the minutes to it."""
+    lines = ["| task | return in `gymnasium.make`'s env after 10 min (3 for the four small tasks), mean (each seed) | "
+             "published figure | minutes to it (seeds) |", "|---|---|---|---|"]
+    for task, rs in by_task_of(runs).items():
+        last = rs[0]["marks_s"][-1]
+        each = [s["gymnasium_return"] for r in rs for s in r["scored"] if abs(s["mark_s"] - last) < 1e-6]
+        digits = 0 if abs(_mean(each)) >= 100 else 1
+        ref = REFERENCE[task]
+        lines.append(f"| {task} | **{_mean(each):.{digits}f}** ({', '.join(f'{v:.{digits}f}' for v in each)}) | "
+                     f"{ref} ({REFERENCE_SOURCE[task]}, {REFERENCE_VERSION[task]}) | {minutes_to(rs, ref)} |")
+    return "\n".join(lines)
+
+
+def table(runs: list[dict], peer: bool = False) -> str:
+    """One row per task: the marks' returns in Gymnasium's env (mean of seeds) and the rest of the issue's
+    columns. ``peer``: runs of a learner that trains in Gymnasium's env itself (no ratio to show)."""
+    by_task = by_task_of(runs)
     lines = ["| task | seeds | Gymnasium's env: return at each mark (mean of seeds) | reference | minutes to it "
              "(to half) | first iteration | samples | samples/s | Gymnasium / warpgym, lowest |",
              "|---|---:|---|---:|---|---:|---:|---:|---:|"]
@@ -202,13 +231,6 @@ def table(runs: list[dict], peer: bool = False) -> str:
                          else f"{m / 60:g} min: -")
 
         ref = REFERENCE.get(task, rs[0]["reference"])
-        # from the evaluations the JSON holds, so that a corrected reference needs no new runs
-        reach_of = [reaching(r["evals"], ref) if "evals" in r else r["first_eval_reaching"] for r in rs]
-
-        def minutes(key):
-            hits = [reach.get(key) for reach in reach_of]
-            done = [h["time_s"] / 60 for h in hits if h]
-            return f"{_mean(done):.1f} ({len(done)}/{len(rs)})" if done else f"not reached (0/{len(rs)})"
 
         scores = [] if peer else [s for r in rs for s in r["scored"]]
         ratio = "-" if peer else "not scored"
@@ -220,7 +242,7 @@ def table(runs: list[dict], peer: bool = False) -> str:
         sps, samples = _mean([r["samples_per_s"] or 0 for r in rs]), _mean([r["samples"] for r in rs])
         # a CPU learner's few thousand samples per second would read 0.00 M
         speed = f"{samples / 1e6:.1f} M | {sps / 1e6:.2f} M" if sps >= 1e4 else f"{samples / 1e6:.2f} M | {sps:.0f}"
-        reach = f"{minutes('target')} ({minutes('half')})" if ref is not None else "-"
+        reach = f"{minutes_to(rs, ref)} ({minutes_to(rs, ref, 'half')})" if ref is not None else "-"
         # summary.json's first_iteration_time_s: when the first iteration's row was logged, one iteration late, so
         # after imports, the build, the first rollout and the second's captures (older JSONs: the curve's first
         # point, the same number where an episode ended within the first iteration)
@@ -268,6 +290,8 @@ def report(folders: list[str], figure: str | None = None) -> int:
               "deterministic policy in gymnasium.make's env")
         print(table(runs))
         print("References: SAC's best within 1 M steps, Tianshou's (SLM-Lab's on v5 for Pusher and HumanoidStandup).")
+        print("\nThe README's table:\n")
+        print(readme_table(runs))
     if peers:
         cpu, scale, _ = next(iter(peers_made))
         print(f"\nStable-Baselines3 PPO (RL Zoo hyperparameters), one core per run on {cpu}; budgets x{scale:g}; "

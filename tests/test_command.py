@@ -45,7 +45,7 @@ def test_every_subcommand_answers_help_under_its_own_name():
 
 @pytest.mark.parametrize(("args", "code", "says"), [
     (["nonsense"], 2, "unknown command 'nonsense'; choose one of train, play"),
-    (["play", "/nowhere/at/all", "--device", "cpu"], 1, "no checkpoint at /nowhere/at/all"),
+    (["play", "/nowhere/at/all", "--device", "cpu"], 2, "no checkpoint at /nowhere/at/all"),
     (["train", "--num-envs", "0"], 2, "--num-envs"),
 ])
 def test_a_wrong_command_or_path_gets_one_line(args, code, says, tmp_path):

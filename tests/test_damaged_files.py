@@ -146,6 +146,7 @@ def test_a_sealed_checkpoint_still_plays(sealed, tmp_path):
     run = tmp_path / "run"
     run.mkdir()
     shutil.copy(sealed[0], run / "checkpoint.pt")
-    done = script("play.py", str(run), "--device", "cpu", "--num-envs", "1", "--steps", "5")
+    done = script("play.py", str(run), "--device", "cpu", "--num-envs", "1", "--steps", "5", "--json",
+                  str(tmp_path / "play.json"))
     assert done.returncode == 0, done.stderr[-2000:]
-    assert json.loads(done.stdout.strip().splitlines()[-1])["eval/length"] == 5
+    assert json.loads((tmp_path / "play.json").read_text())["eval/length"] == 5

@@ -22,6 +22,9 @@ def test_short_cpu_run_writes_logs_checkpoint_plots_resumes_and_plays(tmp_path, 
               "--episode-length", "40"]
     assert train.main(["--task", "Ant", "--device", "cpu", "--num-envs", "8", "--max-iterations", "3",
                        "--run-dir", run, *common]) == 0
+    last = capsys.readouterr().out.strip().splitlines()[-1]  # a sentence for a person, the next command in it
+    assert last.startswith("Trained Ant for 3 iterations (0.0 M samples") and "best evaluation returned" in last
+    assert f"Next: warpgym sim2sim {run} replays it in native MuJoCo; warpgym play {run} --gif ant.gif" in last
     for name in ("config.json", "metrics.jsonl", "metrics.csv", "checkpoint.pt", "summary.json",
                  "reward_vs_time.png", "reward_vs_samples.png"):
         assert os.path.getsize(os.path.join(run, name)) > 0, name
@@ -46,8 +49,9 @@ def test_short_cpu_run_writes_logs_checkpoint_plots_resumes_and_plays(tmp_path, 
     assert load(os.path.join(run, "checkpoint.pt"), torch.device("cpu"))["samples"] == 5 * 64
 
     # the deterministic policy of that run plays full 40-step episodes and reports return and speed
-    assert play.main([run, "--device", "cpu", "--num-envs", "2"]) == 0
-    result = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert play.main([run, "--device", "cpu", "--num-envs", "2", "--json", str(tmp_path / "play.json")]) == 0
+    assert capsys.readouterr().out.strip().splitlines()[-1].startswith(f"Next: warpgym play {run} --gif ant.gif")
+    result = json.loads((tmp_path / "play.json").read_text())
     assert result["iteration"] == 5 and result["episodes"] == 2
     assert 0 < result["eval/length"] <= 40 and result["eval/return"] != 0
 
@@ -94,10 +98,10 @@ def test_play_prints_one_forward_speed_per_thing_measured_and_they_agree(tmp_pat
     capsys.readouterr()
     gif = str(tmp_path / "a.gif")
     assert play.main([run, "--device", "cpu", "--steps", "20", "--gif", gif, "--width", "160", "--height",
-                      "120", "--gif-width", "160"]) == 0
+                      "120", "--gif-width", "160", "--json", str(tmp_path / "play.json")]) == 0
     lines = capsys.readouterr().out.strip().splitlines()
-    result = json.loads(lines[-1])
-    speeds = [line for line in lines[:-1] if "forward speed" in line]
+    result = json.loads((tmp_path / "play.json").read_text())
+    speeds = [line for line in lines if "forward speed" in line]
     assert len(speeds) == 2, lines  # the episodes, then the clip
     assert result["eval/length"] == 20 and abs(result["eval/speed"]) > 1e-3
     assert abs(result["clip/forward_speed"] - result["eval/speed"]) <= 0.01 * abs(result["eval/speed"])

@@ -15,7 +15,6 @@ NAME=VALUE (repeatable) times other solver settings, e.g. --physics ls_iteration
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import platform
@@ -26,6 +25,7 @@ import time
 import torch
 import warp as wp
 
+from warpgym.cli.flags import CommandParser, check_device, positive_int
 from warpgym.envs import LocomotionVecEnv
 from warpgym.sim import newton_internals
 from warpgym.sim.device import resolve_device
@@ -143,27 +143,29 @@ def bench_one(robot: str, num_envs: int, device: str, steps: int, repeats: int, 
     return result
 
 
-def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+def parser() -> CommandParser:
+    ap = CommandParser(prog="warpgym bench", description=__doc__)
     ap.add_argument("--robots", nargs="+", default=["ant", "humanoid"], choices=sorted(TASK_OF_ROBOT))
     ap.add_argument("--tasks", nargs="+", default=None, metavar="NAME-v5",
                     help="Gymnasium's MuJoCo tasks instead of the robots: MuJoCo Warp's step against the task's")
-    ap.add_argument("--num-envs", nargs="+", type=int, default=[1024, 4096, 16384])
+    ap.add_argument("--num-envs", nargs="+", type=positive_int(4096), default=[1024, 4096, 16384])
     ap.add_argument("--device", default=None)
-    ap.add_argument("--steps", type=int, default=200, help="steps per timing")
-    ap.add_argument("--repeats", type=int, default=5, help="timings per figure; the median is reported")
+    ap.add_argument("--steps", type=positive_int(200), default=200, help="steps per timing")
+    ap.add_argument("--repeats", type=positive_int(5), default=5, help="timings per figure; the median is reported")
     ap.add_argument("--physics", action="append", default=[], metavar="NAME=VALUE",
                     help="a warpgym.sim.physics.Physics setting, e.g. solver_iterations=4 (default: the task's)")
-    ap.add_argument("--njmax", type=int, nargs="+", default=[None],
+    ap.add_argument("--njmax", type=positive_int(128), nargs="+", default=[None],
                     help="constraint rows per world to compare (default: each robot's, warpgym/sim/robots.py)")
     ap.add_argument("--no-mathdx", action="store_true",
                     help="compile Warp's tile Cholesky without libmathdx (faster to compile; see the timings)")
     ap.add_argument("--out", default=None, help="JSON file to write (default: print only)")
+    return ap
+
+
+def main(argv=None) -> int:
+    ap = parser()
     args = ap.parse_args(argv)
-    bad = [f"--{k.replace('_', '-')} {v}" for k, vs in (("num_envs", args.num_envs), ("steps", [args.steps]),
-                                                        ("repeats", [args.repeats])) for v in vs if v < 1]
-    if bad:
-        ap.error(f"{', '.join(bad)}: must be positive integers")
+    check_device(ap, args.device)
     if args.no_mathdx:
         wp.config.enable_mathdx_solver = False
     try:
@@ -171,6 +173,14 @@ def main(argv=None) -> int:
         Physics.from_dict(physics)
     except ValueError as e:
         ap.error(f"--physics: {e}")
+    if args.tasks:
+        from warpgym.tasks.suite import get_suite_task  # noqa: PLC0415
+
+        try:
+            for name in args.tasks:
+                get_suite_task(name)
+        except ValueError as e:
+            ap.error(f"--tasks: {e}")
     device = resolve_device(args.device)
     gpu = torch.cuda.get_device_name(torch.device(device)) if device.startswith("cuda") else platform.processor()
 
@@ -212,13 +222,6 @@ def write_json(args, device, gpu, argv, rows) -> None:
 
 def bench_suite(args, device, gpu, argv) -> int:
     from warpgym.cli.bench_suite import bench_suite_task  # noqa: PLC0415
-    from warpgym.tasks.suite import get_suite_task  # noqa: PLC0415
-
-    try:
-        for name in args.tasks:
-            get_suite_task(name)
-    except ValueError as e:
-        raise SystemExit(f"--tasks: {e}") from None
     rows = []
     for name in args.tasks:
         for n in args.num_envs:

@@ -26,9 +26,9 @@ v5's, and prints how much of the v5 return holds there.
 
 from __future__ import annotations
 
-import argparse
-import json
 import sys
+
+from warpgym.cli.flags import CommandParser, check_checkpoint, check_device, non_negative_float, non_negative_int, positive_int
 
 
 def holds(gymnasium_return: float, warpgym_return: float) -> float:
@@ -42,32 +42,36 @@ def holds(gymnasium_return: float, warpgym_return: float) -> float:
     return 1.0 if gymnasium_return >= warpgym_return else 0.0  # signs differ, or warpgym's is 0
 
 
-def parse_args(argv=None):
-    ap = argparse.ArgumentParser(prog="warpgym eval", description=__doc__,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+def parser() -> CommandParser:
+    ap = CommandParser(prog="warpgym eval", description=__doc__)
     ap.add_argument("checkpoint", help="a run directory (its checkpoint.pt) or a checkpoint file")
-    ap.add_argument("--episodes", type=int, default=10, help="episodes per seed (default 10)")
-    ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2], help="reset seeds (default 0 1 2)")
+    ap.add_argument("--episodes", type=positive_int(10), default=10, help="episodes per seed (default 10)")
+    ap.add_argument("--seeds", type=non_negative_int(0), nargs="+", default=[0, 1, 2],
+                    help="reset seeds (default 0 1 2)")
     ap.add_argument("--device", default="cpu", help="where the policy and warpgym's env run (default cpu)")
     ap.add_argument("--json", default=None, metavar="OUT", help="also write the result as JSON")
-    ap.add_argument("--nudge", type=float, default=0.0, metavar="EPS",
+    ap.add_argument("--nudge", type=non_negative_float(1e-9), default=0.0, metavar="EPS",
                     help="also play Gymnasium's episodes from starts moved by EPS (e.g. 1e-9) and compare "
                          "Gymnasium with itself: how far a policy's return moves under a change no simulator "
                          "difference is smaller than")
     ap.add_argument("--normalizer-from", default=None, metavar="CKPT",
                     help="play the policy with CKPT's observation statistics instead of its own (a checkpoint of "
                          "the same task): does a decay follow the weights or the normaliser?")
-    ap.add_argument("--env-version", type=int, choices=(5, 4), default=5,
+    ap.add_argument("--env-version", choices=("5", "4"), default="5",
                     help="4: also score in Gymnasium's v4 of the task, from the same reset seeds (default 5: v5 only)")
+    return ap
+
+
+def parse_args(argv=None):
+    ap = parser()
     args = ap.parse_args(argv)
+    check_checkpoint(ap, args.checkpoint)
+    check_device(ap, args.device)
+    args.env_version = int(args.env_version)
     if args.env_version == 4 and args.nudge:
         ap.error(f"--nudge {args.nudge} with --env-version 4: the nudge compares v5 with itself; run them apart")
-    if not (args.nudge >= 0.0 and args.nudge < 1e-3):
+    if args.nudge >= 1e-3:
         ap.error(f"--nudge {args.nudge}: a tiny non-negative number, e.g. --nudge 1e-9 (0: not played)")
-    if args.episodes < 1:
-        ap.error(f"--episodes {args.episodes}: must be a positive integer, e.g. --episodes 10")
-    if any(s < 0 for s in args.seeds):
-        ap.error(f"--seeds {args.seeds}: seeds are non-negative integers, e.g. --seeds 0 1 2")
     return args
 
 
@@ -208,9 +212,10 @@ def main(argv=None) -> int:
         print("  reward terms, mean per episode (v5 | v4): " + terms_line(
             {"v5": gym["terms"], "v4": old["terms"]}, {"v5": gym_return, "v4": old["return"]},
             {"v5": gym["length"], "v4": old["length"]}))
-    print(json.dumps(result))
     if args.json:
         write_json(args.json, result)
+    print(f"Next: warpgym play {args.checkpoint} --gif {name.lower()}.gif draws it"
+          + (f" (the numbers: {args.json})." if args.json else " (--json OUT writes the numbers)."))
     return 0
 
 

@@ -16,34 +16,40 @@ robot that fell and was reset inside it adds no travel for its reset.
 
 from __future__ import annotations
 
-import argparse
-import json
 import os
 import sys
 
+from warpgym.cli import write_json
+from warpgym.cli.flags import CommandParser, check_checkpoint, check_device, non_negative_int, positive_int
 
 
-def parse_args(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+def parser() -> CommandParser:
+    ap = CommandParser(prog="warpgym play", description=__doc__)
     ap.add_argument("checkpoint", help="a checkpoint file, or a run directory holding checkpoint.pt")
-    ap.add_argument("--num-envs", type=int, default=None,
+    ap.add_argument("--num-envs", type=positive_int(64), default=None,
                     help="episodes at once (default 64 on a GPU, 4 on the CPU; 1 with --video/--gif, "
                          "more draws a grid of robots)")
     ap.add_argument("--device", default=None)
-    ap.add_argument("--seed", type=int, default=12345)
+    ap.add_argument("--seed", type=non_negative_int(12345), default=12345)
     ap.add_argument("--video", default=None, metavar="OUT.mp4", help="write an MP4 of the episode")
     ap.add_argument("--gif", default=None, metavar="OUT.gif", help="write a GIF of the episode")
-    ap.add_argument("--steps", type=int, default=None, help="control steps to play (default: one episode)")
-    ap.add_argument("--width", type=int, default=640, help="frame width in pixels (default 640)")
-    ap.add_argument("--height", type=int, default=480, help="frame height in pixels (default 480)")
-    ap.add_argument("--fps", type=int, default=60, help="MP4 frame rate, dividing 60 (default 60)")
-    ap.add_argument("--gif-fps", type=int, default=20, help="GIF frame rate, dividing 60 and 100 (default 20)")
-    ap.add_argument("--gif-width", type=int, default=320, help="GIF width in pixels (default 320)")
+    ap.add_argument("--steps", type=positive_int(300), default=None,
+                    help="control steps to play (default: one episode)")
+    ap.add_argument("--width", type=positive_int(640), default=640, help="frame width in pixels (default 640)")
+    ap.add_argument("--height", type=positive_int(480), default=480, help="frame height in pixels (default 480)")
+    ap.add_argument("--fps", type=positive_int(60), default=60, help="MP4 frame rate, dividing 60 (default 60)")
+    ap.add_argument("--gif-fps", type=positive_int(20), default=20,
+                    help="GIF frame rate, dividing 60 and 100 (default 20)")
+    ap.add_argument("--gif-width", type=positive_int(320), default=320, help="GIF width in pixels (default 320)")
+    ap.add_argument("--json", default=None, metavar="OUT", help="also write the result as JSON")
+    return ap
+
+
+def parse_args(argv=None):
+    ap = parser()
     args = ap.parse_args(argv)
-    for flag in ("num_envs", "steps", "width", "height", "fps", "gif_fps", "gif_width"):
-        value = getattr(args, flag)
-        if value is not None and value < 1:
-            ap.error(f"--{flag.replace('_', '-')} {value}: must be a positive integer")
+    check_checkpoint(ap, args.checkpoint)
+    check_device(ap, args.device)
     if args.video and not args.video.lower().endswith(".mp4"):
         ap.error(f"--video {args.video}: the file must end in .mp4 (use --gif for a GIF)")
     if args.gif and not args.gif.lower().endswith(".gif"):
@@ -132,7 +138,13 @@ def main(argv=None) -> int:
         for out, count in frames.items():
             print(f"wrote {out}: {count} frames, {os.path.getsize(out) / 1e6:.2f} MB")
         result["videos"] = frames
-    print(json.dumps(result))
+    if args.json:
+        write_json(args.json, result)
+    nxt = [] if filming else [f"warpgym play {args.checkpoint} --gif {task.lower()}.gif draws it"]
+    nxt.append(f"warpgym eval {args.checkpoint} scores it in Gymnasium's env" if task in SUITE else
+               f"warpgym sim2sim {args.checkpoint} replays it in native MuJoCo")
+    print("Next: " + "; ".join(nxt) + (f" (the numbers: {args.json})." if args.json else
+                                       " (--json OUT writes the numbers)."))
     return 0
 
 

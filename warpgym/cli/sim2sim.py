@@ -17,14 +17,14 @@ gait that only works at the training step exploits the integrator, not the robot
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import sys
 import time
 
+import numpy as np
 
-import numpy as np  # noqa: E402
+from warpgym.cli.flags import CommandParser, check_checkpoint, check_device, non_negative_int, positive_int
 
 
 class GaitMeter:
@@ -157,22 +157,26 @@ def play_native(robot, act, steps: int, seed: int) -> dict:
     return meter.result(fell)
 
 
-def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+def parser() -> CommandParser:
+    ap = CommandParser(prog="warpgym sim2sim", description=__doc__)
     ap.add_argument("checkpoint", help="a checkpoint file, or a run directory holding checkpoint.pt")
-    ap.add_argument("--envs", type=int, default=None, help="warpgym robots per setting (default 256 GPU, 8 CPU)")
-    ap.add_argument("--native-copies", type=int, default=16, help="native MuJoCo robots per setting")
-    ap.add_argument("--steps", type=int, default=1000, help="control steps (one episode at most)")
-    ap.add_argument("--finer", type=int, default=4, help="how many times finer the second physics step is")
+    ap.add_argument("--envs", type=positive_int(256), default=None,
+                    help="warpgym robots per setting (default 256 GPU, 8 CPU)")
+    ap.add_argument("--native-copies", type=positive_int(16), default=16, help="native MuJoCo robots per setting")
+    ap.add_argument("--steps", type=positive_int(1000), default=1000, help="control steps (one episode at most)")
+    ap.add_argument("--finer", type=positive_int(4), default=4, help="how many times finer the second physics step is")
     ap.add_argument("--no-native", action="store_true", help="warpgym settings only")
     ap.add_argument("--device", default=None)
-    ap.add_argument("--seed", type=int, default=7)
+    ap.add_argument("--seed", type=non_negative_int(7), default=7)
     ap.add_argument("--out", default=None, help="also write the rows to this JSON file")
+    return ap
+
+
+def main(argv=None) -> int:
+    ap = parser()
     args = ap.parse_args(argv)
-    for name in ("envs", "native_copies", "steps", "finer"):
-        v = getattr(args, name)
-        if v is not None and v < 1:
-            ap.error(f"--{name.replace('_', '-')}={v}: must be a positive integer")
+    check_checkpoint(ap, args.checkpoint)
+    check_device(ap, args.device)
 
     import torch  # noqa: PLC0415
 

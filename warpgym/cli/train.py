@@ -225,7 +225,8 @@ def main(argv=None) -> int:
         finished = True
         return code
     except BaseException as e:
-        if args.run_dir and not (isinstance(e, SystemExit) and e.code in (0, None)):
+        # status 2 is a flag's error (warpgym.cli.flags): nothing started, its one line says it all
+        if args.run_dir and not (isinstance(e, SystemExit) and e.code in (0, None, 2)):
             why = f"{type(e).__name__}: {str(e).splitlines()[0][:300]}" if str(e) else type(e).__name__
             hint = resume_hint(args.run_dir) if rank == 0 else "Rank 0's output says how to resume."
             sys.stderr.write(f"\nwarpgym worker {rank}: training stopped ({why}). {hint}\n")
@@ -331,8 +332,8 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
     try:
         cfg = build_config(args, task, num_envs, device, saved, processes)
         cfg.check_batch(cfg.env_args["num_envs"], processes)
-    except ValueError as e:
-        raise SystemExit(f"error: {with_flag_names(str(e))}") from None
+    except ValueError as e:  # the flags checked together, once the task and the device are known: one line, status 2
+        train_args.parser().error(with_flag_names(str(e)))
     if rank > 0:  # each process draws its own reset noise; rank 0 alone logs, evaluates and saves
         cfg = cfg.replace(env_args={**cfg.env_args, "seed": cfg.env_args["seed"] + 1000 * rank})
         args.no_eval = True
@@ -432,10 +433,26 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
             print("wrote " + ", ".join(paths), flush=True)
         except ImportError:
             print("matplotlib is not installed: pip install 'warpgym[train]' for the plots", flush=True)
-    print(json.dumps(summary), flush=True)
     if stopped:
         print(f"stopped on request after iteration {runner.iteration}. {resume_hint(run_dir)}", flush=True)
+    print(closing_line(task, run_dir, summary), flush=True)
     return 0
+
+
+def closing_line(task: str, run_dir: str, summary: dict) -> str:
+    """What a person reads last: how far the run got, its best evaluation, and the next command."""
+    from warpgym.tasks.suite import SUITE  # noqa: PLC0415
+
+    final = summary.get("final") or {}
+    m, s = divmod(int(final.get("time_s") or 0), 60)
+    best = summary.get("best_eval")
+    result = (f"its best evaluation returned {best['eval/return']:.1f}"
+              + ("" if task in SUITE else f" at {best['eval/speed']:.2f} m/s") if best else "it was not evaluated")
+    score = f"warpgym eval {run_dir} scores it in Gymnasium's env" if task in SUITE else \
+        f"warpgym sim2sim {run_dir} replays it in native MuJoCo"
+    return (f"Trained {task} for {summary['iterations']} iterations ({(final.get('samples') or 0) / 1e6:.1f} M samples, "
+            f"{m} min {s:02d} s); {result}. Next: {score}; warpgym play {run_dir} --gif {task.lower()}.gif draws it "
+            f"(the numbers: {os.path.join(run_dir, 'summary.json')}).")
 
 
 if __name__ == "__main__":

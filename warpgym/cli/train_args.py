@@ -2,43 +2,51 @@
 
 from __future__ import annotations
 
-import argparse
-import math
+import os
+
 
 from agents.config import PRESETS
 from agents.data_parallel import MODES as MULTI_GPU_MODES
+from warpgym.cli.flags import CommandParser, check_device, non_negative_float, non_negative_int, positive_float, \
+    positive_int
 
 TASK_NAMES = {t.lower(): t for t in PRESETS}
 
 
-def parse_args(argv=None, description: str | None = None):
-    ap = argparse.ArgumentParser(description=description, formatter_class=argparse.RawDescriptionHelpFormatter)
+def parser(description: str | None = None) -> CommandParser:
+    """`warpgym train`'s flags, each number with its range and a value that works (warpgym.cli.flags)."""
+    ap = CommandParser(prog="warpgym train", description=description)
     ap.add_argument("--task", default=None, help="Ant (default), Humanoid, or one of Gymnasium's MuJoCo tasks "
                                                  "(InvertedPendulum-v5 ... HumanoidStandup-v5)")
-    ap.add_argument("--num-envs", type=int, default=None, help="default on a GPU: 8192 (Ant), 4096 (Humanoid); 64 on the CPU")
+    ap.add_argument("--num-envs", type=positive_int(4096), default=None, help="default on a GPU: 8192 (Ant), 4096 (Humanoid); 64 on the CPU")
     ap.add_argument("--device", default=None, help="default: cuda:0 when present, else cpu")
-    ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--max-iterations", type=int, default=None)
-    ap.add_argument("--total-steps", type=int, default=None, help="stop after this many samples")
-    ap.add_argument("--time-limit", type=float, default=None, help="stop after this many seconds since start")
+    ap.add_argument("--seed", type=non_negative_int(0), default=0)
+    ap.add_argument("--max-iterations", type=positive_int(500), default=None)
+    ap.add_argument("--total-steps", type=positive_int(100_000_000), default=None, help="stop after this many samples")
+    ap.add_argument("--time-limit", type=positive_float(300), default=None,
+                    help="stop after this many seconds since start")
     ap.add_argument("--run-dir", default=None, help="default: runs/<Task>-<date>-<time>")
     ap.add_argument("--resume", default=None, metavar="RUN_DIR", help="continue the run saved in RUN_DIR")
-    ap.add_argument("--eval-gap", type=float, default=None, help="seconds between deterministic evaluations")
-    ap.add_argument("--eval-envs", type=int, default=None, help="envs per evaluation (the seed's eval env: 1)")
+    ap.add_argument("--eval-gap", type=non_negative_float(30), default=None,
+                    help="seconds between deterministic evaluations")
+    ap.add_argument("--eval-envs", type=positive_int(64), default=None,
+                    help="envs per evaluation (the ElegantRL tutorial's eval env: 1)")
     ap.add_argument("--no-eval", action="store_true")
-    ap.add_argument("--save-gap", type=int, default=None, help="iterations between checkpoints")
-    ap.add_argument("--horizon-len", type=int, default=None)
-    ap.add_argument("--batch-size", type=int, default=None)
-    ap.add_argument("--repeat-times", type=int, default=None)
-    ap.add_argument("--learning-rate", type=float, default=None)
-    ap.add_argument("--episode-length", type=int, default=None, help="steps per episode (task default: 1000)")
-    ap.add_argument("--substeps", type=int, default=None, help="physics substeps per 1/60 s step (default: the task's)")
+    ap.add_argument("--save-gap", type=positive_int(50), default=None, help="iterations between checkpoints")
+    ap.add_argument("--horizon-len", type=positive_int(16), default=None)
+    ap.add_argument("--batch-size", type=positive_int(32768), default=None)
+    ap.add_argument("--repeat-times", type=positive_int(4), default=None)
+    ap.add_argument("--learning-rate", type=positive_float(3e-4), default=None)
+    ap.add_argument("--episode-length", type=positive_int(1000), default=None,
+                    help="steps per episode (task default: 1000)")
+    ap.add_argument("--substeps", type=positive_int(2), default=None,
+                    help="physics substeps per 1/60 s step (default: the task's)")
     ap.add_argument("--physics", action="append", default=[], metavar="NAME=VALUE",
                     help="a physics setting (warpgym/sim/physics.py), e.g. --physics armature=0.05; repeat for more")
     ap.add_argument("--config", action="append", default=[], metavar="NAME=VALUE",
                     help="any PPO setting of agents/config.py's Config, e.g. --config gamma=0.999 --config "
                          "net_dims=256,256 --config reward_scale=0.1; repeat for more (a sweep's knobs)")
-    ap.add_argument("--save-at", type=float, nargs="+", default=None, metavar="SECONDS",
+    ap.add_argument("--save-at", type=non_negative_float(60), nargs="+", default=None, metavar="SECONDS",
                     help="also keep checkpoint-<iteration>.pt at the first iteration after each of these "
                          "wall-clock seconds since start, e.g. --save-at 60 120 (summary.json lists them)")
     ap.add_argument("--target", default=None, metavar="KEY=VALUE",
@@ -54,8 +62,9 @@ def parse_args(argv=None, description: str | None = None):
     ap.add_argument("--video", action="store_true",
                     help="record a clip of the evaluation episode into RUN_DIR/videos and TensorBoard "
                          "(drawn by a separate process; needs warpgym[video])")
-    ap.add_argument("--video-every", type=int, default=1, metavar="N", help="record every N-th evaluation (default 1)")
-    ap.add_argument("--video-length", type=int, default=300, metavar="STEPS",
+    ap.add_argument("--video-every", type=positive_int(1), default=1, metavar="N",
+                    help="record every N-th evaluation (default 1)")
+    ap.add_argument("--video-length", type=positive_int(300), default=300, metavar="STEPS",
                     help="control steps per clip (default 300: 5 s)")
     ap.add_argument("--no-plots", action="store_true")
     ap.add_argument("--no-cuda-graph", action="store_true",
@@ -75,6 +84,11 @@ def parse_args(argv=None, description: str | None = None):
                          "for 3-16 s, the longer with an empty Inductor cache)")
     ap.add_argument("--profile", action="store_true",
                     help="time each phase of an iteration (synchronises the GPU between phases: slower)")
+    return ap
+
+
+def parse_args(argv=None, description: str | None = None):
+    ap = parser(description)
     args = ap.parse_args(argv)
     check_values(ap, args)
     from warpgym.sim.physics import Physics, parse_setting  # noqa: PLC0415
@@ -86,6 +100,10 @@ def parse_args(argv=None, description: str | None = None):
         ap.error(f"--physics: {e}")
     try:
         args.config = parse_config(args.config)
+        if args.resume is None:  # a resumed run's are checked against its own saved config
+            from agents.config import Config  # noqa: PLC0415
+
+            Config.for_task(TASK_NAMES[(args.task or "Ant").lower()]).replace(**args.config)
     except ValueError as e:
         ap.error(f"--config: {e}")
     if args.video:
@@ -123,11 +141,9 @@ def parse_config(texts: list[str]) -> dict:
     return out
 
 
-# flag -> a value that works, quoted in the error; every flag is checked before anything is built
-POSITIVE = {"num_envs": 4096, "max_iterations": 500, "total_steps": 100_000_000, "eval_envs": 64, "save_gap": 50,
-            "horizon_len": 16, "batch_size": 32768, "repeat_times": 4, "episode_length": 1000, "substeps": 2,
-            "time_limit": 300, "learning_rate": 3e-4}
-NON_NEGATIVE = {"eval_gap": 30, "seed": 0}
+# Config fields that have a flag of their own: a config error names the flag (with_flag_names)
+FLAG_FIELDS = ("num_envs", "max_iterations", "total_steps", "eval_envs", "save_gap", "horizon_len", "batch_size",
+               "repeat_times", "episode_length", "substeps", "time_limit", "learning_rate", "eval_gap", "seed")
 
 
 def flag(name: str) -> str:
@@ -135,18 +151,8 @@ def flag(name: str) -> str:
 
 
 def check_values(ap, args) -> None:
-    """Impossible numbers and unknown tasks fail here, naming the flag and a value that works."""
-    for name, example in {**POSITIVE, **NON_NEGATIVE}.items():
-        v = getattr(args, name)
-        if v is None:
-            continue
-        low_ok = v > 0 if name in POSITIVE else v >= 0
-        if not (low_ok and math.isfinite(v)):
-            need = "a positive" if name in POSITIVE else "a non-negative"
-            ap.error(f"{flag(name)} {v}: must be {need} number, e.g. {flag(name)} {example}")
-    for v in args.save_at or ():
-        if not (v >= 0 and math.isfinite(v)):
-            ap.error(f"--save-at {v}: must be non-negative seconds since start, e.g. --save-at 60 120")
+    """What the flags' types cannot check alone fails here, before anything is built, naming the flag and a
+    value that works: the task, the device, the target, --config against the task's preset, a resume's flags."""
     if args.task is not None and args.task.lower() not in TASK_NAMES:
         ap.error(f"--task {args.task!r}: choose one of {list(TASK_NAMES.values())}")
     if args.target is not None:
@@ -157,6 +163,11 @@ def check_values(ap, args) -> None:
         except ValueError:
             ap.error(f"--target {args.target!r}: write KEY=VALUE with a logged key and a number, e.g. "
                      "--target eval/speed=9.5 or --target eval/return=5850")
+    check_device(ap, args.device)
+    # rank 0 alone reads a resumed run's files (on several machines the others receive them): it alone checks
+    if args.resume is not None and os.environ.get("RANK", "0") == "0" and \
+            not os.path.isfile(os.path.join(args.resume, "config.json")):
+        ap.error(f"--resume {args.resume}: no config.json there; pass a run directory written by warpgym train")
     if args.resume is not None:
         given = [f for f in ("num_envs", "horizon_len", "episode_length", "substeps", "multi_gpu")
                  if getattr(args, f) is not None]
@@ -168,7 +179,7 @@ def check_values(ap, args) -> None:
 
 def with_flag_names(message: str) -> str:
     """A config error as the user wrote it: ``batch_size=8`` becomes ``--batch-size 8``."""
-    for name in sorted({*POSITIVE, *NON_NEGATIVE}, key=len, reverse=True):
+    for name in sorted(FLAG_FIELDS, key=len, reverse=True):
         message = message.replace(f"{name}=", f"{flag(name)} ").replace(f"lower {name}", f"lower {flag(name)}")
     return message
 
@@ -177,9 +188,6 @@ def check_video_args(ap, args) -> None:
     """--video fails here, before any model is built, if it cannot work."""
     if args.no_eval:
         ap.error("--video records the evaluation episode: drop --no-eval")
-    for flag, value in (("--video-every", args.video_every), ("--video-length", args.video_length)):
-        if value < 1:
-            ap.error(f"{flag} {value}: must be a positive integer")
     from warpgym.media.video import why_no_video  # noqa: PLC0415
 
     reason = why_no_video(mp4=True, gif=True)  # an MP4 per clip, a GIF of it in TensorBoard

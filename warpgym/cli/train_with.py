@@ -16,13 +16,13 @@ Install the learner with its extra: pip install "warpgym[rsl_rl]" (or skrl, rl_g
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import sys
 import time
 
 from warpgym.cli import process_start_time
+from warpgym.cli.flags import CommandParser, check_device, non_negative_int, positive_float, positive_int
 
 PROCESS_START = process_start_time()  # as train.py's: the clock starts with the process
 
@@ -40,30 +40,39 @@ def horizon_of(learner: str, task: str) -> int:
     return HORIZON[learner].get(task, HORIZON[learner]["Humanoid"])
 
 
-def parse_args(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+def parser() -> CommandParser:
+    ap = CommandParser(prog="warpgym train-with", description=__doc__)
     ap.add_argument("learner", help=f"one of {', '.join(LEARNERS)}")
     ap.add_argument("--task", default="Ant", help="Ant, Humanoid or one of Gymnasium's suite (Hopper-v5, ...)")
-    ap.add_argument("--num-envs", type=int, default=None, help="default: 4096 on a GPU, 64 on the CPU")
+    ap.add_argument("--num-envs", type=positive_int(4096), default=None, help="default: 4096 on a GPU, 64 on the CPU")
     ap.add_argument("--device", default=None, help="default: cuda:0 when present, else cpu")
-    ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--iterations", type=int, default=None,
+    ap.add_argument("--seed", type=non_negative_int(0), default=0)
+    ap.add_argument("--iterations", type=positive_int(500), default=None,
                     help="learner updates (default: 20 on the CPU, 500 on a GPU)")
-    ap.add_argument("--time-limit", type=float, default=None, help="stop after this many seconds since start")
-    ap.add_argument("--episode-length", type=int, default=None, help="steps per episode (task default: 1000)")
+    ap.add_argument("--time-limit", type=positive_float(300), default=None,
+                    help="stop after this many seconds since start")
+    ap.add_argument("--episode-length", type=positive_int(1000), default=None,
+                    help="steps per episode (task default: 1000)")
     ap.add_argument("--run-dir", default=None, help="default: runs/<Task>-<learner>-<date>-<time>")
     ap.add_argument("--no-plots", action="store_true")
     ap.add_argument("--no-compile", action="store_true", help="rl_games: no torch.compile of its model (its default)")
-    ap.add_argument("--gpus", type=int, default=1,
+    ap.add_argument("--gpus", type=positive_int(1), default=1,
                     help="rllib: env runners and learners, one of each per GPU (on the CPU: that many processes)")
-    ap.add_argument("--env-runners", type=int, default=None,
+    ap.add_argument("--env-runners", type=non_negative_int(8), default=None,
                     help="rllib: env runner processes, each stepping --num-envs robots (default: one per GPU past one, "
                          "else one in this process)")
-    for flag, kind, what in (("--horizon-len", int, "steps per env between updates"),
-                             ("--batch-size", int, "samples per minibatch"), ("--repeat-times", int, "epochs per update"),
-                             ("--learning-rate", float, "Adam's step size")):
+    for flag, kind, what in (("--horizon-len", positive_int(16), "steps per env between updates"),
+                             ("--batch-size", positive_int(32768), "samples per minibatch"),
+                             ("--repeat-times", positive_int(4), "epochs per update"),
+                             ("--learning-rate", positive_float(3e-4), "Adam's step size")):
         ap.add_argument(flag, type=kind, default=None, help=f"rllib: {what} (default: the task's rl_games numbers)")
+    return ap
+
+
+def parse_args(argv=None):
+    ap = parser()
     args = ap.parse_args(argv)
+    check_device(ap, args.device)
     if args.learner not in LEARNERS:
         ap.error(f"learner {args.learner!r}: choose one of {', '.join(LEARNERS)}")
     from warpgym.tasks.suite import SUITE  # noqa: PLC0415
@@ -76,18 +85,8 @@ def parse_args(argv=None):
     rllib_only += [f for f, default in (("gpus", 1), ("env_runners", None)) if getattr(args, f) != default]
     if rllib_only and args.learner != "rllib":
         ap.error(f"--{rllib_only[0].replace('_', '-')} is an rllib setting: the other learners run their published numbers")
-    if args.learning_rate is not None and not args.learning_rate > 0:
-        ap.error(f"--learning-rate {args.learning_rate}: must be a positive number")
-    for flag in ("num_envs", "iterations", "episode_length", "horizon_len", "batch_size", "repeat_times", "gpus"):
-        v = getattr(args, flag)
-        if v is not None and v < 1:
-            ap.error(f"--{flag.replace('_', '-')} {v}: must be a positive integer")
-    if args.env_runners is not None and args.env_runners < 0:
-        ap.error(f"--env-runners {args.env_runners}: must be 0 (one runner in this process) or more")
     if args.env_runners is None:
         args.env_runners = args.gpus if args.gpus > 1 else 0
-    if args.time_limit is not None and not args.time_limit > 0:
-        ap.error(f"--time-limit {args.time_limit}: must be a positive number of seconds")
     try:
         __import__(PIP_NAME[args.learner])
     except ImportError:
@@ -277,8 +276,8 @@ def main(argv=None, args=None) -> int:
     runners = max(getattr(args, "env_runners", 0), 1)  # rllib: every runner's rollout, split over the learners
     rollout = runners * num_envs * horizon // max(getattr(args, "gpus", 1), 1)
     if getattr(args, "batch_size", None) and args.batch_size > rollout:
-        raise SystemExit(f"error: --batch-size {args.batch_size} exceeds the {rollout} samples of one rollout per learner "
-                         f"({runners} runner(s) x {num_envs} envs x horizon {horizon}): lower --batch-size or raise --num-envs")
+        parser().error(f"--batch-size {args.batch_size} exceeds the {rollout} samples of one rollout per learner "
+                       f"({runners} runner(s) x {num_envs} envs x horizon {horizon}): lower --batch-size or raise --num-envs")
     run_dir = args.run_dir or os.path.join("runs", f"{args.task}-{args.learner}-{time.strftime('%Y%m%d-%H%M%S')}")
     os.makedirs(run_dir, exist_ok=True)
     torch.manual_seed(args.seed)
