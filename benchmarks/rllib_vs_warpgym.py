@@ -7,7 +7,9 @@
 
 For each task and GPU count G, one run of each learner, one after another:
 - warpgym: ``warpgym train`` (G = 1) or ``torchrun --nproc_per_node=G -m warpgym train``: G processes, each
-  stepping --num-envs robots and all-reducing every minibatch's gradients;
+  stepping --num-envs robots and all-reducing every minibatch's gradients (``--multi-gpu grow-batch``, as RLlib's
+  DDP learners divide the work: each its own mini-batch; ``--warpgym-multi-gpu split`` or ``grow-steps`` runs
+  warpgym's other ways with the same robots per GPU);
 - RLlib: ``warpgym train-with rllib --gpus G``: PPO on RLlib's new API stack, G env runners each stepping
   --num-envs robots in one warpgym vector env, and G learners training one policy with torch DDP. That is
   RLlib's successor of DD-PPO (see warpgym/cli/rllib_run.py for how they map). ``--rllib-env-runners R``
@@ -66,10 +68,11 @@ def command(learner: str, task: str, gpus: int, args, run_dir: str) -> list[str]
             ["--num-envs", str(args.num_envs)]  # the same robots per GPU, split over the runners
         return [sys.executable, "-m", "warpgym", "train-with", "rllib", "--gpus", str(gpus), "--iterations", "1000000",
                 *spread, *common]
-    train = ["-m", "warpgym", "train", "--num-envs", str(args.num_envs), *common, "--max-iterations", "1000000",
-             "--no-eval"]
+    total = args.num_envs * gpus if args.warpgym_multi_gpu == "split" else args.num_envs  # split: the run's total
+    train = ["-m", "warpgym", "train", "--num-envs", str(total), *common, "--max-iterations", "1000000", "--no-eval"]
     if gpus == 1:
         return [sys.executable, *train]
+    train += ["--multi-gpu", args.warpgym_multi_gpu]
     return [sys.executable, "-m", "torch.distributed.run", "--standalone", f"--nproc_per_node={gpus}", *train]
 
 
@@ -205,6 +208,7 @@ def run(args) -> int:
     os.makedirs(args.out, exist_ok=True)
     device = torch.cuda.get_device_name(0) if torch.cuda.is_available() and args.device != "cpu" else "cpu"
     doc = {"device": device, "date": time.strftime("%Y-%m-%d"), "num_envs": args.num_envs, "seconds": args.seconds,
+           "warpgym_multi_gpu": args.warpgym_multi_gpu,
            "hparams": args.hparams, "settings": {t: settings(t, args.hparams, args.num_envs) for t in args.tasks}, "rows": []}
     for task in args.tasks:
         for gpus in args.gpus:
@@ -234,6 +238,9 @@ def main(argv=None) -> int:
     ap.add_argument("--gpus", type=int, nargs="+", default=[1, 2], help="GPU counts to run (default 1 2)")
     ap.add_argument("--learners", nargs="+", default=["warpgym", "rllib"], choices=["warpgym", "rllib"])
     ap.add_argument("--num-envs", type=int, default=4096, help="robots per GPU (per env runner for RLlib)")
+    ap.add_argument("--warpgym-multi-gpu", choices=("grow-batch", "split", "grow-steps"), default="grow-batch",
+                    help="warpgym's --multi-gpu on several GPUs, each GPU stepping --num-envs robots (default "
+                         "grow-batch: each GPU's own mini-batch, as RLlib's DDP learners)")
     ap.add_argument("--seconds", type=float, default=240.0, help="wall-clock budget per run, from process start")
     ap.add_argument("--hparams", choices=["preset", "seed"], default="preset")
     ap.add_argument("--rllib-env-runners", type=int, default=None, metavar="R",

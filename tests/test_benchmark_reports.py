@@ -485,3 +485,22 @@ def test_the_published_multi_gpu_table_is_what_scaling_prints_from_the_committed
         page = set(f.read().splitlines())
     assert len(rows) == 1 + 7  # the header, one GPU and six multi-GPU settings
     assert [r for r in rows if r not in page] == []
+
+
+def test_the_comparison_gives_warpgym_as_many_robots_per_gpu_as_rllibs_runners_in_every_mode():
+    import argparse
+
+    args = argparse.Namespace(hparams="preset", num_envs=4096, seconds=60.0, seed=0, device=None,
+                              rllib_env_runners=None, warpgym_multi_gpu="grow-batch")
+
+    def flag(cmd, name):
+        return cmd[cmd.index(name) + 1]
+
+    rllib = cmp.command("rllib", "Ant", 2, args, "/x/r")
+    assert flag(rllib, "--num-envs") == "4096" and flag(rllib, "--gpus") == "2"  # two runners of 4096
+    ours = cmp.command("warpgym", "Ant", 2, args, "/x/w")
+    assert (flag(ours, "--num-envs"), flag(ours, "--multi-gpu")) == ("4096", "grow-batch")
+    args.warpgym_multi_gpu = "split"  # split's --num-envs is the run's total: 4096 on each of 2 GPUs
+    ours = cmp.command("warpgym", "Ant", 2, args, "/x/w")
+    assert (flag(ours, "--num-envs"), flag(ours, "--multi-gpu")) == ("8192", "split")
+    assert "--multi-gpu" not in cmp.command("warpgym", "Ant", 1, args, "/x/w")

@@ -68,7 +68,8 @@ def test_device_loops_and_branches_are_walked_once_each_while_recording():
 def test_compile_ahead_compiles_what_the_launch_then_finds_ready():
     import random
 
-    kernel = _constant_kernel(random.random())  # a new constant: a hash no cache has seen
+    # a new constant: a hash no cache has seen (from the OS: hypothesis's tests seed the random module)
+    kernel = _constant_kernel(random.SystemRandom().random())
     out = wp.zeros(2, dtype=float, device="cpu")
 
     def launch():
