@@ -160,8 +160,6 @@ class Config:
                 raise ValueError(f"{name}={getattr(self, name)!r} must be True or False")
         data_parallel.check_mode(self.multi_gpu)
         self.target_pair()
-        if not isinstance(self.target, str):
-            raise ValueError(f"target={self.target!r}: write KEY=VALUE, e.g. target=eval/speed=9.5")
         if self.activation not in ("elu", "relu", "tanh"):
             raise ValueError(f"activation={self.activation!r}: choose 'elu', 'relu' or 'tanh'")
         marks = tuple(self.save_at)

@@ -2,7 +2,6 @@
 the time to a target read from a run's rows, and the benchmark's job packing and table."""
 
 import json
-import math
 import os
 import subprocess
 import sys

@@ -350,10 +350,9 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
         write_json(os.path.join(run_dir, "config.json"),
                    {"task": task, "device": device, "num_envs": num_envs, "seed": args.seed, **cfg.to_dict()})
     say = print if rank == 0 else (lambda *a, **k: None)
-    workers = int(os.environ.get("WORLD_SIZE", "1"))
     local_envs = cfg.env_args["num_envs"]
-    shares = (f" x {workers} processes, {local_envs} envs each (--multi-gpu {cfg.multi_gpu}: "
-              f"{local_envs * workers} in all)") if workers > 1 else ""
+    shares = (f" x {processes} processes, {local_envs} envs each (--multi-gpu {cfg.multi_gpu}: "
+              f"{local_envs * processes} in all)") if processes > 1 else ""
     say(f"warpgym PPO | {task} | {num_envs} envs on {device} ({device_name}){shares} | run dir {run_dir}", flush=True)
     from warpgym.compile import log as compile_log, preload  # noqa: PLC0415
 
