@@ -23,7 +23,7 @@ def test_short_cpu_run_writes_logs_checkpoint_plots_resumes_and_plays(tmp_path, 
     assert train.main(["--task", "Ant", "--device", "cpu", "--num-envs", "8", "--max-iterations", "3",
                        "--run-dir", run, *common]) == 0
     last = capsys.readouterr().out.strip().splitlines()[-1]  # a sentence for a person, the next command in it
-    assert last.startswith("Trained Ant for 3 iterations (0.0 M samples") and "best evaluation returned" in last
+    assert last.startswith("Trained Ant for 3 iterations (0.2 k samples") and "best evaluation returned" in last
     assert f"Next: warpgym sim2sim {run} replays it in native MuJoCo; warpgym play {run} --gif ant.gif" in last
     for name in ("config.json", "metrics.jsonl", "metrics.csv", "checkpoint.pt", "summary.json",
                  "reward_vs_time.png", "reward_vs_samples.png"):

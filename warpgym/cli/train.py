@@ -449,7 +449,9 @@ def closing_line(task: str, run_dir: str, summary: dict) -> str:
               + ("" if task in SUITE else f" at {best['eval/speed']:.2f} m/s") if best else "it was not evaluated")
     score = f"warpgym eval {run_dir} scores it in Gymnasium's env" if task in SUITE else \
         f"warpgym sim2sim {run_dir} replays it in native MuJoCo"
-    return (f"Trained {task} for {summary['iterations']} iterations ({(final.get('samples') or 0) / 1e6:.1f} M samples, "
+    n = final.get("samples") or 0
+    samples = f"{n / 1e6:.1f} M" if n >= 1e6 else f"{n / 1e3:.1f} k"
+    return (f"Trained {task} for {summary['iterations']} iterations ({samples} samples, "
             f"{m} min {s:02d} s); {result}. Next: {score}; warpgym play {run_dir} --gif {task.lower()}.gif draws it "
             f"(the numbers: {os.path.join(run_dir, 'summary.json')}).")
 
