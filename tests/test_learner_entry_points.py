@@ -32,7 +32,8 @@ def test_skrl_wrap_env_recognises_the_vector_envs_and_passes_their_values(which,
     assert wrapped.observation_space == env.single_observation_space
     wrapped.reset()
     actions = torch.rand(env.num_envs, env.single_action_space.shape[0]) * 2 - 1
-    with pytest.warns(UserWarning):  # skrl copies torch tensors with torch.tensor(): our adapter hands them over
+    with warnings.catch_warnings():  # skrl copies the tensors with torch.tensor(), which warns; the values count
+        warnings.simplefilter("ignore", UserWarning)
         obs, reward, terminated, truncated, _ = wrapped.step(actions)
     np.testing.assert_array_equal(obs.numpy(), env.obs.numpy())
     np.testing.assert_array_equal(reward.numpy().reshape(-1), env.reward.numpy())
@@ -40,47 +41,21 @@ def test_skrl_wrap_env_recognises_the_vector_envs_and_passes_their_values(which,
 
 
 def test_skrl_trains_on_its_own_wrapper_of_a_suite_env(hopper_vec, tmp_path):
-    """skrl's documented loop end to end: wrap_env, its PPO and SequentialTrainer; the episodes it counts are
-    the env's (Hopper falls within its first few dozen random steps)."""
+    """skrl's loop end to end on skrl's own wrapper: wrap_env, then the PPO and SequentialTrainer that
+    `warpgym train-with skrl` sets up (its models, skrl's published settings); the episodes skrl counts are the
+    env's (Hopper falls within its first few dozen random steps)."""
     pytest.importorskip("skrl")
-    from skrl.agents.torch.ppo import PPO, PPO_CFG
+    from argparse import Namespace
+
     from skrl.envs.wrappers.torch import wrap_env
-    from skrl.memories.torch import RandomMemory
-    from skrl.models.torch import DeterministicMixin, GaussianMixin, Model
-    from skrl.trainers.torch import SequentialTrainer
 
-    env = wrap_env(hopper_vec, verbose=False)
+    from warpgym.cli.train_with import run_skrl
 
-    class Policy(GaussianMixin, Model):
-        def __init__(self, observation_space, action_space, device):
-            Model.__init__(self, observation_space=observation_space, action_space=action_space, device=device)
-            GaussianMixin.__init__(self, clip_actions=True)
-            self.net = torch.nn.Linear(self.num_observations, self.num_actions)
-            self.log_std = torch.nn.Parameter(torch.zeros(self.num_actions))
-
-        def compute(self, inputs, role=""):
-            return self.net(inputs["observations"]), {"log_std": self.log_std}
-
-    class Value(DeterministicMixin, Model):
-        def __init__(self, observation_space, action_space, device):
-            Model.__init__(self, observation_space=observation_space, action_space=action_space, device=device)
-            DeterministicMixin.__init__(self)
-            self.net = torch.nn.Linear(self.num_observations, 1)
-
-        def compute(self, inputs, role=""):
-            return self.net(inputs["observations"]), {}
-
-    models = {"policy": Policy(env.observation_space, env.action_space, env.device),
-              "value": Value(env.observation_space, env.action_space, env.device)}
-    # skrl tracks episodes only while it writes its logs (every 1000 steps: never within these 64)
-    cfg = PPO_CFG(rollouts=16, learning_epochs=1, mini_batches=1,
-                  experiment={"directory": str(tmp_path), "write_interval": 1000, "checkpoint_interval": 0})
-    agent = PPO(models=models, memory=RandomMemory(memory_size=16, num_envs=env.num_envs, device=env.device),
-                observation_space=env.observation_space, action_space=env.action_space, device=env.device, cfg=cfg)
-    with warnings.catch_warnings():
+    args = Namespace(task="Hopper-v5", iterations=4)
+    with warnings.catch_warnings():  # skrl's wrapper copies the tensors with torch.tensor(), which warns
         warnings.simplefilter("ignore", UserWarning)
-        SequentialTrainer(env=env, agents=agent, cfg={"timesteps": 64, "disable_progressbar": True,
-                                                      "close_environment_at_exit": False}).train()
+        run_skrl(wrap_env(hopper_vec, verbose=False), args, 16, str(tmp_path))
+    agent = args.learner_object
     returns = np.asarray(list(agent._track_rewards)).reshape(-1)
     lengths = np.asarray(list(agent._track_timesteps)).reshape(-1)
     assert len(returns) >= 4 and np.isfinite(returns).all() and (lengths < 64).all()

@@ -38,6 +38,8 @@ sys.path[:0] = [ROOT, HERE]
 
 from gpu_jobs import Job, run_jobs  # noqa: E402
 
+from warpgym.cli import write_json  # noqa: E402
+
 # the issue's targets; a suite task without one here is timed to Tianshou's (or SLM-Lab's) figure
 TARGETS = {"Ant": ("eval/speed", (8.0, 9.5)), "Humanoid": ("eval/speed", (6.0,)),
            "Humanoid-v5": ("eval/return", (10000.0,)), "Ant-v5": ("eval/return", (5850.0,))}
@@ -126,12 +128,6 @@ def run_row(run_dir: str, key: str, values: tuple[float, ...]) -> dict:
     return row
 
 
-def atomic_json(path: str, doc: dict) -> None:
-    with open(path + ".tmp", "w") as f:
-        json.dump(doc, f, indent=1)
-    os.replace(path + ".tmp", path)
-
-
 def censored_median(hits: list[dict | None], bounds: list[float]) -> tuple[float, bool]:
     """The median learning time over seeds and whether it is exact. A seed that missed the target took longer
     than the learning time it had (its bound): if the median falls on such a seed, the median of the values
@@ -205,8 +201,10 @@ def verdict(ratio: float, bound: str, goal: float | None) -> str:
     """'met', 'not met', or 'open' where a bound leaves it undecided."""
     if goal is None:
         return ""
-    if (bound in "=<" and ratio <= goal) or (bound == "=" and ratio > goal) or (bound == ">" and ratio > goal):
-        return f"; <= {goal}: " + ("met" if ratio <= goal else "not met")
+    if bound in ("=", "<") and ratio <= goal:  # below the goal, or a ratio that can only be lower
+        return f"; <= {goal}: met"
+    if bound in ("=", ">") and ratio > goal:  # above it, or a ratio that can only be higher
+        return f"; <= {goal}: not met"
     return f"; <= {goal}: open"
 
 
@@ -250,8 +248,8 @@ def markdown(doc: dict, lines: list[dict]) -> str:
 
 
 def figures(doc: dict, runs_dir: str, out: str) -> list[str]:
-    """The target's key against wall-clock time since start and against samples, every run, one colour per
-    (GPUs, mode)."""
+    """The target's key against learning time (agents.logger.learning_clock) and against samples, every run, one
+    colour per (GPUs, mode)."""
     try:
         import matplotlib  # noqa: PLC0415
     except ImportError:
@@ -292,7 +290,7 @@ def figures(doc: dict, runs_dir: str, out: str) -> list[str]:
 
 def write_report(doc: dict, runs_dir: str, out: str) -> str:
     doc["summary"] = summarize(doc)
-    atomic_json(os.path.join(out, f"scaling_{doc['task']}.json"), doc)
+    write_json(os.path.join(out, f"scaling_{doc['task']}.json"), doc)
     table = markdown(doc, doc["summary"])
     with open(os.path.join(out, f"scaling_{doc['task']}.md"), "w") as f:
         f.write(table)
@@ -420,7 +418,7 @@ def main(argv=None) -> int:
         row = run_row(os.path.join(runs, job.name), key, values)
         row.update(exit_code=code, num_envs=args.num_envs, train_flags=args.train_flags)
         doc["runs"].append(row)
-        atomic_json(os.path.join(out, f"scaling_{args.task}.json"), doc)  # what ended is kept, whatever follows
+        write_json(os.path.join(out, f"scaling_{args.task}.json"), doc)  # what ended is kept, whatever follows
         hits = ", ".join(f"{v}: {h['learning_s']:.1f} s" if h else f"{v}: -" for v, h in row.get("to_target", {}).items())
         say(f"{job.name}: {hits or row.get('error')}")
 
