@@ -2,6 +2,7 @@
 the time to a target read from a run's rows, and the benchmark's job packing and table."""
 
 import json
+import math
 import os
 import subprocess
 import sys
@@ -125,16 +126,36 @@ def test_the_table_takes_medians_over_seeds_and_ratios_to_one_gpu(tmp_path):
     lines = {(ln["gpus"], ln["mode"]): ln["targets"] for ln in scaling.summarize(doc)}
     one, two, four = lines[(1, "-")], lines[(2, "split")], lines[(4, "split")]
     assert (one["8"]["median_learning_s"], one["8"]["exact"]) == (pytest.approx(11.0), True)
-    assert (four["8"]["ratio"], four["8"]["ratio_is"]) == (pytest.approx(3.0 / 11.0), "=")
+    assert four["8"]["ratio"] == (pytest.approx(3.0 / 11.0), pytest.approx(3.0 / 11.0))
     # a median that falls on a seed that missed is a lower bound: the missing seed counts with the time it had
     assert (two["8"]["median_learning_s"], two["8"]["exact"]) == (pytest.approx(12.0), False)
-    assert (two["8"]["ratio"], two["8"]["ratio_is"]) == (pytest.approx(12.0 / 11.0), ">")
+    assert two["8"]["ratio"] == (pytest.approx(12.0 / 11.0), math.inf)
     assert (one["9"]["median_learning_s"], one["9"]["exact"]) == (pytest.approx(11.0), False)  # 12 s and > 10 s
-    assert (four["9"]["ratio"], four["9"]["ratio_is"]) == (pytest.approx(4.0 / 11.0), "<")
+    assert four["9"]["ratio"] == (0.0, pytest.approx(4.0 / 11.0))
     table = scaling.markdown(doc, scaling.summarize(doc))
     assert "| 4 | split | 64 |" in table and "3.0 s (0.27x; <= 0.5: met), 2 of 2" in table
     assert "5.0 s, > 19 s | > 12.0 s (> 1.09x; <= 0.7: not met), 1 of 2" in table
     assert "4.0 s (< 0.36x; <= 0.5: met), 2 of 2" in table and "> 10 s, 12.0 s | > 11.0 s, 1 of 2" in table
+
+
+def test_runs_of_several_lengths_give_the_interval_the_median_lies_in(tmp_path):
+    doc = {"task": "Ant", "targets": {"key": "eval/speed", "values": [9.0]}, "seconds": 60, "eval_gap": 1,
+           "host_gpus": 4, "date": "2026-11-26", "runs": []}
+    # one GPU: a short run that missed (5 s of learning) and two long ones that reached 9 after 20 s and 30 s; the
+    # missed seed may have needed 7 s or for ever, so the median is 20 s at least and 30 s at most
+    plan = {"gpu1-seed0": [1] * 6, "gpu1-seed1": [1] * 20 + [9], "gpu1-seed2": [1] * 30 + [9],
+            "gpu4-split-seed0": [1] * 8 + [9], "gpu4-split-seed1": [1] * 8 + [9]}
+    for name, speeds in plan.items():
+        doc["runs"].append(scaling.run_row(fake_run(tmp_path, name, speeds), "eval/speed", (9.0,)))
+    lines = {(ln["gpus"], ln["mode"]): ln["targets"]["9"] for ln in scaling.summarize(doc)}
+    one, four = lines[(1, "-")], lines[(4, "split")]
+    assert (one["median_learning_s"], one["median_upper_s"], one["exact"]) == (20.0, 30.0, False)
+    assert four["ratio"] == (pytest.approx(8.0 / 30.0), pytest.approx(8.0 / 20.0))
+    table = scaling.markdown(doc, scaling.summarize(doc))
+    assert "> 5 s, 20.0 s, 30.0 s | 20.0-30.0 s, 2 of 3" in table
+    assert "8.0 s | 8.0 s (0.27-0.40x; <= 0.5: met), 2 of 2" in table
+    # the same four GPUs against a goal inside the interval: undecided
+    assert scaling.verdict(four["ratio"], 0.3) == "; <= 0.3: open"
 
 
 def test_the_benchmark_names_a_wrong_flag_before_it_starts_anything():

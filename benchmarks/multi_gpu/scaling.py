@@ -128,28 +128,25 @@ def run_row(run_dir: str, key: str, values: tuple[float, ...]) -> dict:
     return row
 
 
-def censored_median(hits: list[dict | None], bounds: list[float]) -> tuple[float, bool]:
-    """The median learning time over seeds and whether it is exact. A seed that missed the target took longer
-    than the learning time it had (its bound): if the median falls on such a seed, the median of the values
-    with those bounds in their place is a lower bound, returned with False."""
-    exact = [h["learning_s"] if h else math.inf for h in hits]
-    median = statistics.median(exact)
-    if math.isfinite(median):
-        return median, True
-    return statistics.median(h["learning_s"] if h else b for h, b in zip(hits, bounds)), False
+def censored_median(hits: list[dict | None], bounds: list[float]) -> tuple[float, float]:
+    """The median learning time over seeds, as the interval (low, high) that it lies in. A seed that missed the
+    target took longer than the learning time it had (its bound) and may have taken for ever: the median with
+    the bounds in those seeds' places is the low end, with infinity in their places the high end. Runs of one
+    length give an exact median (low == high) or a lower bound (high infinite); runs of several lengths, joined,
+    can give an interval between."""
+    reached = [h["learning_s"] if h else None for h in hits]
+    low = statistics.median(b if s is None else s for s, b in zip(reached, bounds))
+    high = statistics.median(math.inf if s is None else s for s in reached)
+    return low, high
 
 
-def ratio_of(line: dict, base: dict | None) -> tuple[float | None, str]:
-    """G GPUs' median over one GPU's, with '=', '<' or '>' where one of them is only a bound."""
+def ratio_of(line: dict, base: dict | None) -> tuple[float, float] | None:
+    """The interval G GPUs' median over one GPU's lies in, from both medians' intervals."""
     if base is None:
-        return None, ""
-    if line["exact"] and base["exact"]:
-        return line["median_learning_s"] / base["median_learning_s"], "="
-    if line["exact"]:  # one GPU's median is beyond its bound: the ratio is below this
-        return line["median_learning_s"] / base["median_learning_s"], "<"
-    if base["exact"]:
-        return line["median_learning_s"] / base["median_learning_s"], ">"
-    return None, ""
+        return None
+    low = line["median_learning_s"] / base["median_upper_s"] if base["median_upper_s"] > 0 else math.inf
+    high = line["median_upper_s"] / base["median_learning_s"] if base["median_learning_s"] > 0 else math.inf
+    return low, high
 
 
 def groups(doc: dict) -> dict[tuple[int, str], list[dict]]:
@@ -176,15 +173,16 @@ def summarize(doc: dict) -> list[dict]:
         line["samples_speedup"] = line["samples_per_s"] / base_rate if base_rate else math.nan
         for v in doc["targets"]["values"]:
             hits = [r["to_target"].get(f"{v:g}") for r in runs]
-            learn, exact = censored_median(hits, [r.get("learned_s", 0.0) for r in runs])
+            learn, upper = censored_median(hits, [r.get("learned_s", 0.0) for r in runs])
             walls = [h["time_s"] if h else math.inf for h in hits]
             t = {"reached": sum(h is not None for h in hits), "runs": len(hits),
                  "learning_s": [h["learning_s"] if h else None for h in hits],
                  "bounds_s": [None if h else r.get("learned_s") for h, r in zip(hits, runs)],
-                 "median_learning_s": learn, "exact": exact, "median_time_s": statistics.median(walls)}
+                 "median_learning_s": learn, "median_upper_s": upper, "exact": learn == upper,
+                 "median_time_s": statistics.median(walls)}
             if gpus == 1:
                 base[f"{v:g}"] = t
-            t["ratio"], t["ratio_is"] = ratio_of(t, base.get(f"{v:g}"))
+            t["ratio"] = ((1.0, 1.0) if t["exact"] else None) if gpus == 1 else ratio_of(t, base.get(f"{v:g}"))
             line["targets"][f"{v:g}"] = t
         lines.append(line)
     return lines
@@ -197,30 +195,40 @@ def seconds(v: float) -> str:
     return "not reached" if v == math.inf else ("-" if v is None or math.isnan(v) else f"{v:.1f} s")
 
 
-def verdict(ratio: float, bound: str, goal: float | None) -> str:
-    """'met', 'not met', or 'open' where a bound leaves it undecided."""
+def verdict(ratio: tuple[float, float], goal: float | None) -> str:
+    """'met', 'not met', or 'open' where the ratio's interval holds the goal."""
     if goal is None:
         return ""
-    if bound in ("=", "<") and ratio <= goal:  # below the goal, or a ratio that can only be lower
-        return f"; <= {goal}: met"
-    if bound in ("=", ">") and ratio > goal:  # above it, or a ratio that can only be higher
-        return f"; <= {goal}: not met"
-    return f"; <= {goal}: open"
+    low, high = ratio
+    return f"; <= {goal}: " + ("met" if high <= goal else "not met" if low > goal else "open")
+
+
+def interval(low: float, high: float, unit: str, digits: int) -> str:
+    """'12.0 s', '> 12.0 s' (no end known), '< 0.36x' (no start), '40.1-52.3 s'."""
+    if low == high:
+        return f"{low:.{digits}f}{unit}"
+    if high == math.inf:
+        return f"> {low:.{digits}f}{unit}"
+    if low == 0:
+        return f"< {high:.{digits}f}{unit}"
+    return f"{low:.{digits}f}-{high:.{digits}f}{unit}"
 
 
 def target_cells(t: dict, gpus: int) -> str:
     each = ", ".join(seconds(s) if s is not None else f"> {b:.0f} s" for s, b in zip(t["learning_s"], t["bounds_s"]))
-    median = seconds(t["median_learning_s"]) if t["exact"] else f"> {t['median_learning_s']:.1f} s"
-    ratio = "" if t["ratio"] is None else \
-        f" ({'' if t['ratio_is'] == '=' else t['ratio_is'] + ' '}{t['ratio']:.2f}x{verdict(t['ratio'], t['ratio_is'], GOAL.get(gpus))})"
+    median = interval(t["median_learning_s"], t["median_upper_s"], " s", 1)
+    ratio = "" if t["ratio"] is None or t["ratio"] == (0, math.inf) else \
+        f" ({interval(*t['ratio'], 'x', 2)}{verdict(t['ratio'], GOAL.get(gpus))})"
     return f"{each} | {median}{ratio}, {t['reached']} of {t['runs']}"
 
 
 def markdown(doc: dict, lines: list[dict]) -> str:
     key, values = doc["targets"]["key"], doc["targets"]["values"]
     devices = sorted({r.get("device") for r in doc["runs"] if r.get("device")})
+    lengths = [r.get("seconds", doc["seconds"]) for r in doc["runs"]]
+    limits = (min(lengths), max(lengths)) if lengths else ()
     out = [f"{doc['task']}: time to {key} " + " and ".join(f"{v:g}" for v in values)
-           + f"; runs of at most {doc['seconds']:g} s, evaluated every {doc['eval_gap']:g} s; "
+           + f"; runs of at most {interval(*limits, ' s', 0) if limits else ''}, evaluated every {doc['eval_gap']:g} s; "
            f"{', '.join(devices)} ({doc['host_gpus']} GPUs of one host), {doc['date']}", "",
            "| GPUs | mode | envs per GPU | samples/s | x 1 GPU | iteration ms | first iteration | "
            + " | ".join(f"{key} {v:g}: learning time, each seed | median (ratio; goal)" for v in values) + " |",
@@ -237,7 +245,8 @@ def markdown(doc: dict, lines: list[dict]) -> str:
                     if r.get("num_envs") or r.get("train_flags")})
     out += ["", "Learning time: from the run's first iteration to the start of the first evaluation that reached the "
             "target, evaluations left out; \"> T\": a seed that missed it in the T s of learning it had, and a median "
-            "that falls on such seeds, a lower bound (a ratio against it an upper bound, \"<\"). "
+            "that falls on such seeds, a lower bound (a ratio against it an upper bound, \"<\"); where runs of several "
+            "lengths are joined, \"A-B s\": the median lies between. "
             "From the process start (wall-clock, start-up and evaluations included), medians: "
             + "; ".join(f"{ln['gpus']} GPU{'s' if ln['gpus'] > 1 else ''} {ln['mode']}: "
                         + ", ".join(seconds(ln['targets'][f'{v:g}']['median_time_s']) for v in values)
@@ -308,7 +317,10 @@ def report(folders: list[str]) -> int:
         with open(found[0]) as f:
             docs.append((folder, json.load(f)))
     first = docs[0][1]
-    same = ("task", "targets", "seconds", "eval_gap")
+    same = ("task", "targets", "eval_gap")  # runs of other lengths join: each run's misses are bounds of its own
+    for _, doc in docs:
+        for r in doc["runs"]:
+            r.setdefault("seconds", doc["seconds"])
     for folder, doc in docs[1:]:
         if [doc[k] for k in same] != [first[k] for k in same]:
             raise SystemExit(f"--report: {folder} has {', '.join(f'{k} {doc[k]}' for k in same)} and the first output "
@@ -416,7 +428,7 @@ def main(argv=None) -> int:
 
     def done(job: Job, code: int) -> None:
         row = run_row(os.path.join(runs, job.name), key, values)
-        row.update(exit_code=code, num_envs=args.num_envs, train_flags=args.train_flags)
+        row.update(exit_code=code, num_envs=args.num_envs, train_flags=args.train_flags, seconds=args.seconds)
         doc["runs"].append(row)
         write_json(os.path.join(out, f"scaling_{args.task}.json"), doc)  # what ended is kept, whatever follows
         hits = ", ".join(f"{v}: {h['learning_s']:.1f} s" if h else f"{v}: -" for v, h in row.get("to_target", {}).items())
