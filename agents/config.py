@@ -104,9 +104,10 @@ class Config:
     # first update compiles it (on an H100 about 11-16 s with an empty Inductor cache, 3-5 s with a warm one)
     compile_update: bool = False
     obs_clip: float = 5.0
-    # how several processes (torchrun, one per GPU) divide the work: agents/data_parallel.py. "split": num_envs
-    # and batch_size are the run's totals, so G GPUs run the one-GPU algorithm with shorter iterations
-    multi_gpu: str = "split"
+    # how several processes (torchrun, one per GPU) divide the work: agents/data_parallel.py. "grow-steps": each
+    # GPU steps num_envs envs and a mini-batch stays batch_size samples across them, so G GPUs make G times the
+    # optimiser steps of one in an iteration about as long
+    multi_gpu: str = data_parallel.DEFAULT
     # stop once a logged value reaches a number, "KEY=VALUE" (e.g. "eval/speed=9.5", "eval/return=5850"): the
     # first row whose KEY is at least VALUE ends the run as its time limit would (rl_games' score_to_win)
     target: str = ""

@@ -483,7 +483,7 @@ def test_the_published_multi_gpu_table_is_what_scaling_prints_from_the_committed
     rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| ") and "---" not in line]
     with open(os.path.join(root, "docs", "benchmarks.md")) as f:
         page = set(f.read().splitlines())
-    assert len(rows) == 1 + 7  # the header, one GPU and six multi-GPU settings
+    assert len(rows) == 1 + 9  # the header, one GPU and eight multi-GPU settings
     assert [r for r in rows if r not in page] == []
 
 

@@ -73,12 +73,12 @@ def test_train_command_under_torchrun_on_the_cpu(tmp_path):
     done = torchrun("-m", "warpgym", "train", "--task", "Ant", "--device", "cpu", "--num-envs", "4",
                     "--max-iterations", "2", "--horizon-len", "4", "--episode-length", "20",
                     "--no-eval", "--no-plots", "--run-dir", str(run))
-    # --multi-gpu split (the default): --num-envs is the run's total, 2 envs on each process
-    assert "x 2 processes, 2 envs each (--multi-gpu split: 4 in all)" in done.stdout
+    # --multi-gpu grow-steps (the default): --num-envs on each process
+    assert "x 2 processes, 4 envs each (--multi-gpu grow-steps: 8 in all)" in done.stdout
     summary = json.loads((run / "summary.json").read_text())
-    assert (summary["iterations"], summary["workers"], summary["num_envs"], summary["num_envs_total"]) == (2, 2, 2, 4)
+    assert (summary["iterations"], summary["workers"], summary["num_envs"], summary["num_envs_total"]) == (2, 2, 4, 8)
     rows = (run / "metrics.jsonl").read_text().splitlines()
-    assert len(rows) == 2 and '"samples": 32' in rows[1]  # 2 processes x 2 envs x 4 steps x 2 iterations
+    assert len(rows) == 2 and '"samples": 64' in rows[1]  # 2 processes x 4 envs x 4 steps x 2 iterations
 
 
 def test_a_suite_task_trained_by_torchrun_is_scored_in_gymnasiums_env(tmp_path):
@@ -92,7 +92,8 @@ def test_a_suite_task_trained_by_torchrun_is_scored_in_gymnasiums_env(tmp_path):
                           timeout=300, env=ENV)
     assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
     scored = json.loads((tmp_path / "eval.json").read_text())
-    assert scored["task"] == "Hopper-v5" and scored["samples"] == 3 * 8 * 8 and scored["episodes"] == 2
+    # 3 iterations of 2 processes x 8 envs x 8 steps
+    assert scored["task"] == "Hopper-v5" and scored["samples"] == 3 * 2 * 8 * 8 and scored["episodes"] == 2
     assert scored["same_starts"] and abs(scored["gymnasium_over_warpgym"] - 1.0) < 1e-3
 
 
@@ -162,8 +163,8 @@ def test_a_killed_worker_stops_the_job_and_the_run_resumes_on_one_process(tmp_pa
     common = ["--horizon-len", "4", "--episode-length", "20", "--no-eval", "--no-plots"]
     log = open(tmp_path / "job.log", "w")
     job = subprocess.Popen([*torchrun_args(2), "scripts/train.py", "--task", LIFECYCLE_TASK, "--device", "cpu",
-                            "--num-envs", "4", "--max-iterations", "100000", "--save-gap", "3", "--run-dir", str(run),
-                            *common],
+                            "--num-envs", "4", "--multi-gpu", "split", "--max-iterations", "100000", "--save-gap", "3",
+                            "--run-dir", str(run), *common],
                            cwd=ROOT, stdout=log, stderr=subprocess.STDOUT, env=dict(ENV, WARPGYM_PEER_TIMEOUT="20"))
     deadline = time.time() + 240
     while time.time() < deadline and job.poll() is None:

@@ -351,7 +351,7 @@ def pack_runs(runs_dir: str, out: str, task: str) -> None:
 
 
 def main(argv=None) -> int:
-    from agents.data_parallel import MODES  # noqa: PLC0415
+    from agents.data_parallel import DEFAULT, MODES  # noqa: PLC0415
 
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", help="output folder")
@@ -360,7 +360,8 @@ def main(argv=None) -> int:
     ap.add_argument("--gpus", type=int, nargs="+", default=[1, 2, 4],
                     help="GPU counts (default: 1 2 4); without 1 there is no baseline here, and the ratios come when "
                          "--report joins this output with one that has it")
-    ap.add_argument("--modes", nargs="+", default=["split"], choices=MODES, help="--multi-gpu modes to compare")
+    ap.add_argument("--modes", nargs="+", default=[DEFAULT], choices=MODES,
+                    help=f"--multi-gpu modes to compare (default: train's, {DEFAULT})")
     ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1], help="seeds of each multi-GPU setting")
     ap.add_argument("--baseline-seeds", type=int, nargs="+", default=None, help="seeds of the 1-GPU runs (default: --seeds)")
     ap.add_argument("--targets", default=None, metavar="KEY=V1,V2",

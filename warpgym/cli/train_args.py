@@ -53,10 +53,11 @@ def parser(description: str | None = None) -> CommandParser:
                     help="stop once a logged value reaches VALUE, e.g. --target eval/speed=9.5 (an evaluation's "
                          "forward speed) or --target eval/return=5850; summary.json records the row that did")
     ap.add_argument("--multi-gpu", default=None, choices=MULTI_GPU_MODES,
-                    help="under torchrun, how the GPUs divide the work (agents/data_parallel.py): split (default: "
-                         "--num-envs and --batch-size are the run's totals, the one-GPU algorithm in shorter "
-                         "iterations), grow-batch (each GPU --num-envs envs, mini-batches G times larger) or "
-                         "grow-steps (each GPU --num-envs envs, G times the mini-batch steps)")
+                    help="under torchrun, how the GPUs divide the work (agents/data_parallel.py): grow-steps (default: "
+                         "each GPU --num-envs envs, a mini-batch of --batch-size samples across them, G times the "
+                         "mini-batch steps), split (--num-envs and --batch-size are the run's totals, the one-GPU "
+                         "algorithm in shorter iterations) or grow-batch (each GPU --num-envs envs, mini-batches G "
+                         "times larger)")
     ap.add_argument("--keep-checkpoints", action="store_true",
                     help="keep checkpoint-<iteration>.pt at every save, not only the latest checkpoint.pt")
     ap.add_argument("--video", action="store_true",
