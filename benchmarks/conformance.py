@@ -83,12 +83,12 @@ def main(argv=None) -> int:
     if args.episodes < 8:
         ap.error(f"--episodes {args.episodes}: a distribution test needs at least 8, e.g. --episodes 64")
     from warpgym.cli import write_json  # noqa: PLC0415
-    from warpgym.tasks.suite import SUITE  # noqa: PLC0415
+    from warpgym.tasks.registry import task_names  # noqa: PLC0415
 
-    tasks = args.tasks or list(SUITE)
-    unknown = [t for t in tasks if t not in SUITE]
+    tasks = args.tasks or task_names("suite")
+    unknown = [t for t in tasks if t not in task_names("suite")]
     if unknown:
-        ap.error(f"--tasks {unknown}: choose from {list(SUITE)}")
+        ap.error(f"--tasks {unknown}: choose from {task_names('suite')}")
     import gymnasium  # noqa: PLC0415
     import mujoco  # noqa: PLC0415
 

@@ -480,12 +480,12 @@ def main(argv=None) -> int:
                  "all must be positive")
     import torch  # noqa: PLC0415
 
-    from warpgym.tasks.suite import SUITE  # noqa: PLC0415
+    from warpgym.tasks.registry import task_names  # noqa: PLC0415
 
-    tasks = args.tasks or list(SUITE)
-    unknown = [t for t in tasks if t not in SUITE]
+    tasks = args.tasks or task_names("suite")
+    unknown = [t for t in tasks if t not in task_names("suite")]
     if unknown:
-        ap.error(f"--tasks {unknown}: choose from {list(SUITE)}")
+        ap.error(f"--tasks {unknown}: choose from {task_names('suite')}")
     os.makedirs(args.out, exist_ok=True)
     if args.gpus > 1:
         if torch.cuda.device_count() < args.gpus:

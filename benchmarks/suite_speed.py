@@ -128,12 +128,12 @@ def main(argv=None) -> int:
     from warpgym.cli import write_json  # noqa: PLC0415
     from warpgym.cli.bench import gpu_memory_used, timed  # noqa: PLC0415
     from warpgym.cli.bench_suite import bench_suite_task  # noqa: PLC0415
-    from warpgym.tasks.suite import SUITE  # noqa: PLC0415
+    from warpgym.tasks.registry import task_names  # noqa: PLC0415
 
-    tasks = args.tasks or list(SUITE)
-    unknown = [t for t in tasks if t not in SUITE]
+    tasks = args.tasks or task_names("suite")
+    unknown = [t for t in tasks if t not in task_names("suite")]
     if unknown:
-        ap.error(f"--tasks {unknown}: choose from {list(SUITE)}")
+        ap.error(f"--tasks {unknown}: choose from {task_names('suite')}")
     device = "cuda:0" if torch.cuda.is_available() else "cpu"
     cores = os.cpu_count() or 1
     meta = {"gpu": torch.cuda.get_device_name(0) if device != "cpu" else "none", "cpu_cores": cores,

@@ -283,10 +283,10 @@ def main(argv=None) -> int:
     if not (args.out and args.task):
         ap.error("--out OUT and --task NAME are required (or --report JSON)")
     from warpgym.cli import write_json  # noqa: PLC0415
-    from warpgym.tasks.suite import SUITE  # noqa: PLC0415
+    from warpgym.tasks.registry import task_names  # noqa: PLC0415
 
-    if args.task not in SUITE:
-        ap.error(f"--task {args.task!r}: choose from {list(SUITE)}")
+    if args.task not in task_names("suite"):
+        ap.error(f"--task {args.task!r}: choose from {task_names('suite')}")
     if not args.seconds > 0:
         ap.error(f"--seconds {args.seconds}: must be positive, e.g. --seconds 120")
     try:

@@ -1,9 +1,10 @@
-"""The one-way layering (docs/DESIGN and README, "Layout"): scripts and the command on top, the
-environment (warpgym -> kernels) and the learner (agents) side by side below, no import running back up.
+"""The one-way layering (README, "Layout"): scripts and the command on top, the environment (warpgym ->
+kernels) and the learner (agents) side by side below, no import running back up; one registry of tasks.
 agents' own rule is tested in test_agents.py."""
 
 import ast
 import os
+import re
 import subprocess
 import sys
 
@@ -56,3 +57,33 @@ def test_the_wheel_lists_every_package():
             if "__init__.py" in files and "__pycache__" not in folder:
                 found.add(os.path.relpath(folder, ROOT).replace(os.sep, "."))
     assert found == listed, (sorted(found - listed), sorted(listed - found))
+
+
+def test_only_the_registry_asks_which_family_a_task_belongs_to():
+    """warpgym.tasks.registry is the one place that tells warpgym's robots from Gymnasium's suite: a test of
+    membership in the suite's table anywhere else is a second registry growing."""
+    asks = re.compile(r"\bin\s+SUITE\b(?!\.)")  # SUITE.items() is a walk over the suite, not a question
+    own = {os.path.join("warpgym", "tasks", "registry.py"), os.path.join("warpgym", "tasks", "suite", "__init__.py")}
+    found = []
+    for top in ("warpgym", "agents", "kernels", "benchmarks", "scripts"):
+        for folder, _, files in os.walk(os.path.join(ROOT, top)):
+            for name in files:
+                path = os.path.join(folder, name)
+                rel = os.path.relpath(path, ROOT)
+                if name.endswith(".py") and rel not in own:
+                    found += [f"{rel}:{i}" for i, line in enumerate(open(path), 1) if asks.search(line)]
+    assert not found, found
+
+
+def test_every_task_of_the_registry_is_a_gymnasium_id_with_its_entry_points():
+    import gymnasium as gym
+
+    import warpgym  # noqa: F401  (registers the ids)
+    from warpgym.tasks.registry import REGISTRY, task_entry, task_names
+
+    assert task_names("robots") == ["Ant", "Humanoid"] and len(task_names("suite")) == 11
+    for name, entry in REGISTRY.items():
+        spec = gym.spec(entry.gym_id)
+        assert (spec.entry_point, spec.vector_entry_point) == (entry.single_entry_point, entry.vector_entry_point)
+        assert spec.max_episode_steps == entry.episode_length and spec.kwargs["task"] == name
+        assert task_entry(name.lower()) is entry

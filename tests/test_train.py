@@ -10,6 +10,7 @@ import torch
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 import numpy as np  # noqa: E402
+from warpgym.cli import eval as eval_cmd  # noqa: E402
 from warpgym.cli import play, sim2sim, train  # noqa: E402
 
 from agents.checkpoint import load  # noqa: E402
@@ -24,7 +25,7 @@ def test_short_cpu_run_writes_logs_checkpoint_plots_resumes_and_plays(tmp_path, 
                        "--run-dir", run, *common]) == 0
     last = capsys.readouterr().out.strip().splitlines()[-1]  # a sentence for a person, the next command in it
     assert last.startswith("Trained Ant for 3 iterations (0.2 k samples") and "best evaluation returned" in last
-    assert f"Next: warpgym sim2sim {run} replays it in native MuJoCo; warpgym play {run} --gif ant.gif" in last
+    assert f"Next: warpgym eval {run} scores it in native MuJoCo; warpgym play {run} --gif ant.gif" in last
     for name in ("config.json", "metrics.jsonl", "metrics.csv", "checkpoint.pt", "summary.json",
                  "reward_vs_time.png", "reward_vs_samples.png"):
         assert os.path.getsize(os.path.join(run, name)) > 0, name
@@ -68,6 +69,18 @@ def test_short_cpu_run_writes_logs_checkpoint_plots_resumes_and_plays(tmp_path, 
     for r in rows:
         assert 0.0 <= r["no_foot_contact_share"] <= 1.0 and 0 <= r["longest_airborne_steps"] <= 30
         assert r["torso_height"] > 0.2 and r["robots"] == 2
+
+    # warpgym eval scores a robot's policy where it is judged, native MuJoCo: sim2sim's replay, one episode of
+    # the trained length (40 steps), episodes x seeds robots; Gymnasium's own flags are refused by name
+    scored = str(tmp_path / "eval.json")
+    assert eval_cmd.main([run, "--episodes", "2", "--seeds", "3", "--json", scored]) == 0
+    with open(scored) as f:
+        rows = json.load(f)["rows"]
+    assert [r["simulator"] for r in rows] == ["warpgym", "warpgym", "native MuJoCo", "native MuJoCo"]
+    assert rows[2]["robots"] == 2 and all(r["forward_speed"] == r["forward_speed"] for r in rows)
+    capsys.readouterr()
+    assert eval_cmd.main([run, "--nudge", "1e-6"]) == 2
+    assert "--nudge: Gymnasium's env only" in capsys.readouterr().err
 
 
 def test_gait_meter_counts_flights_until_a_robot_ends():
@@ -137,8 +150,9 @@ def test_every_task_has_defaults_and_the_gpu_default_trains_as_it_was_measured()
     """The GPU default envs were picked by benchmarks/envs_per_gpu.py, which trains with the preset's
     mini-batch: a default whose rollout does not split into that mini-batch would train differently."""
     from agents.config import PRESETS, Config
+    from warpgym.tasks.registry import task_names
 
-    assert set(train.DEFAULT_ENVS) == set(train.DEFAULT_ITERATIONS) == {"cuda", "cpu"}
+    assert set(PRESETS) == set(task_names())  # every task the registry has, PPO has a preset for
     for task in PRESETS:
         for kind in ("cuda", "cpu"):
             envs, iterations = train.default_envs_and_iterations(kind, task)

@@ -1,7 +1,9 @@
-"""Score a policy trained on one of Gymnasium's MuJoCo tasks in Gymnasium's own env, where papers report.
+"""Score a trained policy where its task is judged: Gymnasium's own env for Gymnasium's MuJoCo tasks, where
+papers report; native MuJoCo for warpgym's Ant and Humanoid (``warpgym sim2sim``'s replay, which this runs).
 
     warpgym eval runs/Hopper-v5-20261125-120000                  # 10 episodes x seeds 0 1 2, on the CPU
     warpgym eval RUN/checkpoint-1200.pt --episodes 20 --seeds 0 --json OUT.json
+    warpgym eval runs/Ant-20261122-120000    # 30 robots in native MuJoCo, beside warpgym at 1x and 4x substeps
 
 The checkpoint's deterministic policy (the mean action, its observation normaliser as trained) runs in
 ``gymnasium.make("<Name>-v5")``: native MuJoCo in float64, the task's constructor arguments and time
@@ -113,6 +115,23 @@ def gymnasium_side(task, act, episodes: int, seeds: list[int], unit: bool, versi
             "per_seed": per_seed, "terms": mean_terms(terms), "returns": returns, "lengths": lengths}
 
 
+def in_native_mujoco(args, episode_length: int) -> int:
+    """A robot's policy, scored as ``warpgym sim2sim`` does: one episode of the trained length in native MuJoCo
+    beside warpgym, at the training step and 4x finer; ``--episodes`` x the seeds' count robots, from the first
+    seed. The flags that only Gymnasium's env has are refused by name."""
+    from warpgym.cli import sim2sim  # noqa: PLC0415
+
+    gym_only = [flag for flag, given in (("--nudge", args.nudge), ("--normalizer-from", args.normalizer_from),
+                                         ("--env-version 4", args.env_version == 4)) if given]
+    if gym_only:
+        print(f"warpgym eval: error: {', '.join(gym_only)}: Gymnasium's env only; {args.checkpoint} holds a policy "
+              "of warpgym's own robots, scored in native MuJoCo: drop it", file=sys.stderr)
+        return 2
+    return sim2sim.main([args.checkpoint, "--native-copies", str(args.episodes * len(args.seeds)),
+                         "--steps", str(episode_length), "--seed", str(args.seeds[0]), "--device", args.device,
+                         *(["--out", args.json] if args.json else [])])
+
+
 def main(argv=None) -> int:
     args = parse_args(argv)
     import numpy as np  # noqa: PLC0415
@@ -123,6 +142,7 @@ def main(argv=None) -> int:
     from warpgym.envs import make_vec_env  # noqa: PLC0415
     from warpgym.envs.conformance import v4_tasks, warpgym_policy_episodes  # noqa: PLC0415
     from warpgym.sim.device import resolve_device  # noqa: PLC0415
+    from warpgym.tasks.registry import task_entry  # noqa: PLC0415
     from warpgym.tasks.suite import SUITE  # noqa: PLC0415
 
     device = resolve_device(args.device)
@@ -137,9 +157,12 @@ def main(argv=None) -> int:
               f"(iteration {other['iteration']})")
     env_args = dict(ckpt["config"]["env_args"])
     name = env_args.get("task")
-    if name not in SUITE:
-        raise SystemExit(f"{path}: its policy was trained on {name}, not one of Gymnasium's tasks ({list(SUITE)}); "
-                         "score warpgym's own Ant and Humanoid in native MuJoCo with `warpgym sim2sim`")
+    try:
+        entry = task_entry(name)
+    except ValueError as e:
+        raise SystemExit(f"{path}: {e}") from None
+    if entry.scored_in == "native MuJoCo":
+        return in_native_mujoco(args, int(env_args.get("max_episode_steps") or entry.episode_length))
     if args.env_version == 4 and SUITE[name].v4_observation is None:
         raise SystemExit(f"--env-version 4: {name}'s v4 observation is not v5's plus entries after it (or v4 needs "
                          f"MuJoCo < 3), so a v5 policy cannot play it; v4 is scored for {v4_tasks()}")

@@ -80,35 +80,32 @@ def main(argv=None) -> int:
     from agents.checkpoint import load_for_command, policy_from_checkpoint  # noqa: PLC0415
     from agents.evaluate import evaluate  # noqa: PLC0415
     from warpgym.sim.device import resolve_device  # noqa: PLC0415
-    from warpgym.envs import LocomotionVecEnv, make_vec_env  # noqa: PLC0415
-    from warpgym.sim.physics import recorded  # noqa: PLC0415
-    from warpgym.tasks.suite import SUITE  # noqa: PLC0415
+    from warpgym.envs import entry_point  # noqa: PLC0415
+    from warpgym.tasks.registry import task_entry  # noqa: PLC0415
 
     device = resolve_device(args.device)
     path, ckpt = load_for_command(args.checkpoint, torch.device(device))
     cfg = ckpt["config"]
     env_args = cfg["env_args"]
     task = env_args["task"]
+    entry = task_entry(task)
     filming = bool(args.video or args.gif)
     n = args.num_envs or (1 if filming else 64 if device.startswith("cuda") else 4)
+    if filming and n > 1 and not entry.clip_all_worlds:
+        print(f"note: a clip of {task} draws its first world, with Gymnasium's own renderer; --num-envs {n} "
+              "plays the others unseen")
     # the trained task as it was trained (episode length, substeps, physics), on this device
-    if task in SUITE:
-        if filming and n > 1:
-            print(f"note: a clip of {task} draws its first world, with Gymnasium's own renderer; --num-envs {n} "
-                  "plays the others unseen")
-        env = make_vec_env(**{**env_args, "num_envs": n, "device": device, "seed": args.seed})
-    else:
-        env = LocomotionVecEnv(**{**env_args, "physics": recorded(env_args.get("physics")), "num_envs": n,
-                                  "device": device, "seed": args.seed})
+    env_class = entry_point(entry.vector_entry_point)
+    env = env_class(**{**env_class.replay_args(env_args), "num_envs": n, "device": device, "seed": args.seed})
     policy, normalize = policy_from_checkpoint(ckpt, env.num_obs, env.num_actions, torch.device(device))
     steps = args.steps or env.task.episode_length
     recorder = None
     if filming:
         from warpgym.media.clips import StateRecorder  # noqa: PLC0415
 
-        # the reset state, then one per step; for Gymnasium's tasks MuJoCo's qpos and qvel, as its renderer takes
-        recorder = (StateRecorder(steps + 1, copies=1, keys=("dof_pos", "dof_vel")) if task in SUITE
-                    else StateRecorder(steps + 1, copies=n))
+        # the reset state, then one per step, of the worlds and the state the task's clips draw
+        recorder = StateRecorder(steps + 1, copies=n if entry.clip_all_worlds else 1,
+                                 **({"keys": entry.clip_keys} if entry.clip_keys else {}))
     result = evaluate(env, policy, normalize, steps, recorder)
     result = {"task": task, "checkpoint": path, "iteration": ckpt["iteration"], "samples": ckpt["samples"],
               "episodes": n, **result}
@@ -116,33 +113,20 @@ def main(argv=None) -> int:
           f"return {result['eval/return']:.1f}, forward speed {result['eval/speed']:.2f} m/s, "
           f"length {result['eval/length']:.0f} steps (means)")
     if filming:
-        from warpgym.media.clips import clip_forward_speed  # noqa: PLC0415
-        from warpgym.media.video import render_clip, render_suite_clip  # noqa: PLC0415
-
-        states = recorder.states()
         outputs = {}
         if args.video:
             outputs[args.video] = {"fps": args.fps}
         if args.gif:
             outputs[args.gif] = {"fps": args.gif_fps, "width": min(args.gif_width, args.width)}
-        if task in SUITE:
-            shown = states["dof_pos"].shape[0] - 1
-            print(f"clip: {shown} steps ({shown * env.sim.dt:.1f} s) of the first world")
-            frames = render_suite_clip(env.task, states, outputs, env.sim.dt, args.width, args.height)
-        else:
-            shown = states["root_pose"].shape[0] - 1  # steps after the first frame
-            result["clip/forward_speed"] = float(clip_forward_speed(env.task, states).mean())
-            print(f"clip: {shown} steps ({shown * env.task.dt:.1f} s) of {n} robot(s): forward speed "
-                  f"{result['clip/forward_speed']:.2f} m/s")
-            frames = render_clip(env.task, states, outputs, args.width, args.height)
+        frames, measured = entry_point(entry.clip_drawer)(env, recorder.states(), outputs, args.width, args.height)
+        result.update(measured)
         for out, count in frames.items():
             print(f"wrote {out}: {count} frames, {os.path.getsize(out) / 1e6:.2f} MB")
         result["videos"] = frames
     if args.json:
         write_json(args.json, result)
     nxt = [] if filming else [f"warpgym play {args.checkpoint} --gif {task.lower()}.gif draws it"]
-    nxt.append(f"warpgym eval {args.checkpoint} scores it in Gymnasium's env" if task in SUITE else
-               f"warpgym sim2sim {args.checkpoint} replays it in native MuJoCo")
+    nxt.append(f"warpgym eval {args.checkpoint} scores it in {entry.scored_in}")
     print("Next: " + "; ".join(nxt) + (f" (the numbers: {args.json})." if args.json else
                                        " (--json OUT writes the numbers)."))
     return 0

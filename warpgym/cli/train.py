@@ -26,21 +26,11 @@ from warpgym.cli.train_args import TASK_NAMES, with_flag_names
 # The wall-clock axis starts when the process did: the interpreter, imports and kernel compiles count.
 PROCESS_START = process_start_time()
 
-# On a 2-core CPU the Ant default takes about 50 s after the kernels are compiled and its training
-# episodes go from drifting backwards to about 0.8 m/s: enough to see it learn.
-DEFAULT_ITERATIONS = {"cuda": {"Ant": 500, "Humanoid": 1000}, "cpu": {"Ant": 200, "Humanoid": 20}}
-# On one H100 (benchmarks/envs_per_gpu.py, docs/benchmarks.md "Envs per GPU"): 8192 Ants reach 8 m/s in
-# 39 s (median of 3 seeds) against 70 s at 4096 and 54.5 s at 16384; the Humanoid reaches 2 m/s soonest at
-# 4096 (45 s against 55 s at 8192) and its 6 m/s is reached by one seed in two at either size.
-DEFAULT_ENVS = {"cuda": {"Ant": 8192, "Humanoid": 4096}, "cpu": {"Ant": 64, "Humanoid": 64}}
-# Gymnasium's suite (not yet swept, issue 43's presets will replace these): 4096 worlds on a GPU, 64 on the CPU
-SUITE_DEFAULTS = {"cuda": (4096, 500), "cpu": (64, 100)}  # envs, iterations
-
-
 def default_envs_and_iterations(kind: str, task: str) -> tuple[int, int]:
-    if task in DEFAULT_ENVS[kind]:
-        return DEFAULT_ENVS[kind][task], DEFAULT_ITERATIONS[kind][task]
-    return SUITE_DEFAULTS[kind]
+    """The task's default envs and iterations on a device kind ("cuda" or "cpu"): its registry entry's."""
+    from warpgym.tasks.registry import task_entry  # noqa: PLC0415
+
+    return task_entry(task).defaults(kind)
 
 
 def parse_args(argv=None):
@@ -99,26 +89,24 @@ def build_config(args, task: str, num_envs: int, device: str, saved: dict | None
     if saved is None and args.batch_size is None and "batch_size" not in (args.config or {}) and (
             batch > samples // 2 or samples % batch):
         batch = max(samples // 2, 1)  # the preset's mini-batch does not fit this env count
-    from warpgym.envs import LocomotionVecEnv  # noqa: PLC0415
-    from warpgym.envs.suite import SuiteVecEnv  # noqa: PLC0415
-    from warpgym.tasks import get_task  # noqa: PLC0415
-    from warpgym.tasks.suite import SUITE  # noqa: PLC0415
+    from warpgym.envs import entry_point  # noqa: PLC0415
+    from warpgym.tasks.registry import task_entry  # noqa: PLC0415
 
-    if task in SUITE:
-        if args.substeps or args.physics:
-            raise ValueError(f"--substeps / --physics set warpgym's own robots' physics; {task} simulates "
-                             "Gymnasium's model file as it is: drop them")
-        # the policy acts in [-1, 1], mapped onto the control ranges (SuiteVecEnv's unit_actions)
-        common = {"task": task, "device": device, "max_episode_steps": args.episode_length, "unit_actions": True}
-        env_class = SuiteVecEnv
-    else:
+    entry = task_entry(task)
+    # the learner's env: for Gymnasium's tasks, actions in [-1, 1] mapped onto the control ranges
+    common = {"task": task, "device": device, "max_episode_steps": args.episode_length, **dict(entry.learner_kwargs)}
+    if entry.physics_flags:
+        from warpgym.tasks import get_task  # noqa: PLC0415
+
         # The whole physics goes into the config, not only what the flags changed: a checkpoint then
         # replays (play.py, sim2sim.py) with the physics it was trained with, whatever the defaults later.
         defined = get_task(task)
-        common = {"task": task, "device": device, "max_episode_steps": args.episode_length,
-                  "substeps": args.substeps or defined.substeps,
-                  "physics": defined.physics.replace(**(args.physics or {})).to_dict()}
-        env_class = LocomotionVecEnv
+        common.update(substeps=args.substeps or defined.substeps,
+                      physics=defined.physics.replace(**(args.physics or {})).to_dict())
+    elif args.substeps or args.physics:
+        raise ValueError(f"--substeps / --physics set warpgym's own robots' physics; {task} simulates "
+                         "Gymnasium's model file as it is: drop them")
+    env_class = entry_point(entry.vector_entry_point)
     local_envs = envs_per_process(cfg.multi_gpu, num_envs, processes)
     return cfg.replace(
         batch_size=batch,
@@ -440,15 +428,15 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
 
 def closing_line(task: str, run_dir: str, summary: dict) -> str:
     """What a person reads last: how far the run got, its best evaluation, and the next command."""
-    from warpgym.tasks.suite import SUITE  # noqa: PLC0415
+    from warpgym.tasks.registry import task_entry  # noqa: PLC0415
 
+    entry = task_entry(task)
     final = summary.get("final") or {}
     m, s = divmod(int(final.get("time_s") or 0), 60)
     best = summary.get("best_eval")
     result = (f"its best evaluation returned {best['eval/return']:.1f}"
-              + ("" if task in SUITE else f" at {best['eval/speed']:.2f} m/s") if best else "it was not evaluated")
-    score = f"warpgym eval {run_dir} scores it in Gymnasium's env" if task in SUITE else \
-        f"warpgym sim2sim {run_dir} replays it in native MuJoCo"
+              + (f" at {best['eval/speed']:.2f} m/s" if entry.reports_speed else "") if best else "it was not evaluated")
+    score = f"warpgym eval {run_dir} scores it in {entry.scored_in}"
     n = final.get("samples") or 0
     samples = f"{n / 1e6:.1f} M" if n >= 1e6 else f"{n / 1e3:.1f} k"
     return (f"Trained {task} for {summary['iterations']} iterations ({samples} samples, "

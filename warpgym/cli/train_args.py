@@ -4,13 +4,12 @@ from __future__ import annotations
 
 import os
 
-
-from agents.config import PRESETS
 from agents.data_parallel import MODES as MULTI_GPU_MODES
 from warpgym.cli.flags import CommandParser, check_device, non_negative_float, non_negative_int, positive_float, \
     positive_int
+from warpgym.tasks.registry import task_names
 
-TASK_NAMES = {t.lower(): t for t in PRESETS}
+TASK_NAMES = {t.lower(): t for t in task_names()}
 
 
 def parser(description: str | None = None) -> CommandParser:

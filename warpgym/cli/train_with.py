@@ -75,9 +75,9 @@ def parse_args(argv=None):
     check_device(ap, args.device)
     if args.learner not in LEARNERS:
         ap.error(f"learner {args.learner!r}: choose one of {', '.join(LEARNERS)}")
-    from warpgym.tasks.suite import SUITE  # noqa: PLC0415
+    from warpgym.tasks.registry import task_names  # noqa: PLC0415
 
-    names = {name.lower(): name for name in ("Ant", "Humanoid", *SUITE)}
+    names = {name.lower(): name for name in task_names()}
     if args.task.lower() not in names:
         ap.error(f"--task {args.task!r}: choose one of {list(names.values())}")
     args.task = names[args.task.lower()]

@@ -1,20 +1,27 @@
 """Environments built on warpgym's simulators: ``LocomotionVecEnv`` (warpgym's Ant and Humanoid, on
 Newton) and ``SuiteVecEnv`` (Gymnasium's MuJoCo suite, on MuJoCo Warp)."""
 
+from importlib import import_module
+
 from warpgym.envs.locomotion import LocomotionVecEnv
 
 
-def make_vec_env(task: str, for_learner: bool = True, **kwargs):
-    """The vector env of a task name. Gymnasium's tasks ("Hopper-v5", ...) take actions in [-1, 1]
-    mapped onto their control ranges when ``for_learner`` (``SuiteVecEnv``'s ``unit_actions``), as the
-    learner adapters and ``warpgym train`` use them; warpgym's own tasks always act in [-1, 1]."""
-    from warpgym.tasks.suite import SUITE  # noqa: PLC0415
-
-    if task in SUITE:
-        from warpgym.envs.suite import SuiteVecEnv  # noqa: PLC0415
-
-        return SuiteVecEnv(task, unit_actions=kwargs.pop("unit_actions", for_learner), **kwargs)
-    return LocomotionVecEnv(task, **kwargs)
+def entry_point(path: str):
+    """The class a registry entry names, "module:Class"."""
+    module, _, name = path.partition(":")
+    return getattr(import_module(module), name)
 
 
-__all__ = ["LocomotionVecEnv", "make_vec_env"]
+def make_vec_env(task, for_learner: bool = True, **kwargs):
+    """The vector env of a task, a name or a task definition (warpgym.tasks.registry). With ``for_learner``,
+    the env a learner trains on: Gymnasium's tasks ("Hopper-v5", ...) then take actions in [-1, 1] mapped onto
+    their control ranges (``SuiteVecEnv``'s ``unit_actions``), as the learner adapters and ``warpgym train`` use them;
+    warpgym's own tasks always act in [-1, 1]. A keyword given here wins."""
+    from warpgym.tasks.registry import task_entry  # noqa: PLC0415
+
+    entry = task_entry(getattr(task, "name", task))
+    return entry_point(entry.vector_entry_point)(task, **{**(dict(entry.learner_kwargs) if for_learner else {}),
+                                                          **kwargs})
+
+
+__all__ = ["LocomotionVecEnv", "entry_point", "make_vec_env"]

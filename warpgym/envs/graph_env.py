@@ -36,6 +36,11 @@ class GraphVecEnv(VectorEnv):
         task.validate()
         return task
 
+    @classmethod
+    def replay_args(cls, env_args: dict) -> dict:
+        """The constructor's keywords that rebuild the env a run trained on, from the ``env_args`` it saved."""
+        return dict(env_args)
+
     def _alloc_common(self, n: int, num_obs: int, num_actions: int, seed: int) -> StepOutputs:
         """The buffers every env's step uses alike: the actions coming in, the step's outputs, the fault
         counts (non-finite actions per world; totals of non-finite actions, diverged worlds and

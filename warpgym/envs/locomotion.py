@@ -49,6 +49,14 @@ class LocomotionVecEnv(GraphVecEnv, VectorEnv):
     # a torch CUDA graph (agents.protocol); the Warp launches then join torch's capture.
     graph_capturable = True
 
+    @classmethod
+    def replay_args(cls, env_args: dict) -> dict:
+        """A saved run's env: its physics as recorded, a setting added since then off (``recorded``), not
+        today's defaults, which would replay an old policy on physics it never saw."""
+        from warpgym.sim.physics import recorded  # noqa: PLC0415
+
+        return {**env_args, "physics": recorded(env_args.get("physics"))}
+
     def __init__(
         self,
         task: str | LocomotionTask = "Ant",

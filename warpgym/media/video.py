@@ -234,3 +234,21 @@ def render_suite_clip(task, states: dict, outputs: dict[str, dict], dt: float, w
                                                  np.asarray(states["dof_vel"][t], dtype=np.float64))[0])
     finally:
         view.close()
+
+
+def draw_robot_clip(env, states: dict, outputs: dict[str, dict], width: int, height: int) -> tuple[dict, dict]:
+    """A clip of warpgym's robots (every recorded robot, a grid): (path -> frames written, what it measured)."""
+    from warpgym.media.clips import clip_forward_speed  # noqa: PLC0415
+
+    shown = states["root_pose"].shape[0] - 1  # steps after the first frame
+    measured = {"clip/forward_speed": float(clip_forward_speed(env.task, states).mean())}
+    print(f"clip: {shown} steps ({shown * env.task.dt:.1f} s) of {states['root_pose'].shape[1]} robot(s): forward "
+          f"speed {measured['clip/forward_speed']:.2f} m/s")
+    return render_clip(env.task, states, outputs, width, height), measured
+
+
+def draw_suite_clip(env, states: dict, outputs: dict[str, dict], width: int, height: int) -> tuple[dict, dict]:
+    """A clip of one of Gymnasium's tasks (its first world, Gymnasium's renderer): (path -> frames, {})."""
+    shown = states["dof_pos"].shape[0] - 1
+    print(f"clip: {shown} steps ({shown * env.sim.dt:.1f} s) of the first world")
+    return render_suite_clip(env.task, states, outputs, env.sim.dt, width, height), {}
