@@ -136,8 +136,10 @@ class Collector:
         next_obs, reward, terminated, truncated, info = self.env.step(actions)
         timer.lap("collect: env step (physics + task kernels)")
         done = terminated | truncated
+        # bootstrapped: an episode cut by the time limit, not one that also ended on its own at that step
+        timed_out = truncated & ~terminated
         for buffer, value_t in ((s.obs, obs), (s.actions, actions), (s.log_probs, log_prob), (s.values, value),
-                                (s.means, mean), (s.rewards, reward), (s.dones, done), (s.truncated, truncated),
+                                (s.means, mean), (s.rewards, reward), (s.dones, done), (s.truncated, timed_out),
                                 (s.final_obs, info["final_obs"])):
             buffer.index_copy_(0, t, value_t.to(buffer.dtype)[None])
         self.episodes.record(t, reward, done, info)

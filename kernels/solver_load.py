@@ -32,19 +32,3 @@ def track_solver_load(
         overflowed[world] = dropped
     else:
         overflowed[world] = overflowed[world] + dropped
-
-
-@wp.kernel
-def count_faults(
-    nan_actions: wp.array[wp.int32],  # (N,) non-finite action entries this step
-    diverged: wp.array[wp.bool],  # (N,) the world blew up this step and was reset
-    overflowed: wp.array[wp.int32],  # (N,) substeps of this step that dropped constraints or contacts
-    totals: wp.array[wp.int64],  # (3,) in/out: running sums of the three, since the env was built
-):
-    env = wp.tid()
-    if nan_actions[env] > 0:
-        wp.atomic_add(totals, 0, wp.int64(nan_actions[env]))
-    if diverged[env]:
-        wp.atomic_add(totals, 1, wp.int64(1))
-    if overflowed[env] > 0:
-        wp.atomic_add(totals, 2, wp.int64(overflowed[env]))

@@ -60,7 +60,7 @@ def test_the_wheel_carries_the_command_and_all_three_packages(tmp_path):
     (wheel,) = tmp_path.glob("warpgym-*.whl")
     names = zipfile.ZipFile(wheel).namelist()
     for module in ("warpgym/cli/train.py", "warpgym/__main__.py", "warpgym/sim/simulator.py",
-                   "warpgym/compile/preload.py", "warpgym/media/render.py", "kernels/observations.py",
+                   "warpgym/compile/preload.py", "warpgym/media/render.py", "kernels/robots/observations.py",
                    "agents/runner.py"):
         assert module in names, module
     assert not [n for n in names if n.startswith(("tests/", "benchmarks/", "scripts/"))]

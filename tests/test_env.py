@@ -87,18 +87,27 @@ def test_low_torso_terminates_with_death_cost_and_only_that_env_resets(ant_env):
     assert sim.acquire_actor_root_state_tensor()[others, 2].min() > 0.3
 
 
-def test_truncation_at_episode_length_sets_final_obs():
+def test_truncation_at_episode_length_sets_final_obs_and_a_fall_then_is_both():
     env = LocomotionVecEnv("Ant", num_envs=2, device="cpu", max_episode_steps=5)
     env.reset(seed=0)
     for t in range(5):
+        if t == 4:  # robot 1 falls on the last step: terminated and, as Gymnasium's TimeLimit says, truncated
+            root = env.sim.acquire_actor_root_state_tensor().clone()
+            root[1, 2] = 0.15
+            env.sim.set_actor_root_state_tensor_indexed(root, torch.tensor([1]))
         obs, rew, term, trunc, info = env.step(torch.zeros(2, env.num_actions))
         if t < 4:
             assert not trunc.any()
-    assert trunc.all() and not term.any()
+    assert trunc.tolist() == [True, True] and term.tolist() == [False, True]
+    assert info["time_outs"].tolist() == [True, False]  # only robot 0's episode is bootstrapped
     assert info["_final_obs"].all()
     assert not torch.allclose(info["final_obs"], obs)  # the final observation is not the reset one
     assert info["episode"]["l"].tolist() == [5, 5]
     torch.testing.assert_close(obs[:, 0], torch.full((2,), env.sim.spec.start_height))
+    # an explicit reset ends no episode: the flags clear and the ended episodes' statistics stay
+    env.reset()
+    assert not (env.terminated.any() or env.truncated.any() or env.info["time_outs"].any())
+    assert env.info["episode"]["l"].tolist() == [5, 5]
 
 
 def test_same_seed_same_trajectory(ant_env):

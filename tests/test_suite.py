@@ -259,15 +259,16 @@ def test_how_much_of_a_return_holds_reads_alike_for_rewards_and_costs():
     assert holds(5.0, -1.0) == 1.0 and holds(-1.0, 0.0) == 0.0
 
 
-def test_eval_refuses_a_policy_of_warpgyms_own_tasks(tmp_path):
+def test_eval_refuses_gymnasiums_own_flags_for_a_robot_and_a_v4_it_cannot_play(tmp_path, capsys):
     import glob
 
     from agents.checkpoint import load, save_atomic
     from warpgym.cli import eval as eval_command
 
+    # warpgym's own Ant is scored in native MuJoCo (tests/test_train.py): Gymnasium's v4 is no place for it
     policy = sorted(glob.glob(os.path.join(os.path.dirname(__file__), "data", "ant*.pt")))[0]
-    with pytest.raises(SystemExit, match="not one of Gymnasium's tasks.*warpgym sim2sim"):
-        eval_command.main([policy])
+    assert eval_command.main([policy, "--env-version", "4"]) == 2
+    assert "--env-version 4: Gymnasium's env only" in capsys.readouterr().err
     # a suite task whose v4 is laid out otherwise: refused before anything is built, naming the tasks that play
     ckpt = load(policy, torch.device("cpu"))
     ckpt["config"]["env_args"]["task"] = "Ant-v5"
@@ -522,3 +523,22 @@ def test_nudged_starts_move_every_coordinate_and_nothing_else():
         np.testing.assert_array_equal(obs1, obs0)
     assert not np.array_equal(r0, r1)
     np.testing.assert_allclose(r1, r0, rtol=1e-4)
+
+
+def test_a_termination_on_the_last_step_is_truncated_too_as_in_gymnasium():
+    """Gymnasium's TimeLimit truncates at the limit whether or not the step terminated: a Hopper unhealthy from
+    its first step with a one-step limit is (terminated, truncated) = (True, True) in gymnasium.make and here;
+    ``info["time_outs"]`` leaves it out of what a learner bootstraps. An explicit reset clears the flags."""
+    kwargs = {"healthy_z_range": (5.0, 10.0)}
+    reference = gym.make("Hopper-v5", max_episode_steps=1, **kwargs)
+    reference.reset(seed=0)
+    _, _, gym_terminated, gym_truncated, _ = reference.step(np.zeros(3))
+    env = SuiteVecEnv(SUITE["Hopper-v5"].replace(**kwargs), num_envs=2, device=DEVICE, max_episode_steps=1)
+    env.reset(seed=0)
+    _, _, terminated, truncated, info = env.step(torch.zeros(2, 3))
+    assert (gym_terminated, gym_truncated) == (True, True)
+    assert terminated.tolist() == truncated.tolist() == [True, True] and not info["time_outs"].any()
+    assert info["episode"]["l"].tolist() == [1, 1]  # recorded by the step that ended it
+    env.reset()
+    assert not (env.terminated.any() or env.truncated.any() or env.info["time_outs"].any())
+    assert env.info["episode"]["l"].tolist() == [1, 1]

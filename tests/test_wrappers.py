@@ -76,7 +76,7 @@ def test_adapters_hand_out_warpgym_buffers_or_say_why_not(name, ant_env):
         adapter.reset()
     out = _outputs(name, adapter, torch.zeros(ant_env.num_envs, ant_env.num_actions))
     warpgym = {"obs": ant_env.obs, "reward": ant_env.reward, "done": ant_env.info["_final_obs"],
-               "time_outs": ant_env.truncated, "terminated": ant_env.terminated, "truncated": ant_env.truncated}
+               "time_outs": ant_env.info["time_outs"], "terminated": ant_env.terminated, "truncated": ant_env.truncated}
     assert set(out) == set(adapter_cls.SHARED)
     for key, shared in adapter_cls.SHARED.items():
         if shared:

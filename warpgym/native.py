@@ -286,7 +286,7 @@ class NativeRobot:
         return np.linalg.norm(self.contact_wrenches(self.feet)[..., :3], axis=-1) > 0.0
 
     def observation(self, actions: np.ndarray, fresh: bool = False) -> np.ndarray:
-        """The task's observation (Isaac Gym's layout, ``kernels/observations.py``) from MuJoCo's data."""
+        """The task's observation (Isaac Gym's layout, ``kernels/robots/observations.py``) from MuJoCo's data."""
         s = self.state()
         feet = np.zeros((self.copies, len(self.feet), 6)) if fresh else self.contact_wrenches(self.feet)
         dof_force = None

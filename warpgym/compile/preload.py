@@ -49,9 +49,10 @@ SIM_MODULES = (
     "mujoco_warp._src.solver",
     "mujoco_warp._src.support",
     "mujoco_warp._src.constraint",
-    "kernels.actions",
-    "kernels.locomotion",
-    "kernels.resets",
+    "kernels.common",
+    "kernels.robots.actions",
+    "kernels.robots.step",
+    "kernels.robots.resets",
     "kernels.tensor_api",
     "kernels.solver_load",
 )

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import torch
 
-from kernels import gym_params as G
+from kernels.suite import params as G
 from warpgym.envs.suite import SuiteVecEnv
 from warpgym.tasks.suite import SUITE, GymTask, get_suite_task
 

@@ -8,11 +8,10 @@ from __future__ import annotations
 import numpy as np
 import torch
 import warp as wp
+from gymnasium import logger as gymnasium_logger
 from gymnasium.vector import VectorEnv
 
-from kernels.buffers import StepOutputs
-from kernels.locomotion import advance_rng
-from kernels.solver_load import count_faults
+from kernels.common import StepOutputs, advance_rng, count_faults
 from warpgym.sim.checks import check_float_tensor
 
 
@@ -22,8 +21,10 @@ class GraphVecEnv(VectorEnv):
     only, and finding ``GraphVecEnv`` there refused the env (tests/test_learner_entry_points.py)."""
 
     # Set by the subclass before _alloc_common and _expose: sim (with launch/capture), num_envs,
-    # num_actions, device.
+    # num_actions, device; _view (a renderer or None) before render.
     FAULTS = ("nan_actions", "diverged_resets", "solver_overflows")  # fault_counters' names, in _fault_totals' order
+    # what each fault means and its fix, for agents.protocol's messages; the subclasses add the other two
+    FAULT_HELP = {"nan_actions": "the policy sent NaN/inf actions; they were applied as 0"}
 
     @staticmethod
     def configured(task, max_episode_steps: int | None, overrides: dict):
@@ -41,14 +42,15 @@ class GraphVecEnv(VectorEnv):
         """The constructor's keywords that rebuild the env a run trained on, from the ``env_args`` it saved."""
         return dict(env_args)
 
+    def _buf(self, shape, dtype=float) -> wp.array:
+        """A zeroed Warp array on the env's device."""
+        return wp.zeros(shape, dtype=dtype, device=self.sim.device)
+
     def _alloc_common(self, n: int, num_obs: int, num_actions: int, seed: int) -> StepOutputs:
         """The buffers every env's step uses alike: the actions coming in, the step's outputs, the fault
         counts (non-finite actions per world; totals of non-finite actions, diverged worlds and
         overflowed substeps) and the reset noise's random state. Returns the outputs (``self._out``)."""
-        dev = self.sim.device
-
-        def buf(shape, dtype=float):
-            return wp.zeros(shape, dtype=dtype, device=dev)
+        dev, buf = self.sim.device, self._buf
 
         self._actions_in = buf((n, num_actions))
         self._nan_count = buf(n, wp.int32)
@@ -56,7 +58,7 @@ class GraphVecEnv(VectorEnv):
         self._rng_state = wp.array(np.array([seed, 0], np.int32), dtype=wp.int32, device=dev)
         self._out = out = StepOutputs()
         out.obs, out.final_obs, out.reward = buf((n, num_obs)), buf((n, num_obs)), buf(n)
-        out.terminated, out.truncated = buf(n, wp.bool), buf(n, wp.bool)
+        out.terminated, out.truncated, out.time_outs = buf(n, wp.bool), buf(n, wp.bool), buf(n, wp.bool)
         out.done, out.diverged = buf(n, wp.bool), buf(n, wp.bool)
         return out
 
@@ -69,7 +71,8 @@ class GraphVecEnv(VectorEnv):
         self._actions_in_t = t(self._actions_in)
         self.obs, self.reward = t(out.obs), t(out.reward)
         self.terminated, self.truncated = t(out.terminated), t(out.truncated)
-        self.info = {**info, "final_obs": t(out.final_obs), "_final_obs": t(out.done),
+        # "time_outs": truncated and not terminated, what Isaac-style learners bootstrap (rsl_rl, rl_games)
+        self.info = {**info, "final_obs": t(out.final_obs), "_final_obs": t(out.done), "time_outs": t(out.time_outs),
                      "nan_actions": t(self._nan_count), "diverged": t(out.diverged),
                      "solver_overflows": t(self.sim.solver_overflows)}
         totals = t(self._fault_totals)
@@ -126,6 +129,28 @@ class GraphVecEnv(VectorEnv):
         a method's result (``render``: its tuple of frames, one per drawn world), or an attribute's value."""
         value = getattr(self, name)
         return value(*args, **kwargs) if callable(value) else value
+
+    def render(self):
+        """Gymnasium's render: a tuple of (height, width, 3) uint8 frames of the first ``render_robots`` worlds
+        ("rgb_array"), or the viewer updated ("human"). One host copy of their states."""
+        if self._view is None:
+            gymnasium_logger.warn("render() was called on an env made without render_mode: pass render_mode="
+                                  "'rgb_array' (or 'human') to gym.make / gym.make_vec")
+            return None
+        return self._draw(min(self._view.robots, self.num_envs))
+
+    def _draw(self, k: int):
+        """The renderer's frames of the first ``k`` worlds."""
+        raise NotImplementedError
+
+    def close(self, **kwargs) -> None:
+        self._graph = None
+        if self._view is not None:
+            self._view.close()
+        self.closed = True
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self.task.name}, num_envs={self.num_envs}, device={self.sim.device!r})"
 
     def fault_counters(self) -> dict[str, torch.Tensor]:
         """Running totals since the env was built of things that should never happen (agents.protocol):

@@ -9,15 +9,14 @@ from __future__ import annotations
 
 import numpy as np
 import warp as wp
-from gymnasium import logger as gymnasium_logger
 from gymnasium import spaces
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from kernels.actions import apply_actions
-from kernels.buffers import EpisodeBuffers, RobotView
-from kernels.locomotion import locomotion_step
-from kernels.resets import reset_finished_envs
+from kernels.robots.actions import apply_actions
+from kernels.robots.buffers import EpisodeBuffers, RobotView
+from kernels.robots.step import locomotion_step
+from kernels.robots.resets import reset_finished_envs
 from warpgym.envs.graph_env import GraphVecEnv
 from warpgym.sim.simulator import Sim
 from warpgym.tasks import LocomotionTask, get_task
@@ -96,9 +95,7 @@ class LocomotionVecEnv(GraphVecEnv, VectorEnv):
         self.params = task.to_warp(sim.spec.start_height)
         self._torque_scale = wp.array(gear * task.power_scale, dtype=float, device=dev)
         out = self._alloc_common(n, o, a, seed)
-
-        def buf(shape, dtype=float):
-            return wp.zeros(shape, dtype=dtype, device=dev)
+        buf = self._buf
 
         if task.contact_force_scale != 0.0:
             sim.enable_contact_forces()
@@ -150,30 +147,14 @@ class LocomotionVecEnv(GraphVecEnv, VectorEnv):
                   inputs=[self.params, force_all, self._rng_state, self._robot, self._episodes, self._out],
                   device=self.sim.device)
 
-    # ------------------------------------------------------------------ Gymnasium API (GraphVecEnv: reset, step)
+    # ------------------------------------------------------------------ rendering and fault texts (GraphVecEnv: the Gymnasium API)
     FAULT_HELP = {
-        "nan_actions": "the policy sent NaN/inf actions; they were applied as 0",
+        **GraphVecEnv.FAULT_HELP,
         "diverged_resets": "a world's physics blew up (NaN or beyond max_speed); it was reset with reward 0",
         "solver_overflows": "MuJoCo Warp's constraint or contact buffers were full and a world lost constraints "
                             "for a substep; raise njmax/nconmax (sim_options) above the peak in Sim.solver_load()",
     }
 
-    def render(self):
-        """Gymnasium's render: a tuple of (height, width, 3) uint8 frames of the first ``render_robots``
-        robots ("rgb_array"), or the viewer window updated ("human"). One host copy of their states."""
-        if self._view is None:
-            gymnasium_logger.warn("render() was called on an env made without render_mode: pass render_mode="
-                                  "'rgb_array' (or 'human') to gym.make / gym.make_vec")
-            return None
-        k = min(self._view.robots, self.num_envs)
+    def _draw(self, k: int):
         states = {key: getattr(self.sim, key)[:k].cpu().numpy() for key in ("root_pose", "root_vel", "dof_pos", "dof_vel")}
         return self._view.render(states)
-
-    def close(self, **kwargs) -> None:
-        self._graph = None
-        if self._view is not None:
-            self._view.close()
-        self.closed = True
-
-    def __repr__(self) -> str:
-        return f"LocomotionVecEnv({self.task.name}, num_envs={self.num_envs}, device={self.sim.device!r})"

@@ -10,14 +10,13 @@ from __future__ import annotations
 
 import numpy as np
 import warp as wp
-from gymnasium import logger as gymnasium_logger
 from gymnasium import spaces
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from kernels.gym_params import GymEpisodes, MjView
-from kernels.gym_resets import reset_gym_worlds
-from kernels.gym_step import apply_gym_actions, gym_step, write_reset_observation
+from kernels.suite.params import GymEpisodes, MjView
+from kernels.suite.resets import reset_gym_worlds
+from kernels.suite.step import apply_gym_actions, gym_step, write_reset_observation
 from warpgym.envs.graph_env import GraphVecEnv
 from warpgym.sim.mjw_sim import MjwSim
 from warpgym.tasks.suite import GymTask, get_suite_task
@@ -51,7 +50,7 @@ class SuiteVecEnv(GraphVecEnv, VectorEnv):
     metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": ["rgb_array", "human"]}
     graph_capturable = True
     FAULT_HELP = {
-        "nan_actions": "the policy sent NaN/inf actions; they were applied as 0",
+        **GraphVecEnv.FAULT_HELP,
         "diverged_resets": "a world's state stopped being finite; it ended with reward 0 and was reset",
         "solver_overflows": "MuJoCo Warp's constraint or contact buffers were full and a world lost constraints for "
                             "a physics step: pass larger nconmax / njmax",
@@ -85,9 +84,7 @@ class SuiteVecEnv(GraphVecEnv, VectorEnv):
 
         dev = sim.device
         self.params = task.params(sim)
-
-        def buf(shape, dtype=float):
-            return wp.zeros(shape, dtype=dtype, device=dev)
+        buf = self._buf
 
         d = sim.d
         self._mj = view = MjView()
@@ -142,22 +139,6 @@ class SuiteVecEnv(GraphVecEnv, VectorEnv):
         wp.launch(write_reset_observation, dim=self.num_envs,
                   inputs=[self.params, force_all, self._mj, self._episodes, self._out], device=dev)
 
-    # ------------------------------------------------------------------ Gymnasium API (GraphVecEnv: reset, step)
-    def render(self):
-        """Gymnasium's render: a tuple of (height, width, 3) uint8 frames of the first ``render_robots`` worlds
-        ("rgb_array"), or Gymnasium's viewer updated ("human"). One host copy of their states."""
-        if self._view is None:
-            gymnasium_logger.warn("render() was called on an env made without render_mode: pass render_mode="
-                                  "'rgb_array' (or 'human') to gym.make / gym.make_vec")
-            return None
-        k = min(self._view.robots, self.num_envs)
+    # ------------------------------------------------------------------ rendering and fault texts (GraphVecEnv: the Gymnasium API)
+    def _draw(self, k: int):
         return self._view.render(self.sim.dof_pos[:k].cpu().numpy(), self.sim.dof_vel[:k].cpu().numpy())
-
-    def close(self, **kwargs) -> None:
-        self._graph = None
-        if self._view is not None:
-            self._view.close()
-        self.closed = True
-
-    def __repr__(self) -> str:
-        return f"SuiteVecEnv({self.task.name}, num_envs={self.num_envs}, device={self.sim.device!r})"

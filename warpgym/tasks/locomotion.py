@@ -7,7 +7,7 @@ from dataclasses import asdict, dataclass, field
 
 import warp as wp
 
-from kernels.params import LocomotionParams
+from kernels.robots.params import LocomotionParams
 from warpgym.sim.physics import Physics
 
 
@@ -59,7 +59,7 @@ class LocomotionTask:
         position) in ``steps`` control steps: the distance along ``forward_direction`` over the time.
 
         Every reporter uses this definition: the env's ``info["episode"]["s"]`` (its kernel twin,
-        ``kernels.observations.forward_speed``), evaluations, training rows, play.py's episodes and
+        ``kernels.robots.observations.forward_speed``), evaluations, training rows, play.py's episodes and
         clips, and sim2sim.py in both simulators. Works on numpy arrays and torch tensors."""
         d = self.forward_direction
         return (travel[..., 0] * d[0] + travel[..., 1] * d[1]) / (steps * self.dt)

@@ -5,7 +5,8 @@
 
 rl_games takes tensors as they come (its ``is_tensor_obses`` path) and copies the observation into
 its rollout buffer before the next step, so everything here is warpgym's own buffer: zero copies.
-Time-outs go in ``infos["time_outs"]``, which rl_games bootstraps with ``value_bootstrap``.
+Time-outs (truncated and not terminated) go in ``infos["time_outs"]``, which rl_games bootstraps with
+``value_bootstrap``.
 """
 
 from __future__ import annotations
@@ -41,7 +42,7 @@ class RlGamesVecEnv(IVecEnv):
         obs, reward, terminated, truncated, info = self.env.step(actions)
         if self.log is not None:
             self.log.after_step(info)
-        return obs, reward, info["_final_obs"], {"time_outs": truncated}
+        return obs, reward, info["_final_obs"], {"time_outs": info["time_outs"]}
 
     def reset(self):
         obs, _ = self.env.reset()

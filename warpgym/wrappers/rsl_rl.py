@@ -75,7 +75,7 @@ class RslRlVecEnv(VecEnv):
             self.log.after_step(info)
         self._obs = self._group(obs)
         done = info["_final_obs"]  # terminated | truncated, one buffer
-        return self._obs, reward, done, {"time_outs": truncated}
+        return self._obs, reward, done, {"time_outs": info["time_outs"]}
 
     def close(self):
         self.env.close()

@@ -5,7 +5,7 @@ not finite. Observes clipped external contact forces."""
 from dataclasses import dataclass
 from typing import ClassVar
 
-from kernels import gym_params as G
+from kernels.suite import params as G
 from warpgym.tasks.suite.base import GymTask, fill_health, forward_observation_size
 
 

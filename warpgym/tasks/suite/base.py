@@ -3,7 +3,7 @@ Gymnasium's constructor arguments as fields (their defaults are Gymnasium v5's),
 become the kernels' ``GymParams``.
 
 One file per task beside this one holds its fields and ``fill_params``; the kernels
-(``kernels/gym_step.py``, ``kernels/gym_resets.py``) hold the step itself.
+(``kernels/suite/step.py``, ``kernels/suite/resets.py``) hold the step itself.
 """
 
 from __future__ import annotations
@@ -12,11 +12,11 @@ import math
 from dataclasses import asdict, dataclass, fields
 from typing import ClassVar
 
-from kernels import gym_params as G
+from kernels.suite import params as G
 
 INF = math.inf
 
-# Each kind's reward terms, in the column order kernels.gym_step writes them.
+# Each kind's reward terms, in the column order kernels.suite.step writes them.
 TERM_COLUMNS = {
     G.FORWARD: ("reward_forward", "reward_ctrl", "reward_survive", "reward_contact", "x_velocity", "y_velocity",
                 "x_position"),

@@ -4,7 +4,7 @@ or any velocity or joint angle leaves the healthy state range."""
 from dataclasses import dataclass
 from typing import ClassVar
 
-from kernels import gym_params as G
+from kernels.suite import params as G
 from warpgym.tasks.suite.base import INF, GymTask, fill_health, forward_observation_size
 
 

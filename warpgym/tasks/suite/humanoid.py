@@ -5,7 +5,7 @@ torso leaves its height range. Observes com inertias, com velocities, actuator a
 from dataclasses import dataclass
 from typing import ClassVar
 
-from kernels import gym_params as G
+from kernels.suite import params as G
 from warpgym.tasks.suite.base import INF, GymTask, fill_health, forward_observation_size
 
 

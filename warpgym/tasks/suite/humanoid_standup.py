@@ -6,7 +6,7 @@ uses it; here too it is accepted and has no effect."""
 from dataclasses import dataclass
 from typing import ClassVar
 
-from kernels import gym_params as G
+from kernels.suite import params as G
 from warpgym.tasks.suite.base import INF, GymTask
 from warpgym.tasks.suite.humanoid import com_observation_size, fill_com_observation
 

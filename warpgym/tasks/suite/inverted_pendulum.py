@@ -4,7 +4,7 @@ cart; reward 1 per step, the episode ends when the pole leans more than 0.2 rad.
 from dataclasses import dataclass
 from typing import ClassVar
 
-from kernels import gym_params as G
+from kernels.suite import params as G
 from warpgym.tasks.suite.base import GymTask
 
 

@@ -4,7 +4,7 @@ drawn in a 0.2 m disc; 50 steps, never terminates."""
 from dataclasses import dataclass
 from typing import ClassVar
 
-from kernels import gym_params as G
+from kernels.suite import params as G
 from warpgym.tasks.suite.base import GymTask
 
 

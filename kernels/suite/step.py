@@ -12,8 +12,8 @@ actuator, constraint and contact forces.
 
 import warp as wp
 
-from kernels.buffers import StepOutputs
-from kernels.gym_params import (
+from kernels.common import StepOutputs
+from kernels.suite.params import (
     CONTACT_CLIPPED_COST,
     CONTACT_CLIPPED_FORCES,
     DOUBLE_PENDULUM,
@@ -309,6 +309,7 @@ def gym_step(p: GymParams, d: MjView, ep: GymEpisodes, out: StepOutputs):
     out.reward[w] = reward
     out.terminated[w] = terminated
     out.truncated[w] = truncated
+    out.time_outs[w] = truncated and not terminated
     done = terminated or truncated
     out.done[w] = done
     if done:

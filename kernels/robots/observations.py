@@ -8,9 +8,9 @@ Row layout for A actuated dofs and F feet:
 
 import warp as wp
 
-from kernels.buffers import RobotView
+from kernels.robots.buffers import RobotView
 from kernels.math import finite_or_zero, roll_from_quat, unscale, wrap_angle, yaw_from_quat
-from kernels.params import LocomotionParams
+from kernels.robots.params import LocomotionParams
 from kernels.tensor_api import ROOT_COORDS, ROOT_DOFS
 
 

@@ -1,15 +1,14 @@
 """Gymnasium's ``reset_model()`` of the MuJoCo tasks for the worlds that finished (same-step autoreset).
 
 The drawn state goes into MuJoCo Warp's qpos and qvel; the env then runs MuJoCo Warp's kinematics
-where the first observation needs it and ``kernels.gym_step.write_reset_observation``. Gymnasium's
+where the first observation needs it and ``kernels.suite.step.write_reset_observation``. Gymnasium's
 ``mj_resetData`` also zeroes the solver's warm start and the controls: so does this.
 """
 
 import warp as wp
 
-from kernels.buffers import StepOutputs
-from kernels.gym_params import GOAL_PUSHER, GOAL_REACHER, GymEpisodes, GymParams, MjView
-from kernels.resets import env_rng
+from kernels.common import StepOutputs, env_rng
+from kernels.suite.params import GOAL_PUSHER, GOAL_REACHER, GymEpisodes, GymParams, MjView
 
 wp.set_module_options({"enable_backward": False})
 
@@ -42,7 +41,12 @@ def draw_goal(p: GymParams, d: MjView, w: int, rng: wp.uint32):
 def reset_gym_worlds(p: GymParams, force_all: int, rng_state: wp.array[wp.int32], d: MjView, ep: GymEpisodes,
                      out: StepOutputs):
     w = wp.tid()
-    if force_all == 0 and not out.done[w]:
+    if force_all != 0:  # an explicit reset(): no step ended here
+        out.terminated[w] = False
+        out.truncated[w] = False
+        out.time_outs[w] = False
+        out.done[w] = False
+    elif not out.done[w]:
         return
     rng = env_rng(rng_state, w)
     for i in range(d.qpos.shape[1]):

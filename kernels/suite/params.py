@@ -1,6 +1,6 @@
 """What the kernels of Gymnasium's MuJoCo tasks read: the task's numbers (``GymParams``, filled by
 ``warpgym.tasks.suite``), MuJoCo Warp's arrays they take them from (``MjView``) and what a step
-writes (``GymEpisodes``; ``kernels.buffers.StepOutputs`` for the returned tensors).
+writes (``GymEpisodes``; ``kernels.robots.buffers.StepOutputs`` for the returned tensors).
 
 Shapes: N worlds, Q = nq, V = nv, U = nu, B bodies (the world body 0 included), S sites, K reward
 terms of the task, O observation entries.

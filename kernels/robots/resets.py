@@ -2,30 +2,14 @@
 
 import warp as wp
 
-from kernels.buffers import EpisodeBuffers, RobotView, StepOutputs
-from kernels.observations import potential, write_observation
-from kernels.params import LocomotionParams
+from kernels.common import StepOutputs, env_rng
+from kernels.robots.buffers import EpisodeBuffers, RobotView
+from kernels.robots.observations import potential, write_observation
+from kernels.robots.params import LocomotionParams
 from kernels.tensor_api import ROOT_COORDS, ROOT_DOFS
 
 # Nothing differentiates through these kernels; skipping adjoint code shortens their compile.
 wp.set_module_options({"enable_backward": False})
-
-
-@wp.func
-def env_rng(rng_state: wp.array[wp.int32], env: int):
-    # fresh noise per (seed, step, env) from device counters, so a replayed graph draws new numbers
-    step_rng = wp.rand_init(rng_state[0], rng_state[1])
-    return wp.rand_init(wp.randi(step_rng), env)
-
-
-@wp.func
-def record_ended_episode(env: int, episodes: EpisodeBuffers, out: StepOutputs):
-    for i in range(out.obs.shape[1]):
-        out.final_obs[env, i] = out.obs[env, i]
-    length = episodes.length[env]
-    episodes.ended_return[env] = episodes.total_return[env]
-    episodes.ended_length[env] = length
-    episodes.ended_speed[env] = episodes.speed[env]
 
 
 @wp.func
@@ -58,11 +42,10 @@ def reset_finished_envs(
     if force_all != 0:
         out.terminated[env] = False
         out.truncated[env] = False
+        out.time_outs[env] = False
         out.done[env] = False
     elif not out.done[env]:
         return
-    else:
-        record_ended_episode(env, episodes, out)
     episodes.length[env] = 0
     episodes.total_return[env] = 0.0
     episodes.speed[env] = 0.0

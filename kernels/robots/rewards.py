@@ -2,7 +2,7 @@
 
 import warp as wp
 
-from kernels.params import LocomotionParams
+from kernels.robots.params import LocomotionParams
 
 
 @wp.func

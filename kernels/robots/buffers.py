@@ -33,20 +33,7 @@ class EpisodeBuffers:
     potential: wp.array[float]  # (N,) -distance to the target / dt at the last step
     length: wp.array[wp.int32]  # (N,) steps so far
     total_return: wp.array[float]  # (N,)
-    speed: wp.array[float]  # (N,) forward speed of the episode so far [m/s] (kernels.observations.forward_speed)
+    speed: wp.array[float]  # (N,) forward speed of the episode so far [m/s] (kernels.robots.observations.forward_speed)
     ended_return: wp.array[float]  # (N,) written when an episode ends
     ended_length: wp.array[wp.int32]  # (N,)
     ended_speed: wp.array[float]  # (N,) its forward speed [m/s]
-
-
-@wp.struct
-class StepOutputs:
-    """What env.step() returns, written in place."""
-
-    obs: wp.array2d[float]  # (N, O) after a reset: the new episode's first observation
-    final_obs: wp.array2d[float]  # (N, O) the observation an episode ended on
-    reward: wp.array[float]  # (N,)
-    terminated: wp.array[wp.bool]  # (N,) fell, or the state is no longer finite
-    truncated: wp.array[wp.bool]  # (N,) reached the episode length
-    done: wp.array[wp.bool]  # (N,) terminated or truncated
-    diverged: wp.array[wp.bool]  # (N,) the physics blew up (NaN/inf or beyond max_speed)

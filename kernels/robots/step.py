@@ -3,10 +3,11 @@ terminations and truncations, and per-env episode accumulators."""
 
 import warp as wp
 
-from kernels.buffers import EpisodeBuffers, RobotView, StepOutputs
-from kernels.observations import forward_speed, potential, root_position, write_observation
-from kernels.params import LocomotionParams
-from kernels.rewards import locomotion_reward
+from kernels.common import StepOutputs
+from kernels.robots.buffers import EpisodeBuffers, RobotView
+from kernels.robots.observations import forward_speed, potential, root_position, write_observation
+from kernels.robots.params import LocomotionParams
+from kernels.robots.rewards import locomotion_reward
 
 # Nothing differentiates through these kernels; skipping adjoint code shortens their compile.
 wp.set_module_options({"enable_backward": False})
@@ -25,6 +26,16 @@ def is_sane(p: LocomotionParams, robot: RobotView, env: int):
         if not wp.isfinite(v) or wp.abs(v) > p.max_speed:
             sane = False
     return sane
+
+
+@wp.func
+def record_ended_episode(env: int, episodes: EpisodeBuffers, out: StepOutputs):
+    # recorded by the step that ends the episode, as in the suite's step: the reset that follows only resets
+    for i in range(out.obs.shape[1]):
+        out.final_obs[env, i] = out.obs[env, i]
+    episodes.ended_return[env] = episodes.total_return[env]
+    episodes.ended_length[env] = episodes.length[env]
+    episodes.ended_speed[env] = episodes.speed[env]
 
 
 @wp.kernel
@@ -53,15 +64,15 @@ def locomotion_step(p: LocomotionParams, robot: RobotView, episodes: EpisodeBuff
     episodes.total_return[env] = episodes.total_return[env] + r
     if sane:  # a blown-up state travelled nowhere: the speed keeps its last sane value
         episodes.speed[env] = forward_speed(p, pos, length)
-    trunc = (length >= p.episode_length) and not fell
+    # Gymnasium's TimeLimit: the time limit truncates whether or not the step also terminated (a learner
+    # bootstraps only a truncation without a termination); the suite's step does the same
+    trunc = length >= p.episode_length
 
     out.reward[env] = r
     out.terminated[env] = fell
     out.truncated[env] = trunc
+    out.time_outs[env] = trunc and not fell
     out.done[env] = fell or trunc
     out.diverged[env] = not sane
-
-
-@wp.kernel
-def advance_rng(rng_state: wp.array[wp.int32]):  # (2,): seed, step counter
-    rng_state[1] = rng_state[1] + 1
+    if fell or trunc:
+        record_ended_episode(env, episodes, out)

@@ -1,0 +1,49 @@
+"""What both families of tasks use alike: the outputs a step returns, the reset noise's random state,
+and the running counts of faults (agents.protocol)."""
+
+import warp as wp
+
+# Nothing differentiates through these kernels; skipping adjoint code shortens their compile.
+wp.set_module_options({"enable_backward": False})
+
+
+@wp.struct
+class StepOutputs:
+    """What env.step() returns, written in place."""
+
+    obs: wp.array2d[float]  # (N, O) after a reset: the new episode's first observation
+    final_obs: wp.array2d[float]  # (N, O) the observation an episode ended on
+    reward: wp.array[float]  # (N,)
+    terminated: wp.array[wp.bool]  # (N,) fell, or the state is no longer finite
+    truncated: wp.array[wp.bool]  # (N,) reached the episode length (Gymnasium's TimeLimit: terminated or not)
+    time_outs: wp.array[wp.bool]  # (N,) truncated and not terminated: the episodes a learner bootstraps
+    done: wp.array[wp.bool]  # (N,) terminated or truncated
+    diverged: wp.array[wp.bool]  # (N,) the physics blew up (NaN/inf or beyond max_speed)
+
+
+@wp.func
+def env_rng(rng_state: wp.array[wp.int32], env: int):
+    # fresh noise per (seed, step, env) from device counters, so a replayed graph draws new numbers
+    step_rng = wp.rand_init(rng_state[0], rng_state[1])
+    return wp.rand_init(wp.randi(step_rng), env)
+
+
+@wp.kernel
+def advance_rng(rng_state: wp.array[wp.int32]):  # (2,): seed, step counter
+    rng_state[1] = rng_state[1] + 1
+
+
+@wp.kernel
+def count_faults(
+    nan_actions: wp.array[wp.int32],  # (N,) non-finite action entries this step
+    diverged: wp.array[wp.bool],  # (N,) the world blew up this step and was reset
+    overflowed: wp.array[wp.int32],  # (N,) substeps of this step that dropped constraints or contacts
+    totals: wp.array[wp.int64],  # (3,) in/out: running sums of the three, since the env was built
+):
+    env = wp.tid()
+    if nan_actions[env] > 0:
+        wp.atomic_add(totals, 0, wp.int64(nan_actions[env]))
+    if diverged[env]:
+        wp.atomic_add(totals, 1, wp.int64(1))
+    if overflowed[env] > 0:
+        wp.atomic_add(totals, 2, wp.int64(overflowed[env]))
