@@ -243,6 +243,22 @@ def test_a_rollout_stored_at_a_device_step_index_equals_a_plain_loop_over_the_st
         assert runner.storage.truncated.sum() == (0 if rollout == 0 else 8)  # 6-step episodes end in the second
 
 
+def test_an_episode_that_ends_on_its_own_at_the_time_limit_is_not_bootstrapped():
+    """Gymnasium's TimeLimit reports a termination on the last step as truncated too; the value of what follows
+    a termination is 0, so PPO bootstraps only truncated and not terminated (warpgym's info["time_outs"])."""
+
+    class EndsAtTheLimit(PointMassVecEnv):  # the even envs end on their own on the limit's step
+        def step(self, actions):
+            obs, reward, terminated, truncated, info = super().step(actions)
+            return obs, reward, truncated & (torch.arange(self.num_envs) % 2 == 0), truncated, info
+
+    runner = OnPolicyRunner(EndsAtTheLimit(8, episode_length=3), Config(net_dims=(16,), horizon_len=4, batch_size=32),
+                            print_fn=lambda s: None)
+    runner.collect()
+    assert runner.storage.dones[2].all()  # every episode ended at the third step
+    assert runner.storage.truncated[2].tolist() == [0.0, 1.0] * 4
+
+
 def test_checkpoint_write_is_atomic_and_round_trips(tmp_path):
     path = str(tmp_path / "ck.pt")
     base = {"iteration": 1, "samples": 2, "policy": {}, "normalizer": {}, "config": {}, "spec": {}}
