@@ -1,10 +1,13 @@
 """What the kernels of Gymnasium's MuJoCo tasks read: the task's numbers (``GymParams``, filled by
 ``warpgym.tasks.suite``), MuJoCo Warp's arrays they take them from (``MjView``) and what a step
-writes (``GymEpisodes``; ``kernels.robots.buffers.StepOutputs`` for the returned tensors).
+writes (``GymEpisodes``; ``kernels.common.StepOutputs`` for the returned tensors), and each kind's reward
+terms, named once (``TERMS``: the step kernel writes each at its column by name, Gymnasium's info keys read them).
 
 Shapes: N worlds, Q = nq, V = nv, U = nu, B bodies (the world body 0 included), S sites, K reward
 terms of the task, O observation entries.
 """
+
+import enum
 
 import warp as wp
 
@@ -15,6 +18,51 @@ PENDULUM = 2  # InvertedPendulum
 DOUBLE_PENDULUM = 3  # InvertedDoublePendulum
 REACHER = 4
 PUSHER = 5
+
+
+
+class ForwardTerm(enum.IntEnum):  # FORWARD's reward terms, each the column of GymEpisodes.terms it is written in
+    reward_forward = 0
+    reward_ctrl = 1
+    reward_survive = 2
+    reward_contact = 3
+    x_velocity = 4
+    y_velocity = 5
+    x_position = 6
+
+
+class StandupTerm(enum.IntEnum):
+    reward_linup = 0
+    reward_quadctrl = 1
+    reward_impact = 2
+    x_position = 3
+    y_position = 4
+
+
+class PendulumTerm(enum.IntEnum):
+    reward_survive = 0
+
+
+class DoublePendulumTerm(enum.IntEnum):
+    reward_survive = 0
+    distance_penalty = 1
+    velocity_penalty = 2
+
+
+class ReacherTerm(enum.IntEnum):
+    reward_dist = 0
+    reward_ctrl = 1
+
+
+class PusherTerm(enum.IntEnum):
+    reward_dist = 0
+    reward_ctrl = 1
+    reward_near = 2
+
+
+TERMS = {FORWARD: ForwardTerm, STANDUP: StandupTerm, PENDULUM: PendulumTerm, DOUBLE_PENDULUM: DoublePendulumTerm,
+         REACHER: ReacherTerm, PUSHER: PusherTerm}
+MAX_TERMS = max(len(t) for t in TERMS.values())
 
 # Where the forward speed comes from (GymParams.position_source): Gymnasium reads it differently per task.
 POSITION_QPOS_X = 0  # qpos[0] (HalfCheetah, Hopper, Walker2d)

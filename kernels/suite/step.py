@@ -25,9 +25,15 @@ from kernels.suite.params import (
     PUSHER,
     REACHER,
     STANDUP,
+    DoublePendulumTerm,
+    ForwardTerm,
     GymEpisodes,
     GymParams,
     MjView,
+    PendulumTerm,
+    PusherTerm,
+    ReacherTerm,
+    StandupTerm,
 )
 
 wp.set_module_options({"enable_backward": False})
@@ -211,14 +217,8 @@ def sum_squares(a: wp.array2d[float], w: int):
 
 @wp.kernel
 def gym_step(p: GymParams, d: MjView, ep: GymEpisodes, out: StepOutputs):
-    """Observation, reward, reward terms, termination and episode statistics after a step's physics.
-
-    Terms (``ep.terms``) by kind, in this column order:
-      FORWARD: reward_forward, reward_ctrl, reward_survive, reward_contact, x_velocity, y_velocity, x_position
-      STANDUP: reward_linup, reward_quadctrl, reward_impact, x_position, y_position
-      PENDULUM: reward_survive; DOUBLE_PENDULUM: reward_survive, distance_penalty, velocity_penalty
-      REACHER: reward_dist, reward_ctrl; PUSHER: reward_dist, reward_ctrl, reward_near
-    """
+    """Observation, reward, reward terms (``ep.terms``, each at its column of the kind's ``TERMS``),
+    termination and episode statistics after a step's physics."""
     w = wp.tid()
     write_observation(p, d, w, 0, out.obs)
     ctrl_cost = p.ctrl_cost_weight * sum_squares(ep.actions, w)
@@ -239,29 +239,29 @@ def gym_step(p: GymParams, d: MjView, ep: GymEpisodes, out: StepOutputs):
         reward_forward = p.forward_reward_weight * velocity[0]
         reward = reward_forward + survive - ctrl_cost - contact
         terminated = (not healthy) and p.terminate_when_unhealthy != 0
-        ep.terms[w, 0] = reward_forward
-        ep.terms[w, 1] = -ctrl_cost
-        ep.terms[w, 2] = survive
-        ep.terms[w, 3] = -contact
-        ep.terms[w, 4] = velocity[0]
-        ep.terms[w, 5] = velocity[1]
-        ep.terms[w, 6] = d.qpos[w, 0]
+        ep.terms[w, ForwardTerm.reward_forward] = reward_forward
+        ep.terms[w, ForwardTerm.reward_ctrl] = -ctrl_cost
+        ep.terms[w, ForwardTerm.reward_survive] = survive
+        ep.terms[w, ForwardTerm.reward_contact] = -contact
+        ep.terms[w, ForwardTerm.x_velocity] = velocity[0]
+        ep.terms[w, ForwardTerm.y_velocity] = velocity[1]
+        ep.terms[w, ForwardTerm.x_position] = d.qpos[w, 0]
     elif p.kind == STANDUP:
         linup = d.qpos[w, 2] / p.timestep  # Gymnasium divides by MuJoCo's timestep, not the env's dt
         impact = contact_cost(p, d, w)
         reward = linup - ctrl_cost - impact + 1.0
-        ep.terms[w, 0] = linup
-        ep.terms[w, 1] = -ctrl_cost
-        ep.terms[w, 2] = -impact
-        ep.terms[w, 3] = d.qpos[w, 0]
-        ep.terms[w, 4] = d.qpos[w, 1]
+        ep.terms[w, StandupTerm.reward_linup] = linup
+        ep.terms[w, StandupTerm.reward_quadctrl] = -ctrl_cost
+        ep.terms[w, StandupTerm.reward_impact] = -impact
+        ep.terms[w, StandupTerm.x_position] = d.qpos[w, 0]
+        ep.terms[w, StandupTerm.y_position] = d.qpos[w, 1]
     elif p.kind == PENDULUM:
         terminated = not (wp.abs(d.qpos[w, 1]) <= 0.2)
         if terminated:
             reward = 0.0
         else:
             reward = 1.0
-        ep.terms[w, 0] = reward
+        ep.terms[w, PendulumTerm.reward_survive] = reward
     elif p.kind == DOUBLE_PENDULUM:
         tip = d.site_xpos[w, 0]
         terminated = tip[2] <= 1.0
@@ -273,21 +273,21 @@ def gym_step(p: GymParams, d: MjView, ep: GymEpisodes, out: StepOutputs):
         if not terminated:
             alive = p.healthy_reward
         reward = alive - distance - velocity_penalty
-        ep.terms[w, 0] = alive
-        ep.terms[w, 1] = -distance
-        ep.terms[w, 2] = -velocity_penalty
+        ep.terms[w, DoublePendulumTerm.reward_survive] = alive
+        ep.terms[w, DoublePendulumTerm.distance_penalty] = -distance
+        ep.terms[w, DoublePendulumTerm.velocity_penalty] = -velocity_penalty
     elif p.kind == REACHER:
         dist = -wp.length(d.xpos[w, p.body_a] - d.xpos[w, p.body_b]) * p.dist_weight
         reward = dist - ctrl_cost
-        ep.terms[w, 0] = dist
-        ep.terms[w, 1] = -ctrl_cost
+        ep.terms[w, ReacherTerm.reward_dist] = dist
+        ep.terms[w, ReacherTerm.reward_ctrl] = -ctrl_cost
     elif p.kind == PUSHER:
         near = -wp.length(d.xpos[w, p.body_b] - d.xpos[w, p.body_a]) * p.near_weight
         dist = -wp.length(d.xpos[w, p.body_b] - d.xpos[w, p.body_c]) * p.dist_weight
         reward = dist - ctrl_cost + near
-        ep.terms[w, 0] = dist
-        ep.terms[w, 1] = -ctrl_cost
-        ep.terms[w, 2] = near
+        ep.terms[w, PusherTerm.reward_dist] = dist
+        ep.terms[w, PusherTerm.reward_ctrl] = -ctrl_cost
+        ep.terms[w, PusherTerm.reward_near] = near
 
     # A state that is no longer finite ends the episode with reward 0 (Gymnasium would go on
     # returning NaN); info["diverged"] flags it and the observation it ended on reads 0.

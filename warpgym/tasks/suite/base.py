@@ -16,17 +16,9 @@ from kernels.suite import params as G
 
 INF = math.inf
 
-# Each kind's reward terms, in the column order kernels.suite.step writes them.
-TERM_COLUMNS = {
-    G.FORWARD: ("reward_forward", "reward_ctrl", "reward_survive", "reward_contact", "x_velocity", "y_velocity",
-                "x_position"),
-    G.STANDUP: ("reward_linup", "reward_quadctrl", "reward_impact", "x_position", "y_position"),
-    G.PENDULUM: ("reward_survive",),
-    G.DOUBLE_PENDULUM: ("reward_survive", "distance_penalty", "velocity_penalty"),
-    G.REACHER: ("reward_dist", "reward_ctrl"),
-    G.PUSHER: ("reward_dist", "reward_ctrl", "reward_near"),
-}
-MAX_TERMS = max(len(c) for c in TERM_COLUMNS.values())
+# Each kind's reward terms in their columns' order, as kernels.suite.params names them
+TERM_COLUMNS = {kind: tuple(term.name for term in terms) for kind, terms in G.TERMS.items()}
+MAX_TERMS = G.MAX_TERMS
 
 # Fields of a task that are not Gymnasium constructor arguments
 OWN_FIELDS = ("name", "episode_length", "nconmax", "njmax")
