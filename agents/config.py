@@ -1,6 +1,7 @@
-"""Training configuration, named after the seed's ElegantRL ``Arguments`` where the idea matches.
+"""Training configuration, named after ElegantRL's ``Arguments`` (the ElegantRL tutorial this project
+started from) where the idea matches.
 
-Units: ``horizon_len`` is env steps per env per iteration (the seed's ``target_step``);
+Units: ``horizon_len`` is env steps per env per iteration (the ElegantRL tutorial's ``target_step``);
 ``batch_size`` is the mini-batch size in samples; ``repeat_times`` is the number of passes over
 each rollout; ``eval_gap`` is wall-clock seconds between evaluations; ``save_gap`` is iterations
 between checkpoints.
@@ -21,23 +22,11 @@ PRESETS: dict[str, dict[str, Any]] = {
     "Humanoid": dict(net_dims=(400, 200, 100), horizon_len=32, batch_size=32768, repeat_times=5,
                      learning_rate=5e-4, reward_scale=0.01, value_coef=2.0),
 }
-# Gymnasium's MuJoCo suite (v5): starting points, each checked alone for 30-60 s on an H100 (docs/benchmarks.md,
-# "Gymnasium's MuJoCo suite: learning"); swept so far: InvertedPendulum's and Hopper's learning-rate schedules,
-# InvertedPendulum's normaliser and entropy bonus, Reacher's entropy bonus and schedule.
-# The reward scale brings a step's reward near 0.1-1 (HumanoidStandup's is the torso height over MuJoCo's timestep:
-# about 100); Swimmer's reward is a slow drift, which a discount close to 1 sees. An evaluation (64 Ant-v5 episodes of
-# 1000 steps) took 8.7 s on an H100, 8.7 ms a step of 64 worlds where a step of 4096 training worlds took 14.5 ms: bound
-# by MuJoCo Warp's kernel launches more than by work. Every 30 s of wall-clock the evaluations took 28 % of a 550-s
-# Ant-v5 run; every 60 s, 14 % of the learning table's 10-minute Ant-v5 runs (16 % of Humanoid-v5's, 8 % of Hopper's).
+# Gymnasium's MuJoCo suite (v5): why each setting, and what it scored: docs/benchmarks.md, "Presets"
 _SUITE = dict(net_dims=(256, 128, 64), horizon_len=32, batch_size=32768, repeat_times=5, learning_rate=3e-4,
               reward_scale=0.1, eval_gap=60.0)
 PRESETS.update({
-    # no observation normaliser: the cart's position is an input, and its running mean follows the cart. In the
-    # table's falling seed that mean went from 0.03 at 1 minute to 0.46 at 3 (the rail ends at 1); the 3-minute
-    # weights, scoring 91, hold 1000 with the 1-minute statistics, and the 1-minute weights fall with the 3-minute
-    # ones (`warpgym eval --normalizer-from`). Without the normaliser 4 seeds of 4 held 1000 after 180 s, with it
-    # 2 of 4, with an entropy bonus 2 of 4 (docs/benchmarks.md, InvertedPendulum-v5); the table's two seeds then
-    # held 1000 at 3 minutes, one of them down to 143 at 2. Annealed, as before.
+    # no observation normaliser: the cart's position is an input whose running mean follows the cart ("Presets")
     "InvertedPendulum-v5": dict(_SUITE, net_dims=(64, 64), horizon_len=32, batch_size=4096, anneal_lr=True,
                                 normalize_obs=False),
     "InvertedDoublePendulum-v5": dict(_SUITE, reward_scale=0.01),
@@ -45,11 +34,7 @@ PRESETS.update({
     "Pusher-v5": dict(_SUITE, reward_scale=1.0),
     "Swimmer-v5": dict(_SUITE, reward_scale=1.0, gamma=0.9999),
     "HalfCheetah-v5": _SUITE,
-    # annealed: with the KL-adapted rate the table's runs passed 3542 by 2.3 minutes and fell back to 2200 by 10, the
-    # noise collapsing as InvertedPendulum's did; annealed, a sweep's 8-minute run scored 3135 against the preset's 2284
-    # (one seed, 30 episodes each; an entropy bonus kept the noise but scored 1951-2149), and the table's two seeds
-    # 3641 and 1728 at 10 minutes. The second traded staying up for speed, which a discount of 0.99 rewards: 0.999 is
-    # the next sweep (docs/benchmarks.md)
+    # annealed: under the KL-adapted rate the noise collapsed and the return fell back ("Presets")
     "Hopper-v5": dict(_SUITE, anneal_lr=True),
     "Walker2d-v5": _SUITE,
     "Ant-v5": _SUITE,
@@ -65,6 +50,7 @@ def _is_number(v) -> bool:
 
 @dataclass
 class Config:
+    # mirrors ElegantRL's ``Arguments.agent`` for the tutorial's workflow; PPO is the one agent here
     agent: str = "AgentPPO"
     env_class: Callable | None = None  # builds the training env from env_args
     env_args: dict = field(default_factory=dict)

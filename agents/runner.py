@@ -54,7 +54,7 @@ class OnPolicyRunner:
         self.normalizer = RunningMeanStd(spec.num_obs, cfg.obs_clip, until=cfg.normalize_until).to(self.device)
         # every process starts from rank 0's weights, then explores with its own noise
         self.workers.broadcast_(list(self.policy.parameters()) + list(self.normalizer.buffers()))
-        torch.manual_seed(cfg.seed + 7919 * self.workers.rank)
+        torch.manual_seed(self.rank_seed(0))
         self.ppo = PPO(self.policy, cfg, self.device, cuda_graph=cuda_graph, workers=self.workers)
         self.storage = RolloutStorage(cfg.horizon_len, spec.num_envs, spec.num_obs, spec.num_actions, self.device)
         self.episodes = EpisodeTracker(cfg.horizon_len, spec.num_envs, self.device)
@@ -93,6 +93,13 @@ class OnPolicyRunner:
         self._logged_through = 0  # the last iteration whose row is logged: only such a state is saved on an error
 
     # ------------------------------------------------------------------ pieces
+
+    def rank_seed(self, iteration: int) -> int:
+        """Each process's torch seed: its own per rank, and new at a resume's iteration so that a resumed worker
+        does not replay the noise it drew at the start. The multipliers are primes, so that no rank and
+        iteration of one run land on another's seed."""
+        return self.cfg.seed + 7919 * self.workers.rank + 104729 * iteration
+
     def normalize(self, obs: torch.Tensor) -> torch.Tensor:
         return self.normalizer(obs) if self.cfg.normalize_obs else obs
 
@@ -374,7 +381,7 @@ class OnPolicyRunner:
             self.start_time = time.time()
             set_rng_state(ckpt["rng"], self.device)
             if not self.workers.is_main:
-                torch.manual_seed(self.cfg.seed + 7919 * self.workers.rank + 104729 * self.iteration)
+                torch.manual_seed(self.rank_seed(self.iteration))
             if self.logger:
                 self.logger.drop_rows_after(self.iteration, self.samples)
 

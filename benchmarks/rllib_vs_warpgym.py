@@ -18,8 +18,8 @@ For each task and GPU count G, one run of each learner, one after another:
 Both take the same settings as far as each exposes them: the network (the task's), steps per env
 between updates, minibatch size, epochs and learning rate. ``--hparams preset`` uses warpgym's task
 preset for both (Ant: 16 steps, 32768-sample minibatches, 4 epochs, 3e-4; Humanoid: 32, 32768, 5, 5e-4);
-``--hparams seed`` the seed's stated numbers, a minibatch of 1024 samples and a learning rate of 0.001,
-with the preset's steps and epochs (the seed's "replay buffer of 4096" is read as 4096 envs per GPU).
+``--hparams seed`` the ElegantRL tutorial's stated numbers, a minibatch of 1024 samples and a learning rate of 0.001,
+with the preset's steps and epochs (the tutorial's "replay buffer of 4096" is read as 4096 envs per GPU).
 
 During each run the GPUs' utilisation (nvidia-smi) and the machine's CPU use (/proc/stat) are sampled
 every 2 s. Writes OUT/comparison.json (after every run) and OUT/<task>_rllib_vs_warpgym_reward_vs_*.png

@@ -1,4 +1,4 @@
-"""The seed's ElegantRL flow: ElegantRL 0.3.6's own ``AgentPPO`` and ``train_agent`` train warpgym's
+"""The ElegantRL tutorial's flow: ElegantRL 0.3.6's own ``AgentPPO`` and ``train_agent`` train warpgym's
 ``IsaacVecEnv`` on the CPU, given ``env_args`` with ``num_envs`` (the key 0.3.6 reads; older releases
 read ``env_num``, which warpgym's adapter takes). ``pip install elegantrl==0.3.6`` does not install on
 Python 3.11 (its ``gym`` dependency pins box2d-py 2.3.5 and pygame 2.1.0, which have no wheels there

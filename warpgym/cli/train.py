@@ -322,7 +322,7 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
         cfg.check_batch(cfg.env_args["num_envs"], processes)
     except ValueError as e:  # the flags checked together, once the task and the device are known: one line, status 2
         train_args.parser().error(with_flag_names(str(e)))
-    if rank > 0:  # each process draws its own reset noise; rank 0 alone logs, evaluates and saves
+    if rank > 0:  # rank r's envs draw their own resets (seed + 1000 r); rank 0 alone logs, evaluates and saves
         cfg = cfg.replace(env_args={**cfg.env_args, "seed": cfg.env_args["seed"] + 1000 * rank})
         args.no_eval = True
     if args.max_iterations is None and args.total_steps is None and args.time_limit is None:

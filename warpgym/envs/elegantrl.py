@@ -1,4 +1,4 @@
-"""The seed's ElegantRL-style pair, ``IsaacVecEnv`` / ``IsaacOneEnv``, as thin adapters.
+"""The ElegantRL tutorial's pair, ``IsaacVecEnv`` / ``IsaacOneEnv``, as thin adapters.
 
     env_args = {"env_num": 4096, "env_name": "Ant", "max_step": 1000, "state_dim": 60,
                 "action_dim": 8, "if_discrete": False, "target_return": 14000.0, "device_id": 0}
@@ -52,7 +52,7 @@ class IsaacVecEnv:
 
 
 class IsaacOneEnv(IsaacVecEnv):
-    """One env, numpy in and out: the seed's evaluation env (``env_num`` is 1)."""
+    """One env, numpy in and out: the ElegantRL tutorial's evaluation env (``env_num`` is 1)."""
 
     def __init__(self, env_name: str = "Ant", device_id: int | None = None, env_num: int = 1, **kwargs):
         if env_num != 1:
@@ -71,7 +71,7 @@ class IsaacOneEnv(IsaacVecEnv):
 
 
 def build_env(env_class, env_args: dict):
-    """Call ``env_class`` with the ``env_args`` it accepts (the seed's ``build_env``)."""
+    """Call ``env_class`` with the ``env_args`` it accepts (the ElegantRL tutorial's ``build_env``)."""
     import inspect  # noqa: PLC0415
 
     params = inspect.signature(env_class).parameters
