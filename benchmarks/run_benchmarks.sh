@@ -6,7 +6,7 @@
 #            GPU checks, Ant and Humanoid at 4096 envs
 #   default  also the env-step table at 1024-16384 envs, profiles and the Ant scaling runs (~30 min)
 #   COLD=0   skip the cold start and the --no-mathdx env step, and keep Warp's own kernel cache
-#            (warm after any earlier run; benchmarks/cold_start.py measures cold starts in full)
+#            (warm after any earlier run; benchmarks/speed/cold_start.py measures cold starts in full)
 set -uo pipefail
 out=${1:?usage: benchmarks/run_benchmarks.sh OUT_DIR}
 mkdir -p "$out"

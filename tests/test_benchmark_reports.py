@@ -1,4 +1,4 @@
-"""benchmarks/rllib_vs_warpgym.py --report: the rows of several earlier runs in one table."""
+"""benchmarks/multi_gpu/rllib_vs_warpgym.py --report: the rows of several earlier runs in one table."""
 
 import json
 import os
@@ -7,8 +7,7 @@ import sys
 
 import pytest
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "benchmarks"))
-import rllib_vs_warpgym as cmp  # noqa: E402
+from benchmarks.multi_gpu import rllib_vs_warpgym as cmp
 
 COMMON = {"device": "NVIDIA H200", "num_envs": 4096, "seconds": 180.0, "hparams": "preset", "settings": {"Ant": {}}}
 
@@ -48,7 +47,7 @@ def test_runs_made_differently_are_refused_by_name(tmp_path):
 
 
 def test_suite_learning_report_merges_runs_made_alike_and_refuses_others(tmp_path, capsys):
-    import suite_learning as sl
+    from benchmarks.learning import suite_learning as sl
 
     def doc(folder, task, seed, scale=1.0, gpu="NVIDIA H100 80GB HBM3", hit=True, **capture):
         os.makedirs(folder, exist_ok=True)
@@ -93,7 +92,7 @@ def test_suite_learning_report_merges_runs_made_alike_and_refuses_others(tmp_pat
 def test_suite_learning_reads_minutes_to_the_reference_from_the_runs_evaluations():
     """A run keeps its evaluations, so the table's minutes follow REFERENCE as it stands now, not the figure
     (here a rounded 9360 that no policy can reach) the run was made with."""
-    import suite_learning as sl
+    from benchmarks.learning import suite_learning as sl
 
     evals = [{"time_s": 77.0, "samples": 1e7, "eval/return": 9068.7},
              {"time_s": 137.0, "samples": 5e7, "eval/return": 9359.8}]
@@ -113,7 +112,7 @@ def test_suite_learning_reads_minutes_to_the_reference_from_the_runs_evaluations
 def test_suite_learning_scores_a_policy_below_the_goal_again_on_more_episodes_and_nudged_starts(monkeypatch, tmp_path):
     """Below 0.95 on 30 episodes a policy is played again on 100 (seeds 0-9) with the nudge; the table shows that
     result. A run scored before that rule is rescored only where it fell below."""
-    import suite_learning as sl
+    from benchmarks.learning import suite_learning as sl
 
     from warpgym.cli import eval as eval_command
 
@@ -154,7 +153,7 @@ def test_suite_learning_scores_a_policy_below_the_goal_again_on_more_episodes_an
 def test_suite_learning_gives_each_gpus_process_the_arguments_less_the_spread():
     """--gpus N starts one process per seed: each gets every argument but --gpus and --seeds (its own seed is
     added), whichever form they were written in."""
-    import suite_learning as sl
+    from benchmarks.learning import suite_learning as sl
 
     argv = ["--out", "O", "--seeds", "0", "1", "--tasks", "Ant-v5", "Hopper-v5", "--gpus=2", "--no-score"]
     assert sl.without(argv, ("--gpus", "--seeds")) == ["--out", "O", "--tasks", "Ant-v5", "Hopper-v5", "--no-score"]
@@ -164,7 +163,7 @@ def test_suite_learning_gives_each_gpus_process_the_arguments_less_the_spread():
 def test_suite_learning_report_sets_sb3_beside_warpgym_and_draws_both(tmp_path, capsys):
     """SB3's runs (suite_sb3.py's JSON) get their own table, with no Gymnasium / warpgym ratio, and
     their curves join warpgym's in both figures."""
-    import suite_learning as sl
+    from benchmarks.learning import suite_learning as sl
 
     marks = list(sl.MARKS["long"])
 
@@ -198,7 +197,7 @@ def test_suite_learning_report_sets_sb3_beside_warpgym_and_draws_both(tmp_path, 
 
 
 def test_suite_sb3_takes_the_zoos_hyperparameters_as_sb3_does():
-    import suite_sb3 as sb
+    from benchmarks.learning import suite_sb3 as sb
     import torch
 
     kw, n_envs = sb.hyperparameters("HalfCheetah-v5")
@@ -211,7 +210,7 @@ def test_suite_sb3_takes_the_zoos_hyperparameters_as_sb3_does():
 
 
 def test_suite_sweep_ranks_combinations_by_their_return_in_gymnasiums_env():
-    import suite_sweep as sw
+    from benchmarks.learning import suite_sweep as sw
 
     assert sw.parse_grid(["gamma=0.99,0.995", "net_dims=256x128,64x64"]) == {
         "gamma": ["0.99", "0.995"], "net_dims": ["256,128", "64,64"]}
@@ -254,7 +253,7 @@ def test_suite_sweep_spreads_settings_and_seeds_over_gpus_and_joins_them(monkeyp
     import argparse
     import threading
 
-    import suite_sweep as sw
+    from benchmarks.learning import suite_sweep as sw
 
     calls = []
     both_running = threading.Barrier(2, timeout=20)  # the first two children run at once, or the test fails
@@ -281,19 +280,19 @@ def test_suite_sweep_spreads_settings_and_seeds_over_gpus_and_joins_them(monkeyp
             json.dump({"meta": meta, "rows": [{"combo": combo, "label": f"net_dims={combo['net_dims']}",
                                                "runs": [run], "gymnasium_return": value}]}, f)
 
-    import suite_learning as sl
+    from benchmarks.harness import gpu_slot
 
     cores = sorted(os.sched_getaffinity(0))
-    with pytest.raises(SystemExit, match=f"--gpus {len(cores) + 1}: more GPUs than the {len(cores)} cores"):
-        sl.gpu_slot(0, len(cores) + 1)
+    with pytest.raises(SystemExit, match=f"{len(cores) + 1} GPUs but only {len(cores)} cores"):
+        gpu_slot(0, len(cores) + 1)
     monkeypatch.delenv("CUDA_VISIBLE_DEVICES", raising=False)
-    slot = sl.gpu_slot(len(cores) - 1, len(cores))  # the last GPU gets the last core
+    slot = gpu_slot(len(cores) - 1, len(cores))  # the last GPU gets the last core
     assert slot["env"]["CUDA_VISIBLE_DEVICES"] == str(len(cores) - 1)
     # within the GPUs this process was given: its second is the host's GPU 3
     monkeypatch.setenv("CUDA_VISIBLE_DEVICES", "2, 3")
-    assert sl.gpu_slot(1, 2)["env"]["CUDA_VISIBLE_DEVICES"] == "3"
-    with pytest.raises(SystemExit, match="--gpus 3: CUDA_VISIBLE_DEVICES=2,3 gives this process 2; name more"):
-        sl.gpu_slot(0, 3)
+    assert gpu_slot(1, 2)["env"]["CUDA_VISIBLE_DEVICES"] == "3"
+    with pytest.raises(SystemExit, match="3 GPUs asked for, but CUDA_VISIBLE_DEVICES=2,3 gives this process 2"):
+        gpu_slot(0, 3)
     monkeypatch.delenv("CUDA_VISIBLE_DEVICES")
     monkeypatch.setattr(sw.subprocess, "run", fake_child)
     args = argparse.Namespace(gpus=2, seeds=[0, 1], out=str(tmp_path), task="InvertedPendulum-v5")
@@ -320,7 +319,7 @@ def test_suite_sweep_spreads_settings_and_seeds_over_gpus_and_joins_them(monkeyp
 def test_suite_sweep_scores_its_policies_again_and_keeps_the_first_score(monkeypatch, tmp_path):
     """``--score``: each final policy played again with the scoring asked for, from its folder beside the JSON
     (not the path the GPU machine wrote); the row's mean follows; the earlier score stays beside the new."""
-    import suite_sweep as sw
+    from benchmarks.learning import suite_sweep as sw
 
     from warpgym.cli import eval as eval_command
 
@@ -361,7 +360,7 @@ def test_suite_sweep_scores_its_policies_again_and_keeps_the_first_score(monkeyp
 
 
 def test_rollout_capture_reports_medians_of_the_rounds_against_the_whole_rollouts_graph():
-    import rollout_capture as rc
+    from benchmarks.speed import rollout_capture as rc
 
     def run(ready, sps):
         return {"ready_s": ready, "samples_per_s": sps, "iterations": 100}
@@ -377,9 +376,9 @@ def test_rollout_capture_reports_medians_of_the_rounds_against_the_whole_rollout
 
 
 def test_suite_versions_plays_each_runs_last_policy_in_v4_and_names_the_term_that_moved(monkeypatch, tmp_path):
-    """benchmarks/suite_versions.py: the last kept policy of each run of a task that plays in v4 (Ant's runs
+    """benchmarks/learning/suite_versions.py: the last kept policy of each run of a task that plays in v4 (Ant's runs
     left out), by ``warpgym eval --env-version 4``; the table's means over seeds and the term that moved most."""
-    import suite_versions as sv
+    from benchmarks.learning import suite_versions as sv
 
     from warpgym.cli import eval as eval_command
 
@@ -414,7 +413,7 @@ def test_suite_versions_plays_each_runs_last_policy_in_v4_and_names_the_term_tha
 def test_suite_versions_plays_again_only_what_changed(monkeypatch, tmp_path):
     """A policy's .v4.json from an earlier run is read, not played again, where it is newer than the checkpoint
     and played the same episodes from the same reset seeds; a newer checkpoint or other episodes play anew."""
-    import suite_versions as sv
+    from benchmarks.learning import suite_versions as sv
 
     from warpgym.cli import eval as eval_command
 
@@ -450,8 +449,8 @@ def test_the_published_suite_tables_are_what_their_scripts_print_from_the_commit
     """docs/benchmarks.md's learning table (warpgym's and SB3's) and its v4-beside-v5 table, row for row, as
     ``suite_learning.py --report`` and ``suite_versions.py --report`` print them from docs/bench: a row whose JSON
     changed without the page (or the other way round) fails here."""
-    import suite_learning as sl
-    import suite_versions as sv
+    from benchmarks.learning import suite_learning as sl
+    from benchmarks.learning import suite_versions as sv
 
     root = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
     with open(os.path.join(root, "docs", "benchmarks.md")) as f:
@@ -475,8 +474,7 @@ def test_the_published_multi_gpu_table_is_what_scaling_prints_from_the_committed
     --report`` prints it from the runs' metrics committed in docs/bench/multi_gpu (read again, not from the JSON's
     numbers): a number changed on the page or in the reading of the runs fails here."""
     root = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
-    sys.path.insert(0, os.path.join(root, "benchmarks", "multi_gpu"))
-    import scaling
+    from benchmarks.multi_gpu import scaling
 
     shutil.copytree(os.path.join(root, "docs", "bench", "multi_gpu"), tmp_path / "mg")
     assert scaling.main(["--report", str(tmp_path / "mg")]) == 0

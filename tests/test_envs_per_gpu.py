@@ -1,12 +1,11 @@
-"""benchmarks/envs_per_gpu.py: its mini-batch shaping and how it reads time to target over seeds."""
+"""benchmarks/speed/envs_per_gpu.py: its mini-batch shaping and how it reads time to target over seeds."""
 
 import os
 import sys
 
 import pytest
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "benchmarks"))
-import envs_per_gpu as epg  # noqa: E402
+from benchmarks.speed import envs_per_gpu as epg
 
 
 def run(n, seed, three=None, eight=None):
@@ -65,7 +64,7 @@ def test_the_mini_batch_keeps_its_size_unless_scaled_with_the_envs(envs, scale, 
 
 
 def test_the_overlap_benchmark_reads_ratios_phases_and_time_to_target_per_mode():
-    import overlap
+    from benchmarks.speed import overlap
 
     def run(mode, seed, three, eight):
         hit = {"3.0": three and {"time_s": three, "samples": 1}, "8.0": eight and {"time_s": eight, "samples": 1}}
@@ -130,7 +129,7 @@ def test_the_overlap_benchmark_times_no_mode_from_a_run_too_short_to_time_it():
     (on an H100, 3 iterations in 40 s read 0.08 M samples/s), and must not enter the table as a rate."""
     import argparse
 
-    import overlap
+    from benchmarks.speed import overlap
 
     def run(iterations):
         return {"summary": {"iterations": iterations, "steady_samples_per_s_median": 8e4,

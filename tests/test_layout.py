@@ -87,3 +87,23 @@ def test_every_task_of_the_registry_is_a_gymnasium_id_with_its_entry_points():
         assert (spec.entry_point, spec.vector_entry_point) == (entry.single_entry_point, entry.vector_entry_point)
         assert spec.max_episode_steps == entry.episode_length and spec.kwargs["task"] == name
         assert task_entry(name.lower()) is entry
+
+
+def test_benchmarks_are_a_package_in_folders_by_what_they_measure_and_edit_no_import_path():
+    """Each harness sits in the folder of what it measures and runs as ``python -m benchmarks.GROUP.NAME``: no
+    script reaches for its neighbours through sys.path."""
+    groups = {"speed", "learning", "multi_gpu", "physics", "reliability"}
+    top = os.path.join(ROOT, "benchmarks")
+    loose = sorted(n for n in os.listdir(top) if n.endswith(".py"))
+    assert loose == ["__init__.py", "harness.py", "targets.py"], loose
+    folders = {n for n in os.listdir(top) if os.path.isdir(os.path.join(top, n)) and n != "__pycache__"}
+    assert folders == groups, folders
+    for group in groups:
+        assert os.path.isfile(os.path.join(top, group, "__init__.py")), group
+    edits = []
+    for folder, _, files in os.walk(top):
+        for name in files:
+            if name.endswith(".py"):
+                text = open(os.path.join(folder, name)).read()
+                edits += [os.path.relpath(os.path.join(folder, name), ROOT)] if "sys.path" in text else []
+    assert not edits, edits

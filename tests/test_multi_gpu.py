@@ -15,10 +15,9 @@ from agents.logger import time_to_target
 from point_mass import PointMassVecEnv
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, os.path.join(ROOT, "benchmarks", "multi_gpu"))
 
-import gpu_jobs  # noqa: E402
-import scaling  # noqa: E402
+from benchmarks.multi_gpu import gpu_jobs
+from benchmarks.multi_gpu import scaling
 
 
 @pytest.mark.parametrize(("mode", "envs", "steps", "samples_per_step"), [
@@ -162,6 +161,6 @@ def test_the_benchmark_names_a_wrong_flag_before_it_starts_anything():
     for flags, says in ((["--gpus", "0", "2"], "--gpus 0 2: each is a number of GPUs, 1 or more"),
                         (["--targets", "eval/speed"], "--targets 'eval/speed': write KEY=V1,V2"),
                         (["--task", "Hopper"], "--task Hopper: choose one of Ant, Humanoid")):
-        done = subprocess.run([sys.executable, os.path.join(ROOT, "benchmarks", "multi_gpu", "scaling.py"), "--out",
-                               "/nowhere", *flags], capture_output=True, text=True, timeout=120)
+        done = subprocess.run([sys.executable, "-m", "benchmarks.multi_gpu.scaling", "--out", "/nowhere", *flags],
+                              cwd=ROOT, capture_output=True, text=True, timeout=120)
         assert done.returncode == 2 and says in done.stderr, done.stderr[-2000:]

@@ -107,7 +107,7 @@ def test_a_gait_trained_on_the_default_physics_keeps_its_speed_at_a_finer_step(t
     trained_on_default = [n for n in policies if trained_with(n) == (task.substeps, task.physics)]
     assert trained_on_default, (
         f"no committed policy was trained with the {task_name}'s default ({task.substeps} substeps, {task.physics}): "
-        "train one with benchmarks/fidelity.py and commit it to tests/data")
+        "train one with benchmarks/physics/fidelity.py and commit it to tests/data")
     for name in trained_on_default:
         coarse = replay(name, task.substeps, task=task_name)
         fine = replay(name, 4 * task.substeps, task=task_name)
@@ -138,10 +138,7 @@ def test_a_policy_recorded_before_a_physics_setting_existed_replays_without_it()
 
 
 def test_step_sensitivity_names_a_bad_setting():
-    import sys
-
-    sys.path.insert(0, os.path.join(os.path.dirname(DATA), "..", "benchmarks"))
-    from step_sensitivity import parse_setting
+    from benchmarks.physics.step_sensitivity import parse_setting
 
     assert parse_setting("substeps=10,damping[hip_z|ankle]=0.8") == {
         "label": "substeps=10,damping[hip_z|ankle]=0.8", "substeps": 10, "damping": [(("hip_z", "ankle"), 0.8)]}
@@ -156,10 +153,7 @@ def test_step_sensitivity_names_a_bad_setting():
 def test_the_seed1_humanoid_gait_leans_on_joint_damping_and_no_constraint_pays_energy_in():
     """docs/tasks.md: the 5x4 seed-1 policy runs at its own step and falls with 30 % more damping on the
     abdomen and hip flexion joints; the motors put energy in, contacts and joint limits take it out."""
-    import sys
-
-    sys.path.insert(0, os.path.join(os.path.dirname(DATA), "..", "benchmarks"))
-    from step_sensitivity import parse_setting, replay as native_replay
+    from benchmarks.physics.step_sensitivity import parse_setting, replay as native_replay
     from agents.checkpoint import load
     from warpgym.tasks import trained_task
 
@@ -178,10 +172,7 @@ def test_the_humanoids_step_pays_its_seed1_gait_energy_and_the_ants_pays_none():
     the work of every force. The 5x4 seed-1 sprint takes energy from implicitfast's explicit treatment of
     the velocity-product forces at its own step, a quarter as much at 4x finer; the Ant's default gait
     takes none, which also checks the bookkeeping (a missed force would show up there)."""
-    import sys
-
-    sys.path.insert(0, os.path.join(os.path.dirname(DATA), "..", "benchmarks"))
-    from step_sensitivity import parse_setting, replay as native_replay
+    from benchmarks.physics.step_sensitivity import parse_setting, replay as native_replay
     from agents.checkpoint import load
     from warpgym.tasks import trained_task
 
@@ -200,10 +191,7 @@ def test_the_humanoids_step_pays_its_seed1_gait_energy_and_the_ants_pays_none():
 
 
 def test_matched_damping_is_the_identity_at_its_own_step_and_lighter_at_a_finer_one():
-    import sys
-
-    sys.path.insert(0, os.path.join(os.path.dirname(DATA), "..", "benchmarks"))
-    from step_sensitivity import match_damping
+    from benchmarks.physics.step_sensitivity import match_damping
     from warpgym.native import NativeRobot
 
     same, finer = NativeRobot("Humanoid", substeps=5), NativeRobot("Humanoid", substeps=10)

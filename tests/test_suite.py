@@ -26,7 +26,7 @@ NAMES = list(SUITE)
 # Largest relative step differences allowed (|warpgym - Gymnasium| / (1 + |Gymnasium|)): float32
 # against float64 over one env step (2-5 physics steps). HalfCheetah's joint speeds differ most: a
 # contact that starts within float32's reach of the margin in one of its five Euler steps gave 3.5e-4
-# in 1 of 128 states (benchmarks/conformance.py); every other task stays below 8e-5. The humanoids
+# in 1 of 128 states (benchmarks/physics/conformance.py); every other task stays below 8e-5. The humanoids
 # solve their contacts with Newton's method where the file asks for PGS (docs/tasks.md): the contact
 # forces in their observation (its last 78 entries) differ by up to 5e-3 of (1 + force) lying down.
 OBS_TOL = 2e-4
@@ -133,7 +133,7 @@ def test_the_pendulum_observation_term_is_checked():
 @pytest.mark.parametrize("name", NAMES)
 def test_random_action_episodes_have_gymnasiums_distribution(name):
     """Two-sample Kolmogorov-Smirnov tests of return and length over 32 uniform-random-action
-    episodes each, cut at 120 steps on both sides (the full episodes: benchmarks/conformance.py)."""
+    episodes each, cut at 120 steps on both sides (the full episodes: benchmarks/physics/conformance.py)."""
     task = SUITE[name].replace(episode_length=min(SUITE[name].episode_length, 120))
     returns, lengths = gymnasium_episodes(task, 32, seed=0)
     mine_r, mine_l = warpgym_episodes(SuiteVecEnv(task, num_envs=32, device=DEVICE, seed=0), seed=0)

@@ -122,8 +122,7 @@ def test_play_prints_one_forward_speed_per_thing_measured_and_they_agree(tmp_pat
 
 
 def test_fidelity_replays_a_probe_in_four_settings_and_reports_it(tmp_path, capsys):
-    sys.path.insert(0, os.path.join(ROOT, "benchmarks"))
-    import fidelity
+    from benchmarks.physics import fidelity
 
     flying = os.path.join(ROOT, "tests", "data", "ant_flying_policy.pt")
     out = str(tmp_path / "fid")
@@ -147,7 +146,7 @@ def test_fidelity_replays_a_probe_in_four_settings_and_reports_it(tmp_path, caps
 
 
 def test_every_task_has_defaults_and_the_gpu_default_trains_as_it_was_measured():
-    """The GPU default envs were picked by benchmarks/envs_per_gpu.py, which trains with the preset's
+    """The GPU default envs were picked by benchmarks/speed/envs_per_gpu.py, which trains with the preset's
     mini-batch: a default whose rollout does not split into that mini-batch would train differently."""
     from agents.config import PRESETS, Config
     from warpgym.tasks.registry import task_names

@@ -1,4 +1,4 @@
-"""Config.compile_update and benchmarks/update_speed.py: the compiled PPO loss learns what the eager one
+"""Config.compile_update and benchmarks/speed/update_speed.py: the compiled PPO loss learns what the eager one
 does, and the benchmark times the learner at the sizes of the real envs."""
 
 from __future__ import annotations
@@ -15,8 +15,7 @@ from agents.config import Config
 from agents.ppo import PPO, compiled
 from agents.storage import RolloutStorage
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(__file__)), "benchmarks"))
-import update_speed  # noqa: E402
+from benchmarks.speed import update_speed
 
 
 def learn(compile_update: bool, lagged: bool = False):

@@ -182,7 +182,7 @@ class NativeRobot:
         # (K,) bool: some foot had a contact with the ground in some substep of the last step()
         self.feet_touched = np.zeros(copies, bool)
         # called after every substep of step() as on_substep(copy, data, qvel before the substep), for
-        # measurements that need each substep (benchmarks/step_sensitivity.py: the power of each force)
+        # measurements that need each substep (benchmarks/physics/step_sensitivity.py: the power of each force)
         self.on_substep = None
 
     # ------------------------------------------------------------------ state

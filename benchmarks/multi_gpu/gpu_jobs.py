@@ -16,6 +16,8 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
+from benchmarks.harness import core_shares, visible_gpus
+
 # NVLink multicast stays off in every child, also where a job is given an environment of its own
 # (the lending host's rule: a program that uses it can take the host's GPUs out of service)
 NO_MULTICAST = {"NCCL_NVLS_ENABLE": "0", "TORCH_SYMM_MEM_DISABLE_MULTICAST": "1", "NVSHMEM_DISABLE_NVLS": "1"}
@@ -31,24 +33,6 @@ class Job:
     env: dict = field(default_factory=dict)
 
 
-def host_gpus(count: int) -> list[str]:
-    """The ``count`` GPU ids this process may hand out."""
-    visible = [d.strip() for d in os.environ.get("CUDA_VISIBLE_DEVICES", "").split(",") if d.strip()]
-    if visible and len(visible) < count:
-        raise SystemExit(f"{count} GPUs asked for, but CUDA_VISIBLE_DEVICES={','.join(visible)} gives this process "
-                         f"{len(visible)}: name more there or ask for fewer")
-    return visible[:count] if visible else [str(k) for k in range(count)]
-
-
-def core_shares(gpus: int, cores: list[int] | None = None) -> list[list[int]]:
-    """Each GPU's equal share of the cores this process may use."""
-    cores = sorted(cores if cores is not None else os.sched_getaffinity(0))
-    share = len(cores) // gpus
-    if share < 1:
-        raise SystemExit(f"{gpus} GPUs but only {len(cores)} cores for them: use fewer GPUs or more cores")
-    return [cores[k * share:(k + 1) * share] for k in range(gpus)]
-
-
 def run_jobs(jobs: list[Job], gpus: int, on_done: Callable[[Job, int], None] | None = None,
              say: Callable[[str], None] = print, poll: float = 0.5, cores: list[int] | None = None) -> dict[str, int]:
     """Run ``jobs`` on ``gpus`` GPUs as described above; ``on_done(job, returncode)`` as each ends. Returns
@@ -56,7 +40,7 @@ def run_jobs(jobs: list[Job], gpus: int, on_done: Callable[[Job, int], None] | N
     too_big = [j.name for j in jobs if j.gpus > gpus or j.gpus < 1]
     if too_big:
         raise SystemExit(f"jobs {too_big} need more GPUs than the {gpus} given (or none)")
-    ids, shares = host_gpus(gpus), core_shares(gpus, cores)
+    ids, shares = visible_gpus(gpus), core_shares(gpus, cores)
     free = list(range(gpus))
     pending = list(jobs)
     running: list[tuple[subprocess.Popen, Job, list[int], object]] = []

@@ -1,8 +1,8 @@
 """Several GPUs on one host: how much sooner each way of dividing the work reaches a target.
 
-    python benchmarks/multi_gpu/scaling.py --out OUT --task Ant --gpus 1 2 4 --modes split grow-batch --seeds 0 1
-    python benchmarks/multi_gpu/scaling.py --out OUT --task Humanoid-v5 --gpus 1 4 --seconds 600
-    python benchmarks/multi_gpu/scaling.py --report OUT [OUT2 ...]   # the table and figures again, runs joined
+    python -m benchmarks.multi_gpu.scaling --out OUT --task Ant --gpus 1 2 4 --modes split grow-batch --seeds 0 1
+    python -m benchmarks.multi_gpu.scaling --out OUT --task Humanoid-v5 --gpus 1 4 --seconds 600
+    python -m benchmarks.multi_gpu.scaling --report OUT [OUT2 ...]   # the table and figures again, runs joined
 
 One `warpgym train` per GPU count, mode (``--multi-gpu``, agents/data_parallel.py) and seed, G GPUs under
 `torchrun --nproc_per_node=G`, with the same flags; one GPU is every mode's baseline. The jobs share the host
@@ -32,11 +32,9 @@ import sys
 import tarfile
 import time
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(os.path.dirname(HERE))
-sys.path[:0] = [ROOT, HERE]
+from benchmarks.harness import ROOT  # noqa: E402
 
-from gpu_jobs import Job, run_jobs  # noqa: E402
+from benchmarks.multi_gpu.gpu_jobs import Job, run_jobs  # noqa: E402
 
 from warpgym.cli import write_json  # noqa: E402
 
@@ -48,8 +46,7 @@ TARGETS = {"Ant": ("eval/speed", (8.0, 9.5)), "Humanoid": ("eval/speed", (6.0,))
 def default_targets(task: str) -> tuple[str, tuple[float, ...]]:
     if task in TARGETS:
         return TARGETS[task]
-    sys.path.insert(0, os.path.dirname(HERE))
-    from suite_learning import REFERENCE  # noqa: PLC0415
+    from benchmarks.learning.suite_learning import REFERENCE  # noqa: PLC0415
 
     return "eval/return", (REFERENCE[task],)
 

@@ -1,4 +1,4 @@
-"""RLlib's PPO on warpgym, for ``warpgym train-with rllib`` (and benchmarks/rllib_vs_warpgym.py).
+"""RLlib's PPO on warpgym, for ``warpgym train-with rllib`` (and benchmarks/multi_gpu/rllib_vs_warpgym.py).
 
 One GPU: one env runner in this process (``num_env_runners=0``) steps the adapter built here, and one
 learner on the same GPU; warpgym's ``EpisodeLog`` reads the episodes as for the other learners.
@@ -6,7 +6,7 @@ learner on the same GPU; warpgym's ``EpisodeLog`` reads the episodes as for the 
 Several GPUs (``--gpus G``): G env runners and G learners, each a Ray actor with half a GPU, so that
 runner i and learner i share GPU i. ``--env-runners R`` sets the runners apart from the GPUs (on one GPU
 too): R runner actors share half of the G GPUs, as RLlib users spread sampling over CPU cores, since each
-runner's loop over its episodes runs on one core (benchmarks/rllib_overhead.py). Every runner steps its
+runner's loop over its episodes runs on one core (benchmarks/multi_gpu/rllib_overhead.py). Every runner steps its
 own ``--num-envs`` robots in one warpgym vector env; the learners train one policy with torch DDP,
 all-reducing gradients every minibatch. That is RLlib's successor of DD-PPO (its old stack's decentralised PPO, where each worker sampled,
 computed gradients and all-reduced them itself): sampling and learning are now separate actors, and

@@ -4,7 +4,7 @@ Warp compiles a module in three steps: Python code generation, held under one pr
 (``_codegen_lock``); inside it, the libmathdx LTO objects that tile solvers and GEMMs link
 (cuSolverDx, cuBLASDx); then NVRTC (or Clang on the CPU), outside the lock. A record splits the
 module's wall time into those steps plus the wait for the lock, so a timeline shows whether the
-compiles ran side by side or queued behind one another. ``benchmarks/cold_start.py`` prints it.
+compiles ran side by side or queued behind one another. ``benchmarks/speed/cold_start.py`` prints it.
 
 The split comes from wrapping Warp's private build functions (``Module._run_codegen``,
 ``build._build_lto_base``, ``build.build_cuda``/``build_cpu``) of the pinned warp-lang 1.19; in a

@@ -1,5 +1,5 @@
 """warpgym's suite against Gymnasium's own envs: one step from the same states, and the distributions
-of random-action episodes. Used by tests/test_suite.py and benchmarks/conformance.py.
+of random-action episodes. Used by tests/test_suite.py and benchmarks/physics/conformance.py.
 
 "The same state" is everything Gymnasium's ``step`` reads before it simulates: qpos, qvel, the
 solver's warm start, and the position the forward speed is measured from (a body position as the

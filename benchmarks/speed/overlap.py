@@ -1,10 +1,10 @@
 """Which way of running the PPO update trains fastest? Sequential against `--overlap` (the next rollout
 collected during the update) and `--compile-update` (the loss under torch.compile), on one GPU.
 
-    python benchmarks/overlap.py --out OUT --task Ant
-    python benchmarks/overlap.py --out OUT --task Ant --modes sequential compiled
-    python benchmarks/overlap.py --out OUT --task Humanoid --seeds 0 1 2 --seconds 240
-    python benchmarks/overlap.py --out OUT --task Ant --envs 16 --batch-size 64 --throughput-seconds 20 \\
+    python -m benchmarks.speed.overlap --out OUT --task Ant
+    python -m benchmarks.speed.overlap --out OUT --task Ant --modes sequential compiled
+    python -m benchmarks.speed.overlap --out OUT --task Humanoid --seeds 0 1 2 --seconds 240
+    python -m benchmarks.speed.overlap --out OUT --task Ant --envs 16 --batch-size 64 --throughput-seconds 20 \\
         --seconds 30 --seeds 0 --device cpu                                  # a smoke run on a CPU
 
 In one script run, for one task at --envs envs (warm kernel cache: the first run fills it):
@@ -26,11 +26,8 @@ import argparse
 import os
 import sys
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, ROOT)
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-import envs_per_gpu as epg  # noqa: E402  (the runs, the bench and the JSON writes are the same)
+from benchmarks.speed import envs_per_gpu as epg  # noqa: E402  (the runs, the bench and the JSON writes are the same)
 
 MODES = {"sequential": (), "overlap": ("--overlap",), "compiled": ("--compile-update",),
          "overlap+compiled": ("--overlap", "--compile-update")}

@@ -2,7 +2,7 @@
 CUDA graphs (agents.collect): one env step's graph replayed horizon_len times ("step"), the whole
 rollout as one graph ("rollout"), or none ("off": each step launched from Python).
 
-    python benchmarks/rollout_capture.py --out OUT --tasks Ant-v5 Hopper-v5 Ant --seconds 45 --repeats 3
+    python -m benchmarks.speed.rollout_capture --out OUT --tasks Ant-v5 Hopper-v5 Ant --seconds 45 --repeats 3
 
 For each task, one warm-up run fills the kernel cache (not counted); then --repeats rounds, each running
 every mode once (the order turning each round, so that a drift of the machine falls on every mode alike).
@@ -22,8 +22,7 @@ import subprocess
 import sys
 import time
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, ROOT)
+from benchmarks.harness import ROOT  # noqa: E402
 
 MODES = ("step", "rollout", "off")
 
@@ -85,7 +84,7 @@ def main(argv=None) -> int:
 
     gpu = torch.cuda.get_device_name(0) if torch.cuda.is_available() and args.device != "cpu" else "cpu"
     doc = {"meta": {"gpu": gpu, "date": time.strftime("%Y-%m-%d"), "seconds": args.seconds,
-                    "command": " ".join(["benchmarks/rollout_capture.py"] + (argv or sys.argv[1:]))},
+                    "command": " ".join(["python -m benchmarks.speed.rollout_capture"] + (argv or sys.argv[1:]))},
            "runs": {task: {mode: [] for mode in args.modes} for task in args.tasks}}
     path = os.path.join(args.out, "rollout_capture.json")
     for task in args.tasks:

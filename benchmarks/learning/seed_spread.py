@@ -1,7 +1,7 @@
 """How much does time-to-3 m/s vary between seeds, and between two runs of one seed?
 
-    python benchmarks/seed_spread.py --out OUT                    # Ant, seeds 0 1 2, two runs each, 60 s
-    python benchmarks/seed_spread.py --report OUT/seed_spread.json
+    python -m benchmarks.learning.seed_spread --out OUT                    # Ant, seeds 0 1 2, two runs each, 60 s
+    python -m benchmarks.learning.seed_spread --report OUT/seed_spread.json
 
 Each run is ``scripts/train.py --task TASK --seed S --time-limit SECONDS`` in its own process, on a
 warm kernel cache (a throwaway first run warms it). On a GPU two runs of one seed differ: CUDA's
@@ -18,7 +18,7 @@ import statistics
 import subprocess
 import sys
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+from benchmarks.harness import ROOT  # noqa: E402
 
 
 def run(out: str, name: str, task: str, seed: int, seconds: float) -> dict:

@@ -1,9 +1,9 @@
 """Learners side by side on one machine: warpgym's PPO and each adapter (scripts/train_with.py),
 the same task, env count and wall-clock budget, one after another in one script run.
 
-    python benchmarks/learner_bench.py --out bench/learners --seconds 120                # all five
-    python benchmarks/learner_bench.py --out bench/learners --learners rl_games,sb3       # some
-    python benchmarks/learner_bench.py --report bench/learners bench/learners2 --figure docs/figures
+    python -m benchmarks.speed.learner_bench --out bench/learners --seconds 120                # all five
+    python -m benchmarks.speed.learner_bench --out bench/learners --learners rl_games,sb3       # some
+    python -m benchmarks.speed.learner_bench --report bench/learners bench/learners2 --figure docs/figures
 
 Each run writes its run directory under OUT and a row in OUT/learners.json: steady samples/s
 (``agents.logger.steady_median``: the first fifth of the iterations left out), the time and samples at which the
@@ -21,11 +21,9 @@ import subprocess
 import sys
 import time
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.dirname(HERE))
-sys.path.insert(0, HERE)
+from benchmarks.harness import ROOT  # noqa: E402
 
-from targets import WALKING, walking_row  # noqa: E402
+from benchmarks.targets import WALKING, walking_row  # noqa: E402
 
 ALL = ("warpgym", "rsl_rl", "skrl", "rl_games", "sb3")
 
@@ -34,8 +32,8 @@ def command(learner: str, task: str, seconds: float, num_envs: int, run_dir: str
     common = ["--task", task, "--num-envs", str(num_envs), "--time-limit", str(seconds), "--run-dir", run_dir,
               "--no-plots"]
     if learner == "warpgym":
-        return [sys.executable, os.path.join(os.path.dirname(HERE), "scripts", "train.py"), *common, "--max-iterations", "1000000"]
-    return [sys.executable, os.path.join(os.path.dirname(HERE), "scripts", "train_with.py"), learner, *common, "--iterations", "1000000"]
+        return [sys.executable, os.path.join(ROOT, "scripts", "train.py"), *common, "--max-iterations", "1000000"]
+    return [sys.executable, os.path.join(ROOT, "scripts", "train_with.py"), learner, *common, "--iterations", "1000000"]
 
 
 def row_of(learner: str, task: str, run_dir: str, wall_s: float, rc: int) -> dict:

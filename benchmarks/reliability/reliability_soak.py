@@ -1,8 +1,8 @@
 """Long runs that must neither produce a NaN nor drift: random actions, then training, at scale.
 
-    python benchmarks/reliability_soak.py random --task Ant --num-envs 16384 --steps 5e8 --out OUT
-    python benchmarks/reliability_soak.py train  --task Ant --num-envs 16384 --steps 5e8 --out OUT
-    python benchmarks/reliability_soak.py --report OUT/soak_*.json
+    python -m benchmarks.reliability.reliability_soak random --task Ant --num-envs 16384 --steps 5e8 --out OUT
+    python -m benchmarks.reliability.reliability_soak train  --task Ant --num-envs 16384 --steps 5e8 --out OUT
+    python -m benchmarks.reliability.reliability_soak --report OUT/soak_*.json
 
 ``random``: ``env.step`` with uniform random actions in [-1, 1] for STEPS env-steps. On the device,
 every step: the count of non-finite observation and reward entries. Every WINDOW steps (one host
@@ -26,8 +26,7 @@ import subprocess
 import sys
 import time
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, ROOT)
+from benchmarks.harness import ROOT  # noqa: E402
 
 
 def ends(values: list[float]) -> tuple[float | None, float | None]:

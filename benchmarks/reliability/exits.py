@@ -1,8 +1,8 @@
 """Every run ends: short torchrun trainings back to back, and two failures, on G processes of one host.
 
-    python benchmarks/exits.py --out OUT                          # 20 runs (Ant, Humanoid, ...) of 20 s on 2 GPUs
-    python benchmarks/exits.py --out OUT --runs 4 --device cpu --num-envs 4 --seconds 8
-    python benchmarks/exits.py --report OUT/exits.json
+    python -m benchmarks.reliability.exits --out OUT                          # 20 runs (Ant, Humanoid, ...) of 20 s on 2 GPUs
+    python -m benchmarks.reliability.exits --out OUT --runs 4 --device cpu --num-envs 4 --seconds 8
+    python -m benchmarks.reliability.exits --report OUT/exits.json
 
 Finished runs: each is ``torchrun --standalone --nproc_per_node=G scripts/train.py --time-limit S``;
 the table gives its exit code and the seconds from its last metrics row (metrics.jsonl's last write)
@@ -24,7 +24,7 @@ import subprocess
 import sys
 import time
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+from benchmarks.harness import ROOT, write_json  # noqa: E402
 TRAIN = os.path.join(ROOT, "scripts", "train.py")
 FAIL_WORKER = os.path.join(ROOT, "tests", "fail_worker.py")
 EXIT_WITHIN_S, STOP_WITHIN_S = 10.0, 60.0
@@ -185,9 +185,7 @@ def main(argv=None) -> int:
         row = finished_run(args, k) if kind == "finished" else failure(args, kind)
         data["rows"].append(row)
         print(json.dumps(row), flush=True)
-        with open(os.path.join(args.out, "exits.json.tmp"), "w") as f:
-            json.dump(data, f, indent=1)
-        os.replace(os.path.join(args.out, "exits.json.tmp"), os.path.join(args.out, "exits.json"))
+        write_json(os.path.join(args.out, "exits.json"), data)
     print(report(os.path.join(args.out, "exits.json")))
     return 0 if all(holds(r) for r in data["rows"]) else 1
 

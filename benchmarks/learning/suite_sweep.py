@@ -6,13 +6,13 @@ the reset seeds 0, 1 and 2 by default, as the learning table scores (where episo
 rank two settings). The table ranks the combinations by that return (mean over seeds), beside the training's
 throughput; the best row is the candidate preset for agents/config.py.
 
-    python benchmarks/suite_sweep.py --out OUT --task Hopper-v5 --seconds 120 \\
+    python -m benchmarks.learning.suite_sweep --out OUT --task Hopper-v5 --seconds 120 \\
         --grid num_envs=4096,8192 --grid horizon_len=16,32 --grid gamma=0.99,0.995
-    python benchmarks/suite_sweep.py --report OUT/sweep-Hopper-v5.json
-    python benchmarks/suite_sweep.py --out OUT --task InvertedPendulum-v5 --seconds 180 --seeds 0 1 2 3 \
+    python -m benchmarks.learning.suite_sweep --report OUT/sweep-Hopper-v5.json
+    python -m benchmarks.learning.suite_sweep --out OUT --task InvertedPendulum-v5 --seconds 180 --seeds 0 1 2 3 \
         --grid normalize_obs=true,false --gpus 4          # 8 runs, 4 at once
-    python benchmarks/suite_sweep.py --report GPU0/sweep-Hopper-v5.json GPU1/sweep-Hopper-v5.json  # one table
-    python benchmarks/suite_sweep.py --score OUT/sweep-Hopper-v5.json   # score again, e.g. on a CPU after a GPU
+    python -m benchmarks.learning.suite_sweep --report GPU0/sweep-Hopper-v5.json GPU1/sweep-Hopper-v5.json  # one table
+    python -m benchmarks.learning.suite_sweep --score OUT/sweep-Hopper-v5.json   # score again, e.g. on a CPU after a GPU
 
 On a host of several GPUs, ``--gpus N`` runs every setting and seed as its own process, N at a time, one per
 GPU, each pinned to its share of the cores (what a one-GPU machine with that many cores gives), and joins
@@ -39,8 +39,7 @@ import sys
 import threading
 import time
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, ROOT)
+from benchmarks.harness import ROOT  # noqa: E402
 
 
 def parse_grid(texts: list[str]) -> dict[str, list[str]]:
@@ -68,7 +67,7 @@ def command(task: str, combo: dict, seed: int, seconds: float, run_dir: str, dev
 def score(run_dir: str, scoring: dict, device: str | None) -> dict:
     """The final policy of ``run_dir`` scored by ``warpgym eval``: episodes from each of the reset seeds in
     Gymnasium's env and from the same starts in warpgym's."""
-    from suite_learning import play  # noqa: PLC0415
+    from benchmarks.learning.suite_learning import play  # noqa: PLC0415
 
     result = play(run_dir, scoring["episodes"], scoring["seeds"], os.path.join(run_dir, "eval.json"), device)
     return {"gymnasium_return": result["gymnasium_return"], "ratio": result["gymnasium_over_warpgym"],
@@ -173,7 +172,8 @@ def spread(args, grid: dict[str, list[str]], argv: list[str]) -> dict:
     pinned to its share of the cores, writing under OUT/parts/<k>; their sweeps joined into one, their runs
     moved to OUT/runs (so that ``--score`` finds them beside the JSON). A process that wrote nothing leaves
     its run as an error row that names its log."""
-    from suite_learning import gpu_slot, without  # noqa: PLC0415
+    from benchmarks.harness import gpu_slot  # noqa: PLC0415
+    from benchmarks.learning.suite_learning import without  # noqa: PLC0415
 
     gpu_slot(0, args.gpus)  # too many GPUs for the cores: said before anything starts
     names = list(grid)
@@ -183,7 +183,7 @@ def spread(args, grid: dict[str, list[str]], argv: list[str]) -> dict:
     todo, lock = list(enumerate(jobs)), threading.Lock()
 
     def command_of(k: int, combo: dict, seed: int) -> list[str]:
-        cmd = [sys.executable, os.path.abspath(__file__), *rest, "--out", os.path.join(args.out, "parts", f"{k:03d}"),
+        cmd = [sys.executable, "-m", "benchmarks.learning.suite_sweep", *rest, "--out", os.path.join(args.out, "parts", f"{k:03d}"),
                "--seeds", str(seed), "--no-warm-up"]
         for name, value in combo.items():  # parse_grid read "256x128" as "256,128"
             cmd += ["--grid", f"{name}={value.replace(',', 'x')}"]
@@ -297,7 +297,7 @@ def main(argv=None) -> int:
 
     os.makedirs(os.path.join(args.out, "runs"), exist_ok=True)
     if not args.no_warm_up:  # else the first combination's budget pays for compiling the task's kernels
-        from suite_learning import warm_up  # noqa: PLC0415
+        from benchmarks.learning.suite_learning import warm_up  # noqa: PLC0415
 
         warm_up(args.task, args.out, args.device)
     path = os.path.join(args.out, f"sweep-{args.task}.json")
@@ -307,7 +307,7 @@ def main(argv=None) -> int:
         doc = spread(args, grid, list(argv if argv is not None else sys.argv[1:]))
         doc["meta"].update(grid=grid, runs_at_once=args.gpus, cores=len(os.sched_getaffinity(0)) // args.gpus,
                            kernel_cache="empty at the first run" if args.no_warm_up else "warm",
-                           command=" ".join(["benchmarks/suite_sweep.py"] + (argv or sys.argv[1:])))
+                           command=" ".join(["python -m benchmarks.learning.suite_sweep"] + (argv or sys.argv[1:])))
         write_json(path, doc)
         print(table(doc))
         return 0
@@ -315,7 +315,7 @@ def main(argv=None) -> int:
     doc = {"meta": {"task": args.task, "seconds": args.seconds, "seeds": args.seeds, "grid": grid, "gpu": gpu,
                     "scoring": scoring, "kernel_cache": "empty at the first run" if args.no_warm_up else "warm",
                     "date": time.strftime("%Y-%m-%d"),
-                    "command": " ".join(["benchmarks/suite_sweep.py"] + (argv or sys.argv[1:]))}, "rows": []}
+                    "command": " ".join(["python -m benchmarks.learning.suite_sweep"] + (argv or sys.argv[1:]))}, "rows": []}
     names = list(grid)
     for values in itertools.product(*(grid[n] for n in names)):
         doc["rows"].append(run_combo(args.task, dict(zip(names, values)), args.seeds, args.seconds, args.out,

@@ -1,11 +1,11 @@
 """Does the physics hold at convergence? Train, keep policies at set times, replay each at a 4x finer
 step and in native MuJoCo, and write one table.
 
-    python benchmarks/fidelity.py --out OUT --task Ant --seeds 0 1 --seconds 300 --save-at 60 120
-    python benchmarks/fidelity.py --out OUT --task Ant --candidates substeps4 --seeds 0 --seconds 150
-    python benchmarks/fidelity.py --out OUT --task Ant --no-train --probes tests/data/ant_flying_policy.pt
-    python benchmarks/fidelity.py --out OUT --replay RUN_DIR [RUN_DIR ...]       # runs trained elsewhere, no training
-    python benchmarks/fidelity.py --report OUT [OUT ...]                         # the tables again
+    python -m benchmarks.physics.fidelity --out OUT --task Ant --seeds 0 1 --seconds 300 --save-at 60 120
+    python -m benchmarks.physics.fidelity --out OUT --task Ant --candidates substeps4 --seeds 0 --seconds 150
+    python -m benchmarks.physics.fidelity --out OUT --task Ant --no-train --probes tests/data/ant_flying_policy.pt
+    python -m benchmarks.physics.fidelity --out OUT --replay RUN_DIR [RUN_DIR ...]       # runs trained elsewhere, no training
+    python -m benchmarks.physics.fidelity --report OUT [OUT ...]                         # the tables again
 
 For each candidate (CANDIDATES: named physics settings; "default" is the task's own) and seed,
 scripts/train.py trains --num-envs envs for --seconds of wall-clock time, keeping a checkpoint at each
@@ -38,11 +38,9 @@ import subprocess
 import sys
 import time
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.dirname(HERE))
-sys.path.insert(0, HERE)
+from benchmarks.harness import ROOT  # noqa: E402
 
-from targets import WALKING  # noqa: E402
+from benchmarks.targets import WALKING  # noqa: E402
 
 # Named physics settings, each complete for the fields it names (so a later change of the task's
 # defaults does not change what a name means). "default" is the task as it stands.
@@ -250,7 +248,7 @@ def run_facts(run_dir: str) -> dict:
 
 def train(task: str, name: str, seed: int, args) -> str:
     run_dir = os.path.join(args.out, "runs", f"{task}-{name}-s{seed}")
-    cmd = [sys.executable, os.path.join(os.path.dirname(HERE), "scripts", "train.py"), "--task", task, "--seed", str(seed), "--time-limit",
+    cmd = [sys.executable, os.path.join(ROOT, "scripts", "train.py"), "--task", task, "--seed", str(seed), "--time-limit",
            str(args.seconds), "--eval-gap", "20", "--no-plots", "--run-dir", run_dir,
            *(["--num-envs", str(args.num_envs)] if args.num_envs else []),
            *(["--device", args.device] if args.device else []),

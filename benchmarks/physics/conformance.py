@@ -4,20 +4,17 @@ states along random-action episodes), and two-sample Kolmogorov-Smirnov tests of
 length of whole random-action episodes. Runs on the CPU (Warp's CPU backend, float32, against
 Gymnasium's float64 MuJoCo).
 
-    python benchmarks/conformance.py --out docs/bench/conformance.json        # all eleven tasks
-    python benchmarks/conformance.py --report docs/bench/conformance.json     # the table again
+    python -m benchmarks.physics.conformance --out docs/bench/conformance.json        # all eleven tasks
+    python -m benchmarks.physics.conformance --report docs/bench/conformance.json     # the table again
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
 import time
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, ROOT)
 
 
 def measure(name: str, samples: dict, episodes: int, seed: int) -> dict:
@@ -94,7 +91,7 @@ def main(argv=None) -> int:
 
     samples = dict(episodes=16, steps_apart=5, per_episode=8)
     meta = {"date": time.strftime("%Y-%m-%d"), "gymnasium": gymnasium.__version__, "mujoco": mujoco.__version__,
-            "step_samples": samples, "command": " ".join(["benchmarks/conformance.py"] + (argv or sys.argv[1:]))}
+            "step_samples": samples, "command": " ".join(["python -m benchmarks.physics.conformance"] + (argv or sys.argv[1:]))}
     rows = []
     for name in tasks:
         rows.append(measure(name, samples, args.episodes, args.seed))

@@ -1,7 +1,7 @@
 """What RLlib's env runner costs per step by itself: its sampling loop around an env that does nothing.
 
-    python benchmarks/rllib_overhead.py --out OUT.json                     # 1024 and 4096 envs, Ant's sizes
-    python benchmarks/rllib_overhead.py --envs 4096 --obs 108 --actions 21 # the Humanoid's
+    python -m benchmarks.multi_gpu.rllib_overhead --out OUT.json                     # 1024 and 4096 envs, Ant's sizes
+    python -m benchmarks.multi_gpu.rllib_overhead --envs 4096 --obs 108 --actions 21 # the Humanoid's
 
 RLlib's SingleAgentEnvRunner (new API stack) keeps one episode object per env and runs its connectors
 and module on numpy batches every step. Here it steps a ``VectorEnv`` whose step returns preallocated
@@ -22,8 +22,6 @@ import time
 
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.dirname(HERE))
 
 
 def null_vector_env(num_envs: int, num_obs: int, num_actions: int, episode: int):

@@ -9,8 +9,8 @@ that falls). This script plays each run's last kept policy by ``warpgym eval --e
 observation holds v5's, nothing else changed. Ant, Humanoid and HumanoidStandup lay out v4's observation
 otherwise and Pusher's v4 needs MuJoCo < 3: they are left out.
 
-    python benchmarks/suite_versions.py --runs OUT [OUT2 ...] --json docs/bench/suite_versions.json
-    python benchmarks/suite_versions.py --report docs/bench/suite_versions.json
+    python -m benchmarks.learning.suite_versions --runs OUT [OUT2 ...] --json docs/bench/suite_versions.json
+    python -m benchmarks.learning.suite_versions --report docs/bench/suite_versions.json
 
 ``--runs`` takes suite_learning.py's output folders (the ``<task>-seed<k>.json`` and the ``runs/`` beside
 them, where the checkpoints are); the policies' own ``.v4.json`` lie beside their checkpoints, and a policy
@@ -27,10 +27,8 @@ import os
 import sys
 import time
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, ROOT)
 
-from suite_learning import REFERENCE, REFERENCE_VERSION, SEEDS, play  # noqa: E402
+from benchmarks.learning.suite_learning import REFERENCE, REFERENCE_VERSION, SEEDS, play  # noqa: E402
 
 
 def earlier(ckpt: str, episodes: int) -> dict | None:
@@ -119,7 +117,7 @@ def main(argv=None) -> int:
         from warpgym.cli import write_json  # noqa: PLC0415
 
         write_json(args.json, {"meta": {"date": time.strftime("%Y-%m-%d"), "command": " ".join(
-            ["benchmarks/suite_versions.py"] + (argv or sys.argv[1:]))}, "rows": rows})
+            ["python -m benchmarks.learning.suite_versions"] + (argv or sys.argv[1:]))}, "rows": rows})
     print(table(rows))
     return 0
 

@@ -3,9 +3,9 @@ same host: warpgym's whole task step and MuJoCo Warp's own step of the file's mo
 count (``warpgym bench --tasks``), Gymnasium's own envs in ``AsyncVectorEnv`` over the host's cores,
 and EnvPool 1.2.7 (C++ threads, the same MuJoCo files) with as many threads as cores.
 
-    python benchmarks/suite_speed.py --out OUT.json                        # all eleven tasks, GPU and CPU
-    python benchmarks/suite_speed.py --out A.json --tasks Hopper-v5 --skip-cpu
-    python benchmarks/suite_speed.py --report A.json B.json ...            # one table from several runs
+    python -m benchmarks.speed.suite_speed --out OUT.json                        # all eleven tasks, GPU and CPU
+    python -m benchmarks.speed.suite_speed --out A.json --tasks Hopper-v5 --skip-cpu
+    python -m benchmarks.speed.suite_speed --report A.json B.json ...            # one table from several runs
 
 Every figure is the median of --repeats timings taken in one run. A run writes its JSON after each
 task, so one cut short keeps what it measured; --report refuses runs from different GPUs.
@@ -20,8 +20,6 @@ import statistics
 import sys
 import time
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, ROOT)
 
 
 def cpu_async(name: str, envs: int, seconds: float, repeats: int) -> dict:
@@ -138,7 +136,7 @@ def main(argv=None) -> int:
     cores = os.cpu_count() or 1
     meta = {"gpu": torch.cuda.get_device_name(0) if device != "cpu" else "none", "cpu_cores": cores,
             "repeats": args.repeats, "steps": args.steps, "date": time.strftime("%Y-%m-%d"),
-            "command": " ".join(["benchmarks/suite_speed.py"] + (argv if argv is not None else sys.argv[1:]))}
+            "command": " ".join(["python -m benchmarks.speed.suite_speed"] + (argv if argv is not None else sys.argv[1:]))}
     out = {"meta": meta, "gpu": [], "cpu": {}}
 
     def save():

@@ -1,12 +1,12 @@
 #!/usr/bin/env bash
 # Do MuJoCo Warp's constraint and contact buffers hold over long default training runs?
-# Usage: benchmarks/soak.sh OUT_DIR [SECONDS] [TASK ...]    (default: 300 s, Ant Humanoid)
+# Usage: benchmarks/reliability/soak.sh OUT_DIR [SECONDS] [TASK ...]    (default: 300 s, Ant Humanoid)
 # Writes OUT_DIR/soak.jsonl: per task, the run's peak constraint rows per world against njmax,
 # peak contacts against naconmax, the fault totals (overflowed world-substeps must be 0) and the
 # steady samples/s; and for the Ant, env-steps/s with Newton's old estimate (njmax 64) and the
 # default, from one bench.py run.
 set -uo pipefail
-out=${1:?usage: benchmarks/soak.sh OUT_DIR [SECONDS] [TASK ...]}
+out=${1:?usage: benchmarks/reliability/soak.sh OUT_DIR [SECONDS] [TASK ...]}
 seconds=${2:-300}
 shift $(( $# > 1 ? 2 : 1 ))
 tasks=${*:-Ant Humanoid}

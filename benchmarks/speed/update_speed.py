@@ -1,8 +1,8 @@
 """How long one PPO update takes, per way of running it: the learner alone, no simulator.
 
-    python benchmarks/update_speed.py --out OUT
-    python benchmarks/update_speed.py --out OUT --tasks Ant --envs 4096 8192 --repeats 50
-    python benchmarks/update_speed.py --out OUT --tasks Ant --envs 16 --batch-size 64 --device cpu   # a smoke run
+    python -m benchmarks.speed.update_speed --out OUT
+    python -m benchmarks.speed.update_speed --out OUT --tasks Ant --envs 4096 8192 --repeats 50
+    python -m benchmarks.speed.update_speed --out OUT --tasks Ant --envs 16 --batch-size 64 --device cpu   # a smoke run
 
 For each task's preset (network, horizon, mini-batch, passes) at each --envs size, a rollout of random
 observations and actions of the task's sizes is learnt from --repeats times per mode, after --warmup
@@ -19,14 +19,12 @@ Writes OUT/update_speed.json after every mode and prints the table.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import statistics
 import sys
 import time
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, ROOT)
+from benchmarks.harness import write_json  # noqa: E402
 
 # (observations, actions) of each task's env (tests/test_benchmark_reports.py checks them against the envs)
 SIZES = {"Ant": (60, 8), "Humanoid": (108, 21)}
@@ -146,9 +144,7 @@ def main(argv=None) -> int:
                 except RuntimeError as e:  # a mode this machine cannot run (compiled, without Triton)
                     print(f"{task} {n} {mode}: {e}", file=sys.stderr)
                     doc["rows"].append({"task": task, "num_envs": n, "mode": mode, "error": str(e)})
-                with open(path + ".tmp", "w") as f:
-                    json.dump(doc, f, indent=1)
-                os.replace(path + ".tmp", path)
+                write_json(path, doc)
     print(table(doc))
     return 0
 

@@ -1,9 +1,9 @@
 """Time a fresh machine's first training runs: empty Warp kernel cache, then warm, then a copied cache.
 
-    python benchmarks/cold_start.py --out OUT                # the runs of docs/benchmarks.md, "Cold start"
-    python benchmarks/cold_start.py --out OUT --profile-warm # and a warm start under cProfile
-    python benchmarks/cold_start.py --out OUT --env WARPGYM_LTO_PROCESSES=0 -- --no-mathdx
-    python benchmarks/cold_start.py --report OUT/cold_start.json
+    python -m benchmarks.speed.cold_start --out OUT                # the runs of docs/benchmarks.md, "Cold start"
+    python -m benchmarks.speed.cold_start --out OUT --profile-warm # and a warm start under cProfile
+    python -m benchmarks.speed.cold_start --out OUT --env WARPGYM_LTO_PROCESSES=0 -- --no-mathdx
+    python -m benchmarks.speed.cold_start --report OUT/cold_start.json
 
 Every run is ``scripts/train.py`` with default settings in its own process; ``WARP_CACHE_PATH``
 picks the cache each starts from:
@@ -30,11 +30,9 @@ import sys
 import tempfile
 import time
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, ROOT)
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from benchmarks.harness import ROOT  # noqa: E402
 
-from targets import WALKING  # noqa: E402
+from benchmarks.targets import WALKING  # noqa: E402
 
 
 def train(out: str, name: str, task: str, cache: str, seconds: float, extra: list[str], env_vars: dict,

@@ -13,7 +13,7 @@ clock.
 One JSON per run (``OUT/sb3-<task>-seed<k>.json``), in suite_learning.py's form, which its ``--report``
 sets beside warpgym's runs.
 
-    python benchmarks/suite_sb3.py --out OUT --tasks HalfCheetah-v5 Hopper-v5 --seeds 0 1 --parallel 4
+    python -m benchmarks.learning.suite_sb3 --out OUT --tasks HalfCheetah-v5 Hopper-v5 --seeds 0 1 --parallel 4
 """
 
 from __future__ import annotations
@@ -26,10 +26,7 @@ import subprocess
 import sys
 import time
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, ROOT)
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from suite_learning import MARKS, REFERENCE, half, thin  # noqa: E402
+from benchmarks.learning.suite_learning import MARKS, REFERENCE, half, thin  # noqa: E402
 
 _RELU_256 = dict(log_std_init=-2.0, ortho_init=False, activation_fn="relu", net_arch=dict(pi=[256, 256], vf=[256, 256]))
 # rl-baselines3-zoo, hyperparams/ppo.yml (the v4 entries; Ant-v4 takes its MuJoCo defaults: SB3's PPO defaults)
@@ -205,7 +202,7 @@ def main(argv=None) -> int:
 
         meta = {"learner": f"stable-baselines3 {stable_baselines3.__version__} PPO, RL Zoo hyperparameters",
                 "cpu": cpu_name(), "cores_per_run": 1, "parallel": args.parallel, "scale": scale,
-                "date": time.strftime("%Y-%m-%d"), "command": " ".join(["benchmarks/suite_sb3.py"] + sys.argv[1:])}
+                "date": time.strftime("%Y-%m-%d"), "command": " ".join(["python -m benchmarks.learning.suite_sb3"] + sys.argv[1:])}
         write_json(os.path.join(args.out, f"sb3-{task}-seed{seed}.json"), {"meta": meta, "run": run})
         print(json.dumps({k: run[k] for k in ("task", "seed", "samples", "scored")})[:400], flush=True)
         return 0
@@ -218,7 +215,7 @@ def main(argv=None) -> int:
             task, seed = jobs.pop(0)
             busy = {c for _, c in running}
             core = next(c for c in cores if c not in busy) if len(busy) < len(cores) else cores[0]
-            cmd = [sys.executable, os.path.abspath(__file__), "--out", args.out, "--minutes", str(args.minutes),
+            cmd = [sys.executable, "-m", "benchmarks.learning.suite_sb3", "--out", args.out, "--minutes", str(args.minutes),
                    "--eval-episodes", str(args.eval_episodes), "--parallel", str(args.parallel),
                    "--one", task, str(seed)]
             log = open(os.path.join(args.out, f"sb3-{task}-seed{seed}.log"), "w")

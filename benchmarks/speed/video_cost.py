@@ -1,6 +1,6 @@
 """What ``train.py --video`` costs the training iterations: the same run without and with clips.
 
-    python benchmarks/video_cost.py --out bench/video --task Ant --seconds 100 --eval-gap 20
+    python -m benchmarks.speed.video_cost --out bench/video --task Ant --seconds 100 --eval-gap 20
 
 Runs ``scripts/train.py`` twice, one after the other, and writes OUT/video_cost.json: the median
 samples/s of the iterations (the iteration clock leaves evaluations out; drawing happens in a
@@ -16,8 +16,7 @@ import statistics
 import subprocess
 import sys
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.dirname(HERE))
+from benchmarks.harness import ROOT  # noqa: E402
 
 
 def measure(run_dir: str) -> dict:
@@ -44,7 +43,7 @@ def main(argv=None) -> int:
     result = {"task": args.task, "seconds": args.seconds, "eval_gap": args.eval_gap}
     for name, extra in (("without", []), ("with", ["--video"])):
         run_dir = os.path.join(args.out, name)
-        cmd = [sys.executable, os.path.join(os.path.dirname(HERE), "scripts", "train.py"), "--task", args.task, "--time-limit", str(args.seconds),
+        cmd = [sys.executable, os.path.join(ROOT, "scripts", "train.py"), "--task", args.task, "--time-limit", str(args.seconds),
                "--eval-gap", str(args.eval_gap), "--run-dir", run_dir, "--no-plots", "--max-iterations", "1000000",
                *extra]
         with open(os.path.join(args.out, f"{name}.log"), "w") as log:

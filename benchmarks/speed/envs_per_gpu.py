@@ -1,11 +1,11 @@
 """How many envs per GPU learn fastest? Throughput and memory across sizes, then wall-clock time to
 target speeds at the sizes worth training.
 
-    python benchmarks/envs_per_gpu.py --out OUT --task Ant
-    python benchmarks/envs_per_gpu.py --out OUT --task Humanoid --target-seeds 0
-    python benchmarks/envs_per_gpu.py --report OUT/envs_per_gpu_Humanoid.json OUT2/envs_per_gpu_Humanoid.json \\
+    python -m benchmarks.speed.envs_per_gpu --out OUT --task Ant
+    python -m benchmarks.speed.envs_per_gpu --out OUT --task Humanoid --target-seeds 0
+    python -m benchmarks.speed.envs_per_gpu --report OUT/envs_per_gpu_Humanoid.json OUT2/envs_per_gpu_Humanoid.json \\
         --figure FIG.png                                   # two runs' rows in one table and figure, again
-    python benchmarks/envs_per_gpu.py --out OUT --task Ant --envs 16 32 --target-envs 16 32 --batch-size 64 \\
+    python -m benchmarks.speed.envs_per_gpu --out OUT --task Ant --envs 16 32 --target-envs 16 32 --batch-size 64 \\
         --throughput-iterations 20 --target-seconds 30 --device cpu               # a smoke run on a CPU
 
 For one task, on one GPU with a warm kernel cache (the first run of the script fills it):
@@ -39,11 +39,9 @@ import sys
 import threading
 import time
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, ROOT)
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from benchmarks.harness import ROOT, write_json  # noqa: E402
 
-from targets import TARGETS  # noqa: E402
+from benchmarks.targets import TARGETS  # noqa: E402
 
 BASE_ENVS = 4096  # the size the tasks' batch_size was chosen for
 
@@ -162,9 +160,7 @@ def env_steps(task: str, num_envs: int, args) -> float | None:
 
 
 def save(path: str, doc: dict) -> None:
-    with open(path + ".tmp", "w") as f:
-        json.dump(doc, f, indent=1)
-    os.replace(path + ".tmp", path)
+    write_json(path, doc)
 
 
 def tables(doc: dict) -> str:

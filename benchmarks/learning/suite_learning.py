@@ -9,9 +9,9 @@ those starts moved by 1e-9, Gymnasium against itself). One JSON per run
 (``OUT/<task>-seed<k>.json``); ``--report`` builds one table from several outputs, refusing runs made
 on different GPUs or with different budgets.
 
-    python benchmarks/suite_learning.py --out OUT --tasks Hopper-v5 Walker2d-v5 --seeds 0 1
-    python benchmarks/suite_learning.py --out OUT --seeds 0 1 --gpus 2    # one seed per GPU, at once
-    python benchmarks/suite_learning.py --report OUT OUT2 ...
+    python -m benchmarks.learning.suite_learning --out OUT --tasks Hopper-v5 Walker2d-v5 --seeds 0 1
+    python -m benchmarks.learning.suite_learning --out OUT --seeds 0 1 --gpus 2    # one seed per GPU, at once
+    python -m benchmarks.learning.suite_learning --report OUT OUT2 ...
 
 The reference figures (``REFERENCE``) are Tianshou's MuJoCo benchmark for SAC: the best return, averaged
 over 10 seeds, within the first 1 M steps, on gym's v3 tasks (v2 for Reacher and the two pendulums),
@@ -30,8 +30,7 @@ import subprocess
 import sys
 import time
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, ROOT)
+from benchmarks.harness import ROOT, gpu_slot
 
 # as the sources print them (Tianshou's to one decimal: IDP's 9359.5 lies within 0.5 of the best return there is)
 REFERENCE = {"Ant-v5": 5850.2, "HalfCheetah-v5": 12138.8, "Hopper-v5": 3542.2, "Walker2d-v5": 5007.0,
@@ -397,24 +396,6 @@ def without(argv: list[str], options: tuple[str, ...]) -> list[str]:
     return kept
 
 
-def gpu_slot(gpu: int, gpus: int) -> dict:
-    """``subprocess`` arguments that give a child GPU ``gpu`` of ``gpus`` and its equal share of this process's
-    cores, so that one GPU's run does not take another's CPU (suite_sweep.py's ``--gpus`` uses it too). GPU k is
-    the k-th this process may see: under ``CUDA_VISIBLE_DEVICES=2,3`` and ``taskset``, two such commands share a
-    host, each on its own GPUs and cores."""
-    visible = [d.strip() for d in os.environ.get("CUDA_VISIBLE_DEVICES", "").split(",") if d.strip()]
-    if visible and len(visible) < gpus:
-        raise SystemExit(f"--gpus {gpus}: CUDA_VISIBLE_DEVICES={','.join(visible)} gives this process "
-                         f"{len(visible)}; name more there or ask for --gpus {len(visible)}")
-    cores = sorted(os.sched_getaffinity(0))
-    share = len(cores) // gpus
-    if share < 1:
-        raise SystemExit(f"--gpus {gpus}: more GPUs than the {len(cores)} cores this process may use")
-    mine = set(cores[gpu * share:(gpu + 1) * share])
-    return {"env": dict(os.environ, CUDA_VISIBLE_DEVICES=visible[gpu] if visible else str(gpu)),
-            "preexec_fn": lambda: os.sched_setaffinity(0, mine)}
-
-
 def spread_seeds(args, argv: list[str]) -> int:
     """Run each seed in its own process on its own GPU (``--gpus N``, seeds over GPUs in turn), each process
     pinned to its share of the host's cores, so that one GPU's run does not take another's CPU; a run's
@@ -427,8 +408,8 @@ def spread_seeds(args, argv: list[str]) -> int:
         procs, logs = [], []
         for gpu, seed in enumerate(wave):
             logs.append(open(os.path.join(args.out, f"seed{seed}.log"), "w"))  # noqa: SIM115 (closed below)
-            procs.append(subprocess.Popen([sys.executable, os.path.abspath(__file__), *rest, "--seeds", str(seed),
-                                           "--runs-at-once", str(len(wave))],
+            procs.append(subprocess.Popen([sys.executable, "-m", "benchmarks.learning.suite_learning", *rest,
+                                           "--seeds", str(seed), "--runs-at-once", str(len(wave))],
                                           stdout=logs[-1], stderr=subprocess.STDOUT,
                                           **gpu_slot(gpu, args.gpus)))
         failed += sum(p.wait() != 0 for p in procs)
@@ -502,7 +483,7 @@ def main(argv=None) -> int:
             doc = {"meta": {"gpu": gpu, "scale": args.scale, "date": time.strftime("%Y-%m-%d"),
                             "kernel_cache": "empty at the first run" if args.no_warm_up else "warm",
                             "cores": len(os.sched_getaffinity(0)), "runs_at_once": args.runs_at_once,
-                            "command": " ".join(["benchmarks/suite_learning.py"] + (argv or sys.argv[1:]))},
+                            "command": " ".join(["python -m benchmarks.learning.suite_learning"] + (argv or sys.argv[1:]))},
                    "run": run}
             write_json(os.path.join(args.out, f"{task}-seed{seed}.json"), doc)
             print(json.dumps({k: v for k, v in run.items() if k not in ("curve", "evals")})[:400], flush=True)

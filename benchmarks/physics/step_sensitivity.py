@@ -2,10 +2,10 @@
 step, another integrator, less friction, heavier bodies, more or less joint damping) and account for
 the energy each time.
 
-    python benchmarks/step_sensitivity.py tests/data/humanoid_5x4_seed1_policy.pt --out OUT.json
-    python benchmarks/step_sensitivity.py CKPT --settings substeps=10 "substeps=10,damping=0.8" \\
+    python -m benchmarks.physics.step_sensitivity tests/data/humanoid_5x4_seed1_policy.pt --out OUT.json
+    python -m benchmarks.physics.step_sensitivity CKPT --settings substeps=10 "substeps=10,damping=0.8" \\
         "damping[abdomen|hip_x|hip_y]=1.3" friction=0.8 mass=1.05
-    python benchmarks/step_sensitivity.py CKPT1 CKPT2 --settings finer=4 integrator=implicit --no-joints
+    python -m benchmarks.physics.step_sensitivity CKPT1 CKPT2 --settings finer=4 integrator=implicit --no-joints
 
 Each setting is comma-separated NAME=VALUE:
   substeps      per control step (default: the policy's own); finer=K: K times the policy's own
@@ -36,7 +36,6 @@ import time
 
 import numpy as np
 
-sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 DEFAULT_SETTINGS = ["substeps=6", "substeps=7", "substeps=8", "substeps=10", "friction=0.8", "mass=1.05",
                     "damping[abdomen|hip_x|hip_y]=1.3", "damping[hip_z]=1.3", "damping[ankle]=1.3",

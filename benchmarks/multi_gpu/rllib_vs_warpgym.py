@@ -1,9 +1,9 @@
 """The seed's experiment: warpgym's PPO beside RLlib's PPO, the same robots, GPUs and wall-clock budget.
 
-    python benchmarks/rllib_vs_warpgym.py --out OUT                                   # Ant, Humanoid x 1, 2 GPUs
-    python benchmarks/rllib_vs_warpgym.py --out OUT --tasks Ant --gpus 1 --seconds 60
-    python benchmarks/rllib_vs_warpgym.py --report OUT --figures docs/figures         # table and figures again
-    python benchmarks/rllib_vs_warpgym.py --report OUT OUT2                           # two runs' rows together
+    python -m benchmarks.multi_gpu.rllib_vs_warpgym --out OUT                                   # Ant, Humanoid x 1, 2 GPUs
+    python -m benchmarks.multi_gpu.rllib_vs_warpgym --out OUT --tasks Ant --gpus 1 --seconds 60
+    python -m benchmarks.multi_gpu.rllib_vs_warpgym --report OUT --figures docs/figures         # table and figures again
+    python -m benchmarks.multi_gpu.rllib_vs_warpgym --report OUT OUT2                           # two runs' rows together
 
 For each task and GPU count G, one run of each learner, one after another:
 - warpgym: ``warpgym train`` (G = 1) or ``torchrun --nproc_per_node=G -m warpgym train``: G processes, each
@@ -39,12 +39,9 @@ import sys
 import threading
 import time
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(HERE)
-sys.path.insert(0, ROOT)
-sys.path.insert(0, HERE)
+from benchmarks.harness import ROOT  # noqa: E402
 
-from targets import WALKING, walking_row  # noqa: E402
+from benchmarks.targets import WALKING, walking_row  # noqa: E402
 PRESET = {"Ant": {"horizon_len": 16, "batch_size": 32768, "repeat_times": 4, "learning_rate": 3e-4},
           "Humanoid": {"horizon_len": 32, "batch_size": 32768, "repeat_times": 5, "learning_rate": 5e-4}}
 SEED = {"batch_size": 1024, "learning_rate": 1e-3}

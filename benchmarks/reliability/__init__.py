@@ -1,0 +1,1 @@
+"""Reliability: every run ends (exits), long soaks."""
