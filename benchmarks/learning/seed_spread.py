@@ -18,12 +18,12 @@ import statistics
 import subprocess
 import sys
 
-from benchmarks.harness import ROOT  # noqa: E402
+from benchmarks.harness import ROOT, TRAIN  # noqa: E402
 
 
 def run(out: str, name: str, task: str, seed: int, seconds: float) -> dict:
     run_dir = os.path.join(out, name)
-    cmd = [sys.executable, os.path.join(ROOT, "scripts", "train.py"), "--task", task, "--seed", str(seed),
+    cmd = [*TRAIN, "--task", task, "--seed", str(seed),
            "--time-limit", str(seconds), "--run-dir", run_dir, "--no-plots"]
     with open(os.path.join(out, f"{name}.log"), "w") as log:
         code = subprocess.call(cmd, stdout=log, stderr=subprocess.STDOUT, cwd=ROOT,

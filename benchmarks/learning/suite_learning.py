@@ -30,7 +30,7 @@ import subprocess
 import sys
 import time
 
-from benchmarks.harness import ROOT, gpu_slot
+from benchmarks.harness import ROOT, TRAIN, gpu_slot, read_summary
 
 # as the sources print them (Tianshou's to one decimal: IDP's 9359.5 lies within 0.5 of the best return there is)
 REFERENCE = {"Ant-v5": 5850.2, "HalfCheetah-v5": 12138.8, "Hopper-v5": 3542.2, "Walker2d-v5": 5007.0,
@@ -70,7 +70,7 @@ def reaching(rows: list[dict], target: float | None) -> dict:
 
 def run_train(args: list[str], run_dir: str, device: str | None) -> int:
     """``warpgym train ARGS --run-dir RUN_DIR --no-plots``, its output in RUN_DIR/train.log; its exit code."""
-    cmd = [sys.executable, "-m", "warpgym", "train", *args, "--run-dir", run_dir, "--no-plots"]
+    cmd = [*TRAIN, *args, "--run-dir", run_dir, "--no-plots"]
     os.makedirs(run_dir, exist_ok=True)
     with open(os.path.join(run_dir, "train.log"), "w") as log:
         return subprocess.run(cmd + (["--device", device] if device else []), cwd=ROOT, stdout=log,
@@ -89,7 +89,7 @@ def train_one(task: str, seed: int, out: str, scale: float, device: str | None, 
                       *[str(m) for m in marks], *capture], run_dir, device)
     if code != 0:
         return {"task": task, "seed": seed, "error": f"warpgym train exited {code}: see {run_dir}/train.log"}
-    summary = json.load(open(os.path.join(run_dir, "summary.json")))
+    summary = read_summary(run_dir)
     rows = read_metrics(run_dir)
     target = REFERENCE.get(task)
     reach = reaching(rows, target)

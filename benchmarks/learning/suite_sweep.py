@@ -39,7 +39,7 @@ import sys
 import threading
 import time
 
-from benchmarks.harness import ROOT  # noqa: E402
+from benchmarks.harness import ROOT, TRAIN, read_summary  # noqa: E402
 
 
 def parse_grid(texts: list[str]) -> dict[str, list[str]]:
@@ -57,7 +57,7 @@ def parse_grid(texts: list[str]) -> dict[str, list[str]]:
 
 
 def command(task: str, combo: dict, seed: int, seconds: float, run_dir: str, device: str | None) -> list[str]:
-    cmd = [sys.executable, "-m", "warpgym", "train", "--task", task, "--seed", str(seed), "--time-limit", str(seconds),
+    cmd = [*TRAIN, "--task", task, "--seed", str(seed), "--time-limit", str(seconds),
            "--run-dir", run_dir, "--no-plots"]
     for name, value in combo.items():
         cmd += ["--num-envs", value] if name == "num_envs" else ["--config", f"{name}={value}"]
@@ -92,7 +92,7 @@ def run_combo(task: str, combo: dict, seeds: list[int], seconds: float, out: str
         if code != 0:
             runs.append({"seed": seed, "error": f"exit {code}: {run_dir}/train.log"})
             continue
-        summary = json.load(open(os.path.join(run_dir, "summary.json")))
+        summary = read_summary(run_dir)
         runs.append({"seed": seed, "run_dir": run_dir, **score(run_dir, scoring, device),
                      "samples": summary["final"]["samples"], "samples_per_s": summary["steady_samples_per_s_median"]})
     return {"combo": combo, "label": label, "runs": runs, "gymnasium_return": mean_return(runs)}

@@ -32,7 +32,7 @@ import sys
 import tarfile
 import time
 
-from benchmarks.harness import ROOT  # noqa: E402
+from benchmarks.harness import ROOT, TRAIN, read_summary  # noqa: E402
 
 from benchmarks.multi_gpu.gpu_jobs import Job, run_jobs  # noqa: E402
 
@@ -87,10 +87,11 @@ def jobs_for(args, runs: str, key: str, last: float) -> list[Job]:
     for gpus, mode, seed in plan:
         name = run_name(gpus, mode, seed, args.label)
         d = os.path.join(runs, name)
-        launch = [sys.executable] if gpus == 1 else [sys.executable, "-m", "torch.distributed.run", "--standalone",
-                                                     f"--nproc_per_node={gpus}"]
-        jobs.append(Job(name, gpus, [*launch, os.path.join(ROOT, "scripts", "train.py"), *flags, "--seed", str(seed),
-                                     "--multi-gpu", mode, "--run-dir", d], d + ".log", cwd=ROOT))
+        # one GPU: `warpgym train`; G GPUs: the same command under torchrun, as the README writes it
+        launch = TRAIN if gpus == 1 else [sys.executable, "-m", "torch.distributed.run", "--standalone",
+                                          f"--nproc_per_node={gpus}", "-m", *TRAIN[2:]]
+        jobs.append(Job(name, gpus, [*launch, *flags, "--seed", str(seed), "--multi-gpu", mode, "--run-dir", d],
+                        d + ".log", cwd=ROOT))
     return jobs
 
 
@@ -103,8 +104,7 @@ def run_row(run_dir: str, key: str, values: tuple[float, ...]) -> dict:
     row = {"name": name, "gpus": gpus, "mode": mode, "seed": seed}
     try:
         rows = read_metrics(run_dir)
-        with open(os.path.join(run_dir, "summary.json")) as f:
-            summary = json.load(f)
+        summary = read_summary(run_dir)
     except (FileNotFoundError, ValueError) as e:
         return {**row, "error": str(e)}
     evals = [r for r in rows if r.get(key) is not None]
@@ -415,7 +415,7 @@ def main(argv=None) -> int:
 
     say(f"warm-up: {args.task} compiles its kernels once, so every timed run starts on a warm cache")
     warm = os.path.join(runs, "warmup")
-    codes = run_jobs([Job("warmup", 1, [sys.executable, os.path.join(ROOT, "scripts", "train.py"), "--task", args.task,
+    codes = run_jobs([Job("warmup", 1, [*TRAIN, "--task", args.task,
                                         "--num-envs", "256" if args.device == "cuda" else "8", "--max-iterations", "3",
                                         "--eval-gap", "0", *(["--device", "cpu"] if args.device == "cpu" else []),
                                         "--run-dir", warm, "--no-plots"], warm + ".log", cwd=ROOT)], available, say=say)

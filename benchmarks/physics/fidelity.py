@@ -38,7 +38,7 @@ import subprocess
 import sys
 import time
 
-from benchmarks.harness import ROOT  # noqa: E402
+from benchmarks.harness import TRAIN, read_summary  # noqa: E402
 
 from benchmarks.targets import WALKING  # noqa: E402
 
@@ -231,8 +231,7 @@ def run_facts(run_dir: str) -> dict:
     """What a run's summary.json says about cost and learning."""
     from agents.logger import first_reaching, read_metrics
 
-    with open(os.path.join(run_dir, "summary.json")) as f:
-        s = json.load(f)
+    s = read_summary(run_dir)
     with open(os.path.join(run_dir, "config.json")) as f:
         task = json.load(f)["task"]
     rows = read_metrics(run_dir)
@@ -248,7 +247,7 @@ def run_facts(run_dir: str) -> dict:
 
 def train(task: str, name: str, seed: int, args) -> str:
     run_dir = os.path.join(args.out, "runs", f"{task}-{name}-s{seed}")
-    cmd = [sys.executable, os.path.join(ROOT, "scripts", "train.py"), "--task", task, "--seed", str(seed), "--time-limit",
+    cmd = [*TRAIN, "--task", task, "--seed", str(seed), "--time-limit",
            str(args.seconds), "--eval-gap", "20", "--no-plots", "--run-dir", run_dir,
            *(["--num-envs", str(args.num_envs)] if args.num_envs else []),
            *(["--device", args.device] if args.device else []),

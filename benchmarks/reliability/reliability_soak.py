@@ -26,7 +26,7 @@ import subprocess
 import sys
 import time
 
-from benchmarks.harness import ROOT  # noqa: E402
+from benchmarks.harness import ROOT, TRAIN  # noqa: E402
 
 
 def ends(values: list[float]) -> tuple[float | None, float | None]:
@@ -95,7 +95,7 @@ def soak_random(args) -> dict:
 
 def soak_train(args) -> dict:
     run_dir = os.path.join(args.out, f"train_{args.task}")
-    cmd = [sys.executable, os.path.join(ROOT, "scripts", "train.py"), "--task", args.task, "--num-envs",
+    cmd = [*TRAIN, "--task", args.task, "--num-envs",
            str(args.num_envs), "--total-steps", str(int(args.steps)), "--run-dir", run_dir, "--no-plots",
            "--eval-gap", "60", "--seed", str(args.seed)]
     t0 = time.perf_counter()

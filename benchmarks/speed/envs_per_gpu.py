@@ -39,7 +39,7 @@ import sys
 import threading
 import time
 
-from benchmarks.harness import ROOT, write_json  # noqa: E402
+from benchmarks.harness import ROOT, read_summary, write_json  # noqa: E402
 
 from benchmarks.targets import TARGETS  # noqa: E402
 
@@ -141,8 +141,7 @@ def train(task: str, num_envs: int, seconds: float, seed: int, run_dir: str, arg
     if code != 0:
         with open(log) as f:
             raise SystemExit(f"{' '.join(cmd)} failed ({code}):\n{f.read()[-3000:]}")
-    with open(os.path.join(run_dir, "summary.json")) as f:
-        summary = json.load(f)
+    summary = read_summary(run_dir)
     return {"summary": summary, "rows": read_metrics(run_dir), "peak_mib": peak, "stopped_at_targets": early}
 
 

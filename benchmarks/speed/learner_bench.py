@@ -21,7 +21,7 @@ import subprocess
 import sys
 import time
 
-from benchmarks.harness import ROOT  # noqa: E402
+from benchmarks.harness import ROOT, TRAIN  # noqa: E402
 
 from benchmarks.targets import WALKING, walking_row  # noqa: E402
 
@@ -32,7 +32,7 @@ def command(learner: str, task: str, seconds: float, num_envs: int, run_dir: str
     common = ["--task", task, "--num-envs", str(num_envs), "--time-limit", str(seconds), "--run-dir", run_dir,
               "--no-plots"]
     if learner == "warpgym":
-        return [sys.executable, os.path.join(ROOT, "scripts", "train.py"), *common, "--max-iterations", "1000000"]
+        return [*TRAIN, *common, "--max-iterations", "1000000"]
     return [sys.executable, os.path.join(ROOT, "scripts", "train_with.py"), learner, *common, "--iterations", "1000000"]
 
 

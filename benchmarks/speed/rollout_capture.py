@@ -22,14 +22,14 @@ import subprocess
 import sys
 import time
 
-from benchmarks.harness import ROOT  # noqa: E402
+from benchmarks.harness import ROOT, TRAIN, read_summary  # noqa: E402
 
 MODES = ("step", "rollout", "off")
 
 
 def train(task: str, mode: str, seconds: float, run_dir: str, device: str | None) -> dict:
     """One run; its ready time and steady samples/s, or its error."""
-    cmd = [sys.executable, "-m", "warpgym", "train", "--task", task, "--time-limit", str(seconds), "--rollout-graph",
+    cmd = [*TRAIN, "--task", task, "--time-limit", str(seconds), "--rollout-graph",
            mode, "--config", "eval_gap=1e9", "--run-dir", run_dir, "--no-plots"]
     cmd += ["--device", device] if device else []
     os.makedirs(run_dir, exist_ok=True)
@@ -37,8 +37,7 @@ def train(task: str, mode: str, seconds: float, run_dir: str, device: str | None
         code = subprocess.run(cmd, cwd=ROOT, stdout=log, stderr=subprocess.STDOUT, check=False).returncode
     if code != 0:
         return {"error": f"exit {code}: {run_dir}/train.log"}
-    with open(os.path.join(run_dir, "summary.json")) as f:
-        summary = json.load(f)
+    summary = read_summary(run_dir)
     return {"ready_s": summary["first_iteration_time_s"], "samples_per_s": summary["steady_samples_per_s_median"],
             "iterations": summary["iterations"]}
 

@@ -16,7 +16,7 @@ import statistics
 import subprocess
 import sys
 
-from benchmarks.harness import ROOT  # noqa: E402
+from benchmarks.harness import TRAIN  # noqa: E402
 
 
 def measure(run_dir: str) -> dict:
@@ -43,7 +43,7 @@ def main(argv=None) -> int:
     result = {"task": args.task, "seconds": args.seconds, "eval_gap": args.eval_gap}
     for name, extra in (("without", []), ("with", ["--video"])):
         run_dir = os.path.join(args.out, name)
-        cmd = [sys.executable, os.path.join(ROOT, "scripts", "train.py"), "--task", args.task, "--time-limit", str(args.seconds),
+        cmd = [*TRAIN, "--task", args.task, "--time-limit", str(args.seconds),
                "--eval-gap", str(args.eval_gap), "--run-dir", run_dir, "--no-plots", "--max-iterations", "1000000",
                *extra]
         with open(os.path.join(args.out, f"{name}.log"), "w") as log:
