@@ -22,6 +22,19 @@ class StepOutputs:
 
 
 @wp.func
+def resets_world(force_all: int, out: StepOutputs, w: int):
+    """Whether a reset kernel resets world ``w``: every world on an explicit reset() (which ends no episode, so
+    the step's flags are cleared), else the worlds whose episode this step ended."""
+    if force_all != 0:
+        out.terminated[w] = False
+        out.truncated[w] = False
+        out.time_outs[w] = False
+        out.done[w] = False
+        return True
+    return out.done[w]
+
+
+@wp.func
 def env_rng(rng_state: wp.array[wp.int32], env: int):
     # fresh noise per (seed, step, env) from device counters, so a replayed graph draws new numbers
     step_rng = wp.rand_init(rng_state[0], rng_state[1])

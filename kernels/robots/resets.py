@@ -2,7 +2,7 @@
 
 import warp as wp
 
-from kernels.common import StepOutputs, env_rng
+from kernels.common import StepOutputs, env_rng, resets_world
 from kernels.robots.buffers import EpisodeBuffers, RobotView
 from kernels.robots.observations import potential, write_observation
 from kernels.robots.params import LocomotionParams
@@ -39,12 +39,7 @@ def reset_finished_envs(
     out: StepOutputs,
 ):
     env = wp.tid()
-    if force_all != 0:
-        out.terminated[env] = False
-        out.truncated[env] = False
-        out.time_outs[env] = False
-        out.done[env] = False
-    elif not out.done[env]:
+    if not resets_world(force_all, out, env):
         return
     episodes.length[env] = 0
     episodes.total_return[env] = 0.0

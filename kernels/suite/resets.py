@@ -7,7 +7,7 @@ where the first observation needs it and ``kernels.suite.step.write_reset_observ
 
 import warp as wp
 
-from kernels.common import StepOutputs, env_rng
+from kernels.common import StepOutputs, env_rng, resets_world
 from kernels.suite.params import GOAL_PUSHER, GOAL_REACHER, GymEpisodes, GymParams, MjView
 
 wp.set_module_options({"enable_backward": False})
@@ -41,12 +41,7 @@ def draw_goal(p: GymParams, d: MjView, w: int, rng: wp.uint32):
 def reset_gym_worlds(p: GymParams, force_all: int, rng_state: wp.array[wp.int32], d: MjView, ep: GymEpisodes,
                      out: StepOutputs):
     w = wp.tid()
-    if force_all != 0:  # an explicit reset(): no step ended here
-        out.terminated[w] = False
-        out.truncated[w] = False
-        out.time_outs[w] = False
-        out.done[w] = False
-    elif not out.done[w]:
+    if not resets_world(force_all, out, w):
         return
     rng = env_rng(rng_state, w)
     for i in range(d.qpos.shape[1]):
