@@ -16,7 +16,7 @@ import json
 import os
 import sys
 import time
-from dataclasses import fields
+from dataclasses import dataclass, fields
 
 from agents import Config, OnPolicyRunner
 from agents.data_parallel import envs_per_process
@@ -287,102 +287,184 @@ def built(make, what: str, phase):
     return obj
 
 
-def train(args, rank: int, watch=None, live: dict | None = None) -> int:
-    import torch  # noqa: PLC0415
+@dataclass
+class RunPlan:
+    """Where a run lives and what it trains: a new run from the flags, or the one being resumed."""
 
-    import warpgym  # noqa: PLC0415,F401  (registers the envs, quiets Warp)
+    task: str
+    run_dir: str
+    device: str
+    num_envs: int
+    saved: dict | None  # the resumed run's config.json
+    has_checkpoint: bool  # the resumed run saved a checkpoint (else it starts again from iteration 0)
+
+
+def plan_run(args, rank: int) -> RunPlan:
+    """The run to train. Resuming, the run's own config.json decides, and the flags it was started with are
+    restored into ``args``; every process agrees on the answers rank 0 reads."""
     from warpgym.sim.device import resolve_device  # noqa: PLC0415
     from warpgym.sim.physics import recorded  # noqa: PLC0415
-    from warpgym.envs import LocomotionVecEnv  # noqa: PLC0415
-    from warpgym.envs.suite import SuiteVecEnv  # noqa: PLC0415
 
-    saved = None
     if args.resume:
         saved = read_run_config(args.resume, args.device)
-        task, run_dir = saved["task"], args.resume
         device = resolve_device(args.device or saved["device"])
-        found = str(int(check_resume(run_dir, saved, args.task))) if rank == 0 else ""
-        has_checkpoint = same_on_every_worker(found, device) == "1"
-        num_envs = saved["num_envs"]
+        found = str(int(check_resume(args.resume, saved, args.task))) if rank == 0 else ""
         args.seed = saved["seed"]
         args.episode_length = saved["env_args"].get("max_episode_steps")
         args.substeps = saved["env_args"].get("substeps")
         args.physics = recorded(saved["env_args"].get("physics"))
-    else:
-        has_checkpoint = False
-        task = TASK_NAMES[(args.task or "Ant").lower()]
-        device = resolve_device(args.device)
-        num_envs = args.num_envs or default_envs_and_iterations("cuda" if device.startswith("cuda") else "cpu", task)[0]
-        run_dir = args.run_dir or os.path.join("runs", f"{task}-{time.strftime('%Y%m%d-%H%M%S')}")
-        run_dir = same_on_every_worker(run_dir, device)  # a default name could differ by a second
-    kind = "cuda" if device.startswith("cuda") else "cpu"
-    processes = int(os.environ.get("WORLD_SIZE", "1"))
+        return RunPlan(saved["task"], args.resume, device, saved["num_envs"], saved,
+                       same_on_every_worker(found, device) == "1")
+    task = TASK_NAMES[(args.task or "Ant").lower()]
+    device = resolve_device(args.device)
+    num_envs = args.num_envs or default_envs_and_iterations(device_kind(device), task)[0]
+    run_dir = args.run_dir or os.path.join("runs", f"{task}-{time.strftime('%Y%m%d-%H%M%S')}")
+    run_dir = same_on_every_worker(run_dir, device)  # a default name could differ by a second
+    return RunPlan(task, run_dir, device, num_envs, None, False)
+
+
+def device_kind(device: str) -> str:
+    return "cuda" if device.startswith("cuda") else "cpu"
+
+
+def configure(args, plan: RunPlan, rank: int, processes: int) -> Config:
+    """The run's Config, its flags checked together (a wrong one exits with status 2 and one line); rank r's
+    envs draw their own resets; without a budget, the task's default number of iterations."""
     try:
-        cfg = build_config(args, task, num_envs, device, saved, processes)
+        cfg = build_config(args, plan.task, plan.num_envs, plan.device, plan.saved, processes)
         cfg.check_batch(cfg.env_args["num_envs"], processes)
-    except ValueError as e:  # the flags checked together, once the task and the device are known: one line, status 2
+    except ValueError as e:
         train_args.parser().error(with_flag_names(str(e)))
     if rank > 0:  # rank r's envs draw their own resets (seed + 1000 r); rank 0 alone logs, evaluates and saves
         cfg = cfg.replace(env_args={**cfg.env_args, "seed": cfg.env_args["seed"] + 1000 * rank})
         args.no_eval = True
     if args.max_iterations is None and args.total_steps is None and args.time_limit is None:
-        args.max_iterations = default_envs_and_iterations(kind, task)[1]
+        args.max_iterations = default_envs_and_iterations(device_kind(plan.device), plan.task)[1]
+    return cfg
 
-    args.run_dir = run_dir
-    if rank == 0:
-        os.makedirs(run_dir, exist_ok=True)
-    if watch is not None:  # asked when a peer is lost, by which time a checkpoint may exist
-        watch.hint = lambda: resume_hint(run_dir)
-    device_name = torch.cuda.get_device_name(torch.device(device)) if kind == "cuda" else "cpu"
-    if not args.resume and rank == 0:
-        write_json(os.path.join(run_dir, "config.json"),
-                   {"task": task, "device": device, "num_envs": num_envs, "seed": args.seed, **cfg.to_dict()})
-    say = print if rank == 0 else (lambda *a, **k: None)
-    local_envs = cfg.env_args["num_envs"]
-    shares = (f" x {processes} processes, {local_envs} envs each (--multi-gpu {cfg.multi_gpu}: "
-              f"{local_envs * processes} in all)") if processes > 1 else ""
-    say(f"warpgym PPO | {task} | {num_envs} envs on {device} ({device_name}){shares} | run dir {run_dir}", flush=True)
-    from warpgym.compile import log as compile_log, preload  # noqa: PLC0415
 
-    timeline: list[tuple[float, str]] = []
+class Startup:
+    """What a start-up says as it goes (a cold start should say where its time goes, not sit silent), with
+    the seconds since the process started; summary.json keeps the timeline."""
 
-    def phase(text: str) -> None:  # a cold start should say where its time goes, not sit silent
-        timeline.append((round(time.time() - PROCESS_START, 2), text))
-        say(f"[{timeline[-1][0]:6.1f} s] {text}", flush=True)
+    def __init__(self, say):
+        from warpgym.compile import preload  # noqa: PLC0415
 
-    note = preload.bytecode_note()
-    if note:
-        say(f"note: {note}", flush=True)
-    cache, cached = preload.kernel_cache()
-    phase(f"imports done; Warp kernel cache {cache} holds {cached} modules"
-          + ("" if cached else " (empty: this run compiles them, about 15 s on an H100 or on two "
-                                "CPU cores; WARP_CACHE_PATH points Warp at a shared cache)"))
-    if args.no_mathdx:
-        preload.use_mathdx(False)
-    env = built(lambda: cfg.env_class(**cfg.env_args), f"training env: {task} x {local_envs}", phase)
+        self.say, self.timeline = say, []
+        note = preload.bytecode_note()
+        if note:
+            say(f"note: {note}", flush=True)
+        self.cache, self.cached = preload.kernel_cache()
+        self.phase(f"imports done; Warp kernel cache {self.cache} holds {self.cached} modules"
+                   + ("" if self.cached else " (empty: this run compiles them, about 15 s on an H100 or on two "
+                                             "CPU cores; WARP_CACHE_PATH points Warp at a shared cache)"))
+
+    def phase(self, text: str) -> None:
+        self.timeline.append((round(time.time() - PROCESS_START, 2), text))
+        self.say(f"[{self.timeline[-1][0]:6.1f} s] {text}", flush=True)
+
+    def record(self) -> dict:
+        from warpgym.compile import log as compile_log  # noqa: PLC0415
+
+        return {"timeline": self.timeline, "kernel_cache": self.cache, "cached_modules_at_start": self.cached,
+                "compiled": compile_log.compile_trace(since=PROCESS_START),
+                "lto_builds": compile_log.lto_builds_since(PROCESS_START)}
+
+
+def make_runner(args, plan: RunPlan, cfg: Config, startup: Startup) -> tuple[OnPolicyRunner, object]:
+    """The training env, the evaluation env (none under --no-eval or on ranks above 0) and the runner that
+    holds them. Returns the runner and the training env."""
+    from warpgym.envs.graph_env import GraphVecEnv  # noqa: PLC0415
+
+    env = built(lambda: cfg.env_class(**cfg.env_args), f"training env: {plan.task} x {cfg.env_args['num_envs']}",
+                startup.phase)
     eval_env = None if args.no_eval else built(lambda: cfg.eval_env_class(**cfg.eval_env_args),
-                                               f"evaluation env: {task} x {cfg.eval_env_args['num_envs']}", phase)
-    assert isinstance(env, (LocomotionVecEnv, SuiteVecEnv))
+                                               f"evaluation env: {plan.task} x {cfg.eval_env_args['num_envs']}",
+                                               startup.phase)
+    assert isinstance(env, GraphVecEnv)
     recorder = None
     if args.video and eval_env is not None:
         from warpgym.media.clips import EvalVideoRecorder  # noqa: PLC0415
 
-        recorder = EvalVideoRecorder(run_dir, steps=args.video_length, every=args.video_every,
+        recorder = EvalVideoRecorder(plan.run_dir, steps=args.video_length, every=args.video_every,
                                      print_fn=lambda s: print(s, flush=True))
-    runner = OnPolicyRunner(env, cfg, run_dir=run_dir, eval_env=eval_env, start_time=PROCESS_START,
+    runner = OnPolicyRunner(env, cfg, run_dir=plan.run_dir, eval_env=eval_env, start_time=PROCESS_START,
                             print_fn=lambda s: print(s, flush=True), profile=args.profile,
                             cuda_graph=not args.no_cuda_graph, rollout_graph=args.rollout_graph,
                             eval_recorder=recorder)
-    phase("policy and optimiser ready; the first iterations capture the update graph and the rollout's "
-          f"({runner.collector.capture}: agents.collect)")
+    startup.phase("policy and optimiser ready; the first iterations capture the update graph and the rollout's "
+                  f"({runner.collector.capture}: agents.collect)")
+    return runner, env
+
+
+def resume(runner: OnPolicyRunner, plan: RunPlan, say) -> None:
+    """A resumed run goes on from its checkpoint; one stopped before its first save starts again."""
+    if plan.has_checkpoint:
+        runner.load(os.path.join(plan.run_dir, "checkpoint.pt"), resume=True)
+        say(f"resumed at iteration {runner.iteration} ({runner.samples} samples)", flush=True)
+    else:
+        runner.logger.drop_rows_after(0, 0)
+        say(f"{plan.run_dir} has no checkpoint yet: the run starts again from iteration 0", flush=True)
+
+
+def run_summary(args, history: list[dict], device_name: str, cfg: Config, runner: OnPolicyRunner, env,
+                startup: Startup) -> dict:
+    """summary.json: throughput and targets (summarize), then what this run alone knows."""
+    summary = summarize(history, device_name, cfg)
+    summary["solver_load"] = env.sim.solver_load()  # this process's envs, over the whole run
+    summary["kept_checkpoints"] = runner.kept
+    if cfg.target:
+        summary["target"] = {"target": cfg.target, "reached": runner.target_reached}
+    # the capture the rollouts had: "off" where the device cannot capture or a capture failed and fell back
+    summary["rollout_graph"] = runner.collector.capture
+    summary["startup"] = startup.record()
+    summary["faults"] = {k[len("faults/"):]: v for k, v in (history[-1] if history else {}).items()
+                         if k.startswith("faults/")}
+    if args.profile:
+        summary["profile"] = runner.timer.table()
+        print("| phase | ms / iteration | share |\n|---|---:|---:|")
+        for p in summary["profile"]:
+            print(f"| {p['phase']} | {p['ms_per_iteration']:.2f} | {100 * p['share']:.1f}% |")
+    return summary
+
+
+def train(args, rank: int, watch=None, live: dict | None = None) -> int:
+    """One process's share of a run: plan it, configure it, build the runner, learn, and on rank 0 write the
+    summary, the plots and the closing line."""
+    import torch  # noqa: PLC0415
+
+    import warpgym  # noqa: PLC0415,F401  (registers the envs, quiets Warp)
+
+    processes = int(os.environ.get("WORLD_SIZE", "1"))
+    plan = plan_run(args, rank)
+    cfg = configure(args, plan, rank, processes)
+    args.run_dir = run_dir = plan.run_dir
+    if rank == 0:
+        os.makedirs(run_dir, exist_ok=True)
+    if watch is not None:  # asked when a peer is lost, by which time a checkpoint may exist
+        watch.hint = lambda: resume_hint(run_dir)
+    cuda = device_kind(plan.device) == "cuda"
+    device_name = torch.cuda.get_device_name(torch.device(plan.device)) if cuda else "cpu"
+    if not args.resume and rank == 0:
+        write_json(os.path.join(run_dir, "config.json"), {"task": plan.task, "device": plan.device,
+                                                          "num_envs": plan.num_envs, "seed": args.seed,
+                                                          **cfg.to_dict()})
+    say = print if rank == 0 else (lambda *a, **k: None)
+    local_envs = cfg.env_args["num_envs"]
+    shares = (f" x {processes} processes, {local_envs} envs each (--multi-gpu {cfg.multi_gpu}: "
+              f"{local_envs * processes} in all)") if processes > 1 else ""
+    say(f"warpgym PPO | {plan.task} | {plan.num_envs} envs on {plan.device} ({device_name}){shares} | run dir "
+        f"{run_dir}", flush=True)
+    startup = Startup(say)
+    if args.no_mathdx:
+        from warpgym.compile import preload  # noqa: PLC0415
+
+        preload.use_mathdx(False)
+    runner, env = make_runner(args, plan, cfg, startup)
     if live is not None:
         live["runner"] = runner
-    if args.resume and has_checkpoint:
-        runner.load(os.path.join(run_dir, "checkpoint.pt"), resume=True)
-        say(f"resumed at iteration {runner.iteration} ({runner.samples} samples)", flush=True)
-    elif args.resume:
-        runner.logger.drop_rows_after(0, 0)
-        say(f"{run_dir} has no checkpoint yet: the run starts again from iteration 0", flush=True)
+    if args.resume:
+        resume(runner, plan, say)
     try:
         history = runner.learn(args.max_iterations, args.total_steps, args.time_limit)
     finally:
@@ -394,35 +476,20 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
         watch.stop(finished=True)
     if rank > 0:
         return 0
-    summary = summarize(history, device_name, cfg)
-    summary["solver_load"] = env.sim.solver_load()  # this process's envs, over the whole run
-    summary["kept_checkpoints"] = runner.kept
-    if cfg.target:
-        summary["target"] = {"target": cfg.target, "reached": runner.target_reached}
-    # the capture the rollouts had: "off" where the device cannot capture or a capture failed and fell back
-    summary["rollout_graph"] = runner.collector.capture
-    summary["startup"] = {"timeline": timeline, "kernel_cache": cache, "cached_modules_at_start": cached,
-                          "compiled": compile_log.compile_trace(since=PROCESS_START),
-                          "lto_builds": compile_log.lto_builds_since(PROCESS_START)}
-    summary["faults"] = {k[len("faults/"):]: v for k, v in (history[-1] if history else {}).items()
-                         if k.startswith("faults/")}
-    if args.profile:
-        summary["profile"] = runner.timer.table()
-        print("| phase | ms / iteration | share |\n|---|---:|---:|")
-        for p in summary["profile"]:
-            print(f"| {p['phase']} | {p['ms_per_iteration']:.2f} | {100 * p['share']:.1f}% |")
+    summary = run_summary(args, history, device_name, cfg, runner, env, startup)
     write_json(os.path.join(run_dir, "summary.json"), summary)
     if not args.no_plots:
         try:
             from agents.plotting import plot_runs  # noqa: PLC0415
 
-            paths = plot_runs([run_dir], run_dir, labels=[f"{task} {num_envs} envs"], title=f"warpgym {task}")
+            paths = plot_runs([run_dir], run_dir, labels=[f"{plan.task} {plan.num_envs} envs"],
+                              title=f"warpgym {plan.task}")
             print("wrote " + ", ".join(paths), flush=True)
         except ImportError:
             print("matplotlib is not installed: pip install 'warpgym[train]' for the plots", flush=True)
     if stopped:
         print(f"stopped on request after iteration {runner.iteration}. {resume_hint(run_dir)}", flush=True)
-    print(closing_line(task, run_dir, summary), flush=True)
+    print(closing_line(plan.task, run_dir, summary), flush=True)
     return 0
 
 
