@@ -117,6 +117,8 @@ class Sim(TensorAPI, CapturedLaunches):
             )
 
     def _build(self) -> None:
+        """Newton's model of ``num_envs`` robots and its MuJoCo Warp solver, with the kernels compiled side by
+        side while it is built (warpgym.compile.preload); each phase's seconds go to ``build_times``."""
         clock = _PhaseClock()
         import newton  # noqa: PLC0415
 
@@ -133,77 +135,110 @@ class Sim(TensorAPI, CapturedLaunches):
             scene.replicate(robot, num_worlds)
             return scene.finalize(device=self.device)
 
+        self._solver_settings(path)
+        start = time.perf_counter()
+        queued, stopped_early = self._rehearse(preload, build_model)
+        clock.lap("rehearsal")
+        self.model = model = build_model(self.num_envs)
+        clock.lap("model")
+        self._read_layout(model, path)
+        self._set_start_state(model)
+        preload.wait()
+        clock.lap("waiting for compiles")
+        self.compile_log = [("solver", {"queued": queued, "seconds": time.perf_counter() - start,
+                                        "stopped_early": repr(stopped_early) if stopped_early else None})]
+        self.solver = self._make_solver(model)
+        self.convert_once_per_step &= newton_internals.supports_split_substeps(self.solver)
+        clock.lap("solver")
+        self._make_state(model)
+
+        # The kernels specialised to the world count, named by a launch-free step of this model
+        # (contact forces on: tasks ask for them) and compiled side by side now, not at first launch.
+        self._contact_forces = True
+        self.compile_ahead(self.simulate)
+        self._contact_forces = False
+        clock.lap("step rehearsal")
+        self.build_times = clock.laps
+
+    def _solver_settings(self, path: str) -> None:
+        """Which of MuJoCo Warp's overflow flags count as dropped constraints, which it may stop printing, and
+        the motors' gears that motor damping is scaled by."""
         # The iteration caps are a deliberate speed/accuracy trade, not an error worth a printf per
         # world. Dropped constraints and contacts are errors, but they are counted on the device
         # every substep (solver_overflows, solver_load()) and reported once, not printed per world.
         from mujoco_warp import OverflowType as OF  # noqa: PLC0415
 
         self._drop_bits = int(OF.NEFC | OF.NJMAX_NNZ | OF.BROADPHASE | OF.NARROWPHASE)
-        quiet = ~int(OF.ITERATIONS | OF.LS_ITERATIONS | self._drop_bits)
+        self._quiet_bits = ~int(OF.ITERATIONS | OF.LS_ITERATIONS | self._drop_bits)
+        self._gears_by_joint = motor_gears(path)
+        self._hinge_gears = [self._gears_by_joint.get(name, 0.0) for name in hinge_joint_names(path)]
+
+    def _make_solver(self, model):
+        """Newton's MuJoCo solver for ``model`` with this Sim's physics settings applied to its model."""
+        import newton  # noqa: PLC0415
+
         phys = self.physics
+        solver = newton.solvers.SolverMuJoCo(
+            model,
+            iterations=phys.solver_iterations,
+            ls_iterations=phys.ls_iterations,
+            integrator=phys.integrator,
+            nconmax=self.nconmax,
+            njmax=self.njmax,
+            disable_sensors=True,
+        )
+        if phys.contact_timeconst is not None:
+            solref = solver.mjw_model.geom_solref.numpy()
+            solref[..., 0] = phys.contact_timeconst
+            solver.mjw_model.geom_solref.assign(solref)
+        if phys.motor_speed is not None or phys.exact_damping:
+            import mujoco  # noqa: PLC0415
 
-        gears_by_joint = motor_gears(path)
-        hinge_gears = [gears_by_joint.get(name, 0.0) for name in hinge_joint_names(path)]
+            damping = solver.mjw_model.dof_damping.numpy()
+            cpu = solver.mj_model  # the solver's CPU model, kept in step: exact_damping reads it
+            extra = np.zeros(cpu.nv)
+            extra[k_api.ROOT_DOFS :] = motor_damping(self._hinge_gears, phys.motor_speed)
+            cpu.dof_damping[:] += extra
+            damping += extra
+            if phys.exact_damping:  # of the damping in all, at the substep
+                dofs, scale = exact_damping_scale(mujoco, cpu, self.dt / self.substeps)
+                damping[..., dofs] *= scale
+            solver.mjw_model.dof_damping.assign(damping)
+        opt = solver.mjw_model.opt  # some kernels are specialised to these options
+        opt.warn_overflow = int(opt.warn_overflow) & self._quiet_bits
+        return solver
 
-        def make_solver(model):
-            solver = newton.solvers.SolverMuJoCo(
-                model,
-                iterations=phys.solver_iterations,
-                ls_iterations=phys.ls_iterations,
-                integrator=phys.integrator,
-                nconmax=self.nconmax,
-                njmax=self.njmax,
-                disable_sensors=True,
-            )
-            if phys.contact_timeconst is not None:
-                solref = solver.mjw_model.geom_solref.numpy()
-                solref[..., 0] = phys.contact_timeconst
-                solver.mjw_model.geom_solref.assign(solref)
-            if phys.motor_speed is not None or phys.exact_damping:
-                import mujoco  # noqa: PLC0415
+    def _rehearse(self, preload, build_model) -> tuple[int, object]:
+        """Queue the kernels MuJoCo Warp specialises to the model while it builds and first steps it.
 
-                damping = solver.mjw_model.dof_damping.numpy()
-                cpu = solver.mj_model  # the solver's CPU model, kept in step: exact_damping reads it
-                extra = np.zeros(cpu.nv)
-                extra[k_api.ROOT_DOFS :] = motor_damping(hinge_gears, phys.motor_speed)
-                cpu.dof_damping[:] += extra
-                damping += extra
-                if phys.exact_damping:  # of the damping in all, at the substep
-                    dofs, scale = exact_damping_scale(mujoco, cpu, self.dt / self.substeps)
-                    damping[..., dofs] *= scale
-                solver.mjw_model.dof_damping.assign(damping)
-            opt = solver.mjw_model.opt  # some kernels are specialised to these options
-            opt.warn_overflow = int(opt.warn_overflow) & quiet
-            return solver
-
-        # MuJoCo Warp specialises kernels to the model while it builds and first steps it. A
-        # rehearsal on two worlds names them (a few depend on the world count: the step's own
-        # rehearsal, below, catches those), so they compile beside the modules above, and while the
-        # full model is built, instead of one by one at their first launch.
-        start = time.perf_counter()
+        A rehearsal on two worlds names them (a few depend on the world count: the step's own rehearsal
+        catches those), so they compile beside the modules already queued, and while the full model is
+        built, instead of one by one at their first launch. Returns how many were queued and what stopped
+        the preload early, if anything."""
         queued = preload.add(lambda: build_model(REHEARSAL_WORLDS))  # the finalize kernels
         stopped_early = preload.stopped_early
         small = build_model(REHEARSAL_WORLDS)
 
         def rehearse():  # a launch-free construction and substep, contact forces on as tasks want them
-            solver = make_solver(small)
+            solver = self._make_solver(small)
             solver.mjw_model.opt.run_rne_postconstraint = True
             state, control = small.state(), small.control()
             solver.step(state, state, control, None, self.dt / self.substeps)
 
         queued += preload.add(rehearse)
-        stopped_early = stopped_early or preload.stopped_early
-        clock.lap("rehearsal")
-        self.model = model = build_model(self.num_envs)
-        clock.lap("model")
+        return queued, stopped_early or preload.stopped_early
+
+    def _read_layout(self, model, path: str) -> None:
+        """Per-env counts, body and joint names, feet, joint limits and gears, checked against the robot a
+        task expects: a free root joint and one hinge per actuated dof."""
         n = self.num_envs
         self.coords_per_env = model.joint_coord_count // n
         self.dofs_per_env = model.joint_dof_count // n
         self.bodies_per_env = model.body_count // n
         self.num_dofs = self.dofs_per_env - k_api.ROOT_DOFS
         self.body_names = [_leaf(s) for s in model.body_label[: self.bodies_per_env]]
-        joints_per_env = model.joint_count // n
-        dof_dims = model.joint_dof_dim.numpy()[:joints_per_env].sum(axis=1)
+        self._joints_per_env = model.joint_count // n
+        self._dof_dims = model.joint_dof_dim.numpy()[: self._joints_per_env].sum(axis=1)
         self.dof_names = hinge_joint_names(path)
         missing = [f for f in self.spec.feet if f not in self.body_names]
         if missing:
@@ -211,7 +246,7 @@ class Sim(TensorAPI, CapturedLaunches):
         self.foot_bodies = wp.array([self.body_names.index(f) for f in self.spec.feet], dtype=wp.int32,
                                     device=self.device)
         if (
-            int(dof_dims[0]) != k_api.ROOT_DOFS
+            int(self._dof_dims[0]) != k_api.ROOT_DOFS
             or self.coords_per_env - k_api.ROOT_COORDS != self.num_dofs
             or len(self.dof_names) != self.num_dofs
         ):
@@ -222,26 +257,25 @@ class Sim(TensorAPI, CapturedLaunches):
         self.dof_lower_np = lower.astype(np.float32)
         self.dof_upper_np = upper.astype(np.float32)
         self.default_dof_pos_np = np.clip(0.0, lower, upper).astype(np.float32)
-        self.motor_gear_np = np.array([gears_by_joint.get(name, 0.0) for name in self.dof_names], np.float32)
+        self.motor_gear_np = np.array([self._gears_by_joint.get(name, 0.0) for name in self.dof_names], np.float32)
 
-        # Start state: root upright at the robot's start height, dofs at 0 clamped into their limits.
+    def _set_start_state(self, model) -> None:
+        """Root upright at the robot's start height, dofs at 0 clamped into their limits; the armature set."""
+        n = self.num_envs
         q = model.joint_q.numpy().reshape(n, self.coords_per_env)
         q[:, :7] = (0.0, 0.0, self.spec.start_height, 0.0, 0.0, 0.0, 1.0)
         q[:, 7:] = self.default_dof_pos_np
         model.joint_q.assign(q.reshape(-1))
         model.joint_qd.zero_()
-        if phys.armature is not None:
+        if self.physics.armature is not None:
             armature = model.joint_armature.numpy().reshape(n, self.dofs_per_env)
-            armature[:, k_api.ROOT_DOFS :] = phys.armature
+            armature[:, k_api.ROOT_DOFS :] = self.physics.armature
             model.joint_armature.assign(armature.reshape(-1))
 
-        preload.wait()
-        clock.lap("waiting for compiles")
-        self.compile_log = [("solver", {"queued": queued, "seconds": time.perf_counter() - start,
-                                        "stopped_early": repr(stopped_early) if stopped_early else None})]
-        self.solver = make_solver(model)
-        self.convert_once_per_step &= newton_internals.supports_split_substeps(self.solver)
-        clock.lap("solver")
+    def _make_state(self, model) -> None:
+        """The state and control the steps write, their 2-D views, the solver-load counters and the map from
+        Newton's dofs to MuJoCo's."""
+        n = self.num_envs
         self._peak_nefc = wp.zeros(n, dtype=wp.int32, device=self.device)
         self._peak_nacon = wp.zeros(1, dtype=wp.int32, device=self.device)
         self._overflowed = wp.zeros(n, dtype=wp.int32, device=self.device)
@@ -257,17 +291,9 @@ class Sim(TensorAPI, CapturedLaunches):
         # Newton merges the hinges of one body into a single joint; MuJoCo keeps one dof per hinge,
         # in the same order, so each Newton joint's dofs map onto a contiguous MuJoCo range.
         mj_qd_start = self.solver.mj_qd_start.numpy()
-        to_mj = np.concatenate([mj_qd_start[j] + np.arange(dof_dims[j]) for j in range(1, joints_per_env)])
-        to_mj = to_mj.astype(np.int32)
-        self.newton_to_mj_dof = wp.array(to_mj, dtype=wp.int32, device=self.device)
-
-        # The kernels specialised to the world count, named by a launch-free step of this model
-        # (contact forces on: tasks ask for them) and compiled side by side now, not at first launch.
-        self._contact_forces = True
-        self.compile_ahead(self.simulate)
-        self._contact_forces = False
-        clock.lap("step rehearsal")
-        self.build_times = clock.laps
+        dims = self._dof_dims
+        to_mj = np.concatenate([mj_qd_start[j] + np.arange(dims[j]) for j in range(1, self._joints_per_env)])
+        self.newton_to_mj_dof = wp.array(to_mj.astype(np.int32), dtype=wp.int32, device=self.device)
 
     # ------------------------------------------------------------------ stepping
     @property
