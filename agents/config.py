@@ -2,7 +2,8 @@
 started from) where the idea matches.
 
 Units: ``horizon_len`` is env steps per env per iteration (the ElegantRL tutorial's ``target_step``);
-``batch_size`` is the mini-batch size in samples; ``repeat_times`` is the number of passes over
+``minibatch_size`` is the mini-batch size in samples (CleanRL's name; its ``batch_size`` is the whole
+rollout, and configs saved before 2026-11-26 wrote ``batch_size``: ``RENAMED``); ``repeat_times`` is the number of passes over
 each rollout; ``eval_gap`` is wall-clock seconds between evaluations; ``save_gap`` is iterations
 between checkpoints.
 """
@@ -17,17 +18,17 @@ from agents import data_parallel
 
 # Per-task starting points (Isaac Gym's rl_games settings for Ant and Humanoid, adapted to PPO here).
 PRESETS: dict[str, dict[str, Any]] = {
-    "Ant": dict(net_dims=(256, 128, 64), horizon_len=16, batch_size=32768, repeat_times=4,
+    "Ant": dict(net_dims=(256, 128, 64), horizon_len=16, minibatch_size=32768, repeat_times=4,
                 learning_rate=3e-4, reward_scale=0.01),
-    "Humanoid": dict(net_dims=(400, 200, 100), horizon_len=32, batch_size=32768, repeat_times=5,
+    "Humanoid": dict(net_dims=(400, 200, 100), horizon_len=32, minibatch_size=32768, repeat_times=5,
                      learning_rate=5e-4, reward_scale=0.01, value_coef=2.0),
 }
 # Gymnasium's MuJoCo suite (v5): why each setting, and what it scored: docs/benchmarks.md, "Presets"
-_SUITE = dict(net_dims=(256, 128, 64), horizon_len=32, batch_size=32768, repeat_times=5, learning_rate=3e-4,
+_SUITE = dict(net_dims=(256, 128, 64), horizon_len=32, minibatch_size=32768, repeat_times=5, learning_rate=3e-4,
               reward_scale=0.1, eval_gap=60.0)
 PRESETS.update({
     # no observation normaliser: the cart's position is an input whose running mean follows the cart ("Presets")
-    "InvertedPendulum-v5": dict(_SUITE, net_dims=(64, 64), horizon_len=32, batch_size=4096, anneal_lr=True,
+    "InvertedPendulum-v5": dict(_SUITE, net_dims=(64, 64), horizon_len=32, minibatch_size=4096, anneal_lr=True,
                                 normalize_obs=False),
     "InvertedDoublePendulum-v5": dict(_SUITE, reward_scale=0.01),
     "Reacher-v5": dict(_SUITE, reward_scale=1.0),
@@ -41,6 +42,10 @@ PRESETS.update({
     "Humanoid-v5": dict(_SUITE, net_dims=(400, 200, 100), reward_scale=0.05),
     "HumanoidStandup-v5": dict(_SUITE, net_dims=(400, 200, 100), reward_scale=0.001),
 })
+
+
+# Fields renamed since configs and checkpoints were first saved: the old name is still read (Config.renamed)
+RENAMED = {"batch_size": "minibatch_size"}
 
 
 def _is_number(v) -> bool:
@@ -60,7 +65,7 @@ class Config:
     net_dims: tuple[int, ...] = (256, 128, 64)
     activation: str = "elu"
     init_noise_std: float = 1.0
-    batch_size: int = 32768
+    minibatch_size: int = 32768  # samples per mini-batch step (rsl_rl gives num_mini_batches instead)
     horizon_len: int = 16
     repeat_times: int = 4
     learning_rate: float = 3e-4
@@ -91,7 +96,7 @@ class Config:
     compile_update: bool = False
     obs_clip: float = 5.0
     # how several processes (torchrun, one per GPU) divide the work: agents/data_parallel.py. "grow-steps": each
-    # GPU steps num_envs envs and a mini-batch stays batch_size samples across them, so G GPUs make G times the
+    # GPU steps num_envs envs and a mini-batch stays minibatch_size samples across them, so G GPUs make G times the
     # optimiser steps of one in an iteration about as long
     multi_gpu: str = data_parallel.DEFAULT
     # stop once a logged value reaches a number, "KEY=VALUE" (e.g. "eval/speed=9.5", "eval/return=5850"): the
@@ -107,13 +112,24 @@ class Config:
     # iteration that ends after each), e.g. (60, 120): policies of known training time to compare
     save_at: tuple[float, ...] = ()
 
+    @staticmethod
+    def renamed(values: dict) -> dict:
+        """``values`` with fields under an earlier name (``RENAMED``) under today's; both given: today's wins."""
+        out = dict(values)
+        for old, new in RENAMED.items():
+            if old in out:
+                value = out.pop(old)
+                out.setdefault(new, value)
+        return out
+
     @classmethod
     def for_task(cls, task: str, **overrides) -> Config:
         if task not in PRESETS:
             raise ValueError(f"no preset for task {task!r}: choose one of {sorted(PRESETS)} or build Config() yourself")
-        return cls(**{**PRESETS[task], **overrides}).validated()
+        return cls(**{**PRESETS[task], **cls.renamed(overrides)}).validated()
 
     def replace(self, **changes) -> Config:
+        changes = self.renamed(changes)
         names = {f.name for f in fields(self)}
         unknown = sorted(set(changes) - names)
         if unknown:
@@ -123,7 +139,7 @@ class Config:
     def validated(self) -> Config:
         if self.agent != "AgentPPO":
             raise ValueError(f"agent={self.agent!r}: this package implements 'AgentPPO' only")
-        for name in ("batch_size", "horizon_len", "repeat_times", "save_gap", "eval_envs"):
+        for name in ("minibatch_size", "horizon_len", "repeat_times", "save_gap", "eval_envs"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < 1:
                 raise ValueError(f"{name}={v!r} must be a positive integer")
@@ -159,7 +175,7 @@ class Config:
     def check_batch(self, num_envs: int, processes: int = 1) -> int:
         """Mini-batches per pass for this process's ``num_envs`` envs among ``processes`` (agents.data_parallel);
         raises if they do not divide evenly."""
-        return data_parallel.minibatches(self.multi_gpu, num_envs, self.horizon_len, self.batch_size, processes)
+        return data_parallel.minibatches(self.multi_gpu, num_envs, self.horizon_len, self.minibatch_size, processes)
 
     def target_pair(self) -> tuple[str, float] | None:
         """``target`` as (key, value), or None without one; raises on a malformed one."""

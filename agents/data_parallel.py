@@ -3,16 +3,16 @@
 Every mode trains one policy, its gradients averaged over the processes at each mini-batch step
 (agents.distributed); they differ in what grows with G:
 
-``split``       strong scaling: ``num_envs`` and the mini-batch (``batch_size``) are the run's totals, each
-                process steps num_envs / G envs and holds batch_size / G samples of every mini-batch. An
+``split``       strong scaling: ``num_envs`` and the mini-batch (``minibatch_size``) are the run's totals, each
+                process steps num_envs / G envs and holds minibatch_size / G samples of every mini-batch. An
                 iteration is the one-GPU algorithm step for step (the same samples, mini-batches and
                 optimiser steps), on envs that step faster because each GPU holds fewer: more iterations
                 per second, the same learning per iteration.
 ``grow-batch``  weak scaling, the mini-batch grows: each process steps num_envs envs and mini-batches of
-                batch_size, so an optimiser step averages G times the samples of a one-GPU step; an
+                minibatch_size, so an optimiser step averages G times the samples of a one-GPU step; an
                 iteration takes about as long as on one GPU.
 ``grow-steps``  weak scaling, the mini-batch stays: each process steps num_envs envs, a mini-batch stays
-                batch_size samples across all processes, so an iteration makes G times the optimiser
+                minibatch_size samples across all processes, so an iteration makes G times the optimiser
                 steps (Beukman et al., 2026, keep the inner loop fixed as the envs grow).
 
 ``grow-steps`` is the default (DEFAULT): of the three it reached the Ant's 9.5 m/s soonest on 2 and on 4 GPUs
@@ -45,21 +45,21 @@ def envs_per_process(mode: str, num_envs: int, processes: int) -> int:
     return num_envs // processes
 
 
-def minibatches(mode: str, local_envs: int, horizon_len: int, batch_size: int, processes: int = 1) -> int:
+def minibatches(mode: str, local_envs: int, horizon_len: int, minibatch_size: int, processes: int = 1) -> int:
     """Mini-batch steps per pass over a rollout, the same on every process; raises where the samples do not
-    divide. ``local_envs`` is this process's envs; ``batch_size`` is a mini-batch's samples across all
+    divide. ``local_envs`` is this process's envs; ``minibatch_size`` is a mini-batch's samples across all
     processes under ``split`` and ``grow-steps``, and on each process under ``grow-batch``."""
     check_mode(mode)
     shared = mode != "grow-batch" and processes > 1
-    if shared and batch_size % processes:
-        raise ValueError(f"batch_size={batch_size} does not split over {processes} processes (multi_gpu={mode!r}: "
-                         f"a mini-batch is {batch_size} samples across them): pick a multiple of {processes}")
+    if shared and minibatch_size % processes:
+        raise ValueError(f"minibatch_size={minibatch_size} does not split over {processes} processes (multi_gpu={mode!r}: "
+                         f"a mini-batch is {minibatch_size} samples across them): pick a multiple of {processes}")
     samples = local_envs * horizon_len * (processes if shared else 1)  # the rollout a mini-batch is drawn from
     rollout = (f"{processes} processes x " if shared else "") + f"{local_envs} envs x horizon_len {horizon_len}"
-    if batch_size > samples:
-        raise ValueError(f"batch_size={batch_size} exceeds the {samples} samples of one rollout ({rollout}): "
-                         "lower batch_size or raise num_envs")
-    if samples % batch_size:
-        raise ValueError(f"batch_size={batch_size} does not divide the {samples} samples of one rollout ({rollout}): "
+    if minibatch_size > samples:
+        raise ValueError(f"minibatch_size={minibatch_size} exceeds the {samples} samples of one rollout ({rollout}): "
+                         "lower minibatch_size or raise num_envs")
+    if samples % minibatch_size:
+        raise ValueError(f"minibatch_size={minibatch_size} does not divide the {samples} samples of one rollout ({rollout}): "
                          f"pick a divisor, e.g. {samples // 4}")
-    return samples // batch_size
+    return samples // minibatch_size

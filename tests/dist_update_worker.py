@@ -34,7 +34,7 @@ def main() -> None:
     device = torch.device(f"cuda:{local}")
     init_workers("nccl", device)
     rank = dist.get_rank()
-    cfg = Config(net_dims=(64, 64), horizon_len=8, batch_size=1024, repeat_times=3).validated()
+    cfg = Config(net_dims=(64, 64), horizon_len=8, minibatch_size=1024, repeat_times=3).validated()
     torch.manual_seed(0)
     base = ActorCritic(24, 6, cfg.net_dims).to(device)  # the same weights on every rank
     results = {}

@@ -19,7 +19,7 @@ init_workers("gloo")
 rank = dist.get_rank()
 out = sys.argv[1]
 env = PointMassVecEnv(32, seed=rank)
-cfg = Config(net_dims=(16, 16), horizon_len=10, batch_size=160, repeat_times=2, learning_rate=3e-3,
+cfg = Config(net_dims=(16, 16), horizon_len=10, minibatch_size=160, repeat_times=2, learning_rate=3e-3,
              eval_gap=1e9, save_gap=10**6, seed=0)
 runner = OnPolicyRunner(env, cfg, run_dir=os.path.join(out, "run"), print_fn=lambda s: None)
 history = runner.learn(max_iterations=int(sys.argv[2]) if len(sys.argv) > 2 else 5)

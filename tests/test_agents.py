@@ -93,7 +93,7 @@ def test_an_update_logs_the_mean_and_peak_of_its_mini_batches_rates_and_kls(monk
         return rule(lr, kl, desired_kl)
 
     monkeypatch.setattr(ppo_module, "adapted_lr", watched)
-    cfg = Config(net_dims=(16,), horizon_len=4, batch_size=8, repeat_times=3, learning_rate=5e-3, seed=1,
+    cfg = Config(net_dims=(16,), horizon_len=4, minibatch_size=8, repeat_times=3, learning_rate=5e-3, seed=1,
                  eval_gap=1e9)
     runner = OnPolicyRunner(PointMassVecEnv(8, seed=1), cfg, print_fn=lambda s: None)
     step = runner.ppo.optimizer.step
@@ -114,7 +114,7 @@ def test_an_update_logs_the_mean_and_peak_of_its_mini_batches_rates_and_kls(monk
 def test_an_annealed_learning_rate_falls_linearly_to_zero_over_the_budget_and_resumes_where_it_was(tmp_path):
     """Config.anneal_lr: iteration k of n learns at learning_rate * (1 - (k - 1) / n) (the factor is set
     before each update), with the KL rule too (its rate, scaled), and a resumed run goes on down the line."""
-    base = dict(net_dims=(8,), horizon_len=4, batch_size=32, repeat_times=2, learning_rate=1e-3, eval_gap=1e9,
+    base = dict(net_dims=(8,), horizon_len=4, minibatch_size=32, repeat_times=2, learning_rate=1e-3, eval_gap=1e9,
                 save_gap=2)
     fixed = OnPolicyRunner(PointMassVecEnv(8), Config(**base, desired_kl=0.0, anneal_lr=True), run_dir=str(tmp_path),
                            print_fn=lambda s: None)
@@ -165,7 +165,7 @@ def test_normalizer_keeps_its_statistics_once_it_holds_until_observations():
     np.testing.assert_allclose(frozen.var.numpy(), learnt.var(0), rtol=1e-4)
     assert frozen.count.item() == 120 and free.count.item() == 180 and free.mean.mean().item() > 3.0
 
-    cfg = Config(net_dims=(16,), horizon_len=4, batch_size=32, seed=0, normalize_until=40, eval_gap=1e9)
+    cfg = Config(net_dims=(16,), horizon_len=4, minibatch_size=32, seed=0, normalize_until=40, eval_gap=1e9)
     runner = OnPolicyRunner(PointMassVecEnv(8, seed=0), cfg, print_fn=lambda s: None)
     runner.learn(max_iterations=3)
     # the first observations (8), then the first rollout (32): 40, where it stops
@@ -182,16 +182,16 @@ def test_config_validation_names_the_value_and_the_fix():
     with pytest.raises(ValueError, match="unknown config field"):
         Config().replace(lr=1.0)
     with pytest.raises(ValueError, match="does not divide"):
-        Config(batch_size=300, horizon_len=16).check_batch(64)
+        Config(minibatch_size=300, horizon_len=16).check_batch(64)
     with pytest.raises(ValueError, match="exceeds"):
-        Config(batch_size=4096, horizon_len=16).check_batch(64)
-    assert Config(batch_size=256, horizon_len=16).check_batch(64) == 4
+        Config(minibatch_size=4096, horizon_len=16).check_batch(64)
+    assert Config(minibatch_size=256, horizon_len=16).check_batch(64) == 4
     assert Config.for_task("Humanoid").net_dims == (400, 200, 100)
 
 
 def test_ppo_learns_a_point_mass_within_seconds():
     env, ev = PointMassVecEnv(64, seed=0), PointMassVecEnv(16, seed=1)
-    cfg = Config(net_dims=(32, 32), horizon_len=25, batch_size=400, repeat_times=4, learning_rate=3e-3,
+    cfg = Config(net_dims=(32, 32), horizon_len=25, minibatch_size=400, repeat_times=4, learning_rate=3e-3,
                  eval_gap=1e9, save_gap=10**6, seed=0)
     runner = OnPolicyRunner(env, cfg, eval_env=ev, print_fn=lambda s: None)
     history = runner.learn(max_iterations=50)
@@ -210,7 +210,7 @@ def test_a_rollout_stored_at_a_device_step_index_equals_a_plain_loop_over_the_st
     by Python ints does, truncations crossing the rollouts' boundary included."""
     import copy
 
-    cfg = Config(net_dims=(16,), horizon_len=4, batch_size=32, seed=2, normalize_obs=normalize_obs)
+    cfg = Config(net_dims=(16,), horizon_len=4, minibatch_size=32, seed=2, normalize_obs=normalize_obs)
     env = PointMassVecEnv(8, episode_length=6, seed=3)
     twin = copy.deepcopy(env)
     runner = OnPolicyRunner(env, cfg, print_fn=lambda s: None)
@@ -243,6 +243,13 @@ def test_a_rollout_stored_at_a_device_step_index_equals_a_plain_loop_over_the_st
         assert runner.storage.truncated.sum() == (0 if rollout == 0 else 8)  # 6-step episodes end in the second
 
 
+def test_minibatch_size_is_read_under_its_earlier_name_too():
+    """Configs and checkpoints saved before the rename wrote ``batch_size``; they load as they were."""
+    assert Config.renamed({"batch_size": 8, "gamma": 0.9}) == {"minibatch_size": 8, "gamma": 0.9}
+    assert Config.renamed({"batch_size": 8, "minibatch_size": 16}) == {"minibatch_size": 16}
+    assert Config.for_task("Ant").replace(batch_size=512).minibatch_size == 512
+
+
 def test_an_episode_that_ends_on_its_own_at_the_time_limit_is_not_bootstrapped():
     """Gymnasium's TimeLimit reports a termination on the last step as truncated too; the value of what follows
     a termination is 0, so PPO bootstraps only truncated and not terminated (warpgym's info["time_outs"])."""
@@ -252,7 +259,7 @@ def test_an_episode_that_ends_on_its_own_at_the_time_limit_is_not_bootstrapped()
             obs, reward, terminated, truncated, info = super().step(actions)
             return obs, reward, truncated & (torch.arange(self.num_envs) % 2 == 0), truncated, info
 
-    runner = OnPolicyRunner(EndsAtTheLimit(8, episode_length=3), Config(net_dims=(16,), horizon_len=4, batch_size=32),
+    runner = OnPolicyRunner(EndsAtTheLimit(8, episode_length=3), Config(net_dims=(16,), horizon_len=4, minibatch_size=32),
                             print_fn=lambda s: None)
     runner.collect()
     assert runner.storage.dones[2].all()  # every episode ended at the third step
@@ -271,7 +278,7 @@ def test_checkpoint_write_is_atomic_and_round_trips(tmp_path):
 
 
 def test_resume_restores_policy_normalizer_optimizer_and_counters(tmp_path):
-    cfg = Config(net_dims=(16,), horizon_len=10, batch_size=320, repeat_times=2, save_gap=2, eval_gap=1e9)
+    cfg = Config(net_dims=(16,), horizon_len=10, minibatch_size=320, repeat_times=2, save_gap=2, eval_gap=1e9)
     a = OnPolicyRunner(PointMassVecEnv(64), cfg, run_dir=str(tmp_path), print_fn=lambda s: None)
     a.learn(max_iterations=3)
     b = OnPolicyRunner(PointMassVecEnv(64), cfg, run_dir=str(tmp_path), print_fn=lambda s: None)
@@ -289,7 +296,7 @@ def test_resume_restores_policy_normalizer_optimizer_and_counters(tmp_path):
 
 def test_a_policy_plays_with_another_checkpoints_normalizer_and_refuses_what_has_none(tmp_path):
     """``warpgym eval --normalizer-from``: one checkpoint's weights on the inputs another's statistics give."""
-    cfg = Config(net_dims=(16,), horizon_len=10, batch_size=320, repeat_times=2, save_gap=1, eval_gap=1e9)
+    cfg = Config(net_dims=(16,), horizon_len=10, minibatch_size=320, repeat_times=2, save_gap=1, eval_gap=1e9)
     runner = OnPolicyRunner(PointMassVecEnv(64), cfg, run_dir=str(tmp_path), print_fn=lambda s: None)
     runner.learn(max_iterations=2)
     mine = load(str(tmp_path / "checkpoint.pt"), torch.device("cpu"))
@@ -336,7 +343,7 @@ def test_actor_starts_near_zero_mean_with_the_configured_noise():
 def test_rows_logged_one_iteration_late_still_report_their_own_iteration():
     # 8 envs whose 10-step episodes all end together, 4 steps per rollout: episodes finish during
     # iterations 3 (step 10) and 5 (step 20) only
-    cfg = Config(net_dims=(8,), horizon_len=4, batch_size=32, repeat_times=1, eval_gap=1e9, save_gap=10**6)
+    cfg = Config(net_dims=(8,), horizon_len=4, minibatch_size=32, repeat_times=1, eval_gap=1e9, save_gap=10**6)
     runner = OnPolicyRunner(PointMassVecEnv(8, episode_length=10), cfg,
                             eval_env=PointMassVecEnv(4, episode_length=10), print_fn=lambda s: None)
     history = runner.learn(max_iterations=5)
@@ -349,7 +356,7 @@ def test_rows_logged_one_iteration_late_still_report_their_own_iteration():
 
 
 def test_an_error_inside_an_iteration_keeps_its_rows_and_the_last_clean_checkpoint(tmp_path):
-    cfg = Config(net_dims=(8,), horizon_len=4, batch_size=32, repeat_times=1, eval_gap=1e9, save_gap=2)
+    cfg = Config(net_dims=(8,), horizon_len=4, minibatch_size=32, repeat_times=1, eval_gap=1e9, save_gap=2)
     runner = OnPolicyRunner(PointMassVecEnv(8), cfg, run_dir=str(tmp_path), print_fn=lambda s: None)
     real_update = runner.update
 
@@ -371,7 +378,7 @@ def test_an_error_inside_an_iteration_keeps_its_rows_and_the_last_clean_checkpoi
 def test_a_peer_lost_while_gathering_statistics_leaves_no_checkpoint_ahead_of_the_metrics(tmp_path):
     """A peer dies in the collective that gathers iteration 5's statistics: iteration 5 finished,
     but its row was never made. Saving it would leave a resume with no row 5 ever."""
-    cfg = Config(net_dims=(8,), horizon_len=4, batch_size=32, repeat_times=1, eval_gap=1e9, save_gap=2)
+    cfg = Config(net_dims=(8,), horizon_len=4, minibatch_size=32, repeat_times=1, eval_gap=1e9, save_gap=2)
     runner = OnPolicyRunner(PointMassVecEnv(8), cfg, run_dir=str(tmp_path), print_fn=lambda s: None)
     real_sum = runner.workers.sum_
 
@@ -392,7 +399,7 @@ def test_a_peer_lost_while_gathering_statistics_leaves_no_checkpoint_ahead_of_th
 
 
 def test_checkpoints_are_kept_at_the_first_iteration_after_each_save_at_mark_and_not_again_on_resume(tmp_path):
-    cfg = Config(net_dims=(8,), horizon_len=4, batch_size=32, repeat_times=1, eval_gap=1e9, save_gap=10**6,
+    cfg = Config(net_dims=(8,), horizon_len=4, minibatch_size=32, repeat_times=1, eval_gap=1e9, save_gap=10**6,
                  save_at=(45, 15, 25, 26))
     a = OnPolicyRunner(PointMassVecEnv(8), cfg, run_dir=str(tmp_path), print_fn=lambda s: None)
     a.elapsed = lambda: 10.0 * a.iteration  # a clock that ticks 10 s per iteration
@@ -409,7 +416,7 @@ def test_checkpoints_are_kept_at_the_first_iteration_after_each_save_at_mark_and
 
 
 def test_a_stop_request_ends_the_run_after_an_iteration_and_saves_it(tmp_path):
-    cfg = Config(net_dims=(8,), horizon_len=4, batch_size=32, repeat_times=1, eval_gap=1e9, save_gap=10**6)
+    cfg = Config(net_dims=(8,), horizon_len=4, minibatch_size=32, repeat_times=1, eval_gap=1e9, save_gap=10**6)
     runner = OnPolicyRunner(PointMassVecEnv(8), cfg, run_dir=str(tmp_path), print_fn=lambda s: None)
     real_update = runner.update
 
@@ -426,7 +433,7 @@ def test_a_stop_request_ends_the_run_after_an_iteration_and_saves_it(tmp_path):
 
 
 def test_a_time_limit_stops_every_process_after_the_same_iteration():
-    cfg = Config(net_dims=(8,), horizon_len=4, batch_size=32, repeat_times=1, eval_gap=1e9, save_gap=10**6)
+    cfg = Config(net_dims=(8,), horizon_len=4, minibatch_size=32, repeat_times=1, eval_gap=1e9, save_gap=10**6)
     runner = OnPolicyRunner(PointMassVecEnv(8), cfg, print_fn=lambda s: None)
     history = runner.learn(time_limit=0.0)  # over at once: read with iteration 1's row, during iteration 2
     assert [r["iteration"] for r in history] == [1, 2]
@@ -445,7 +452,7 @@ class SlowPointMass(PointMassVecEnv):
 def test_evaluation_time_is_left_out_of_the_iteration_it_delays():
     # an evaluation after every row, each far longer than an iteration of 8 envs x 4 steps; the
     # evaluation runs while the next iteration is already queued, so its time belongs to the one after
-    cfg = Config(net_dims=(8,), horizon_len=4, batch_size=32, repeat_times=1, eval_gap=0.0, save_gap=10**6)
+    cfg = Config(net_dims=(8,), horizon_len=4, minibatch_size=32, repeat_times=1, eval_gap=0.0, save_gap=10**6)
     runner = OnPolicyRunner(PointMassVecEnv(8), cfg, eval_env=SlowPointMass(4, episode_length=60),
                             print_fn=lambda s: None)
     history = runner.learn(max_iterations=8)
@@ -480,7 +487,7 @@ class FaultyPointMass(PointMassVecEnv):
 
 def test_fault_counters_are_logged_every_row_and_warned_once():
     lines = []
-    cfg = Config(net_dims=(8,), horizon_len=4, batch_size=32, repeat_times=1, eval_gap=1e9, save_gap=10**6)
+    cfg = Config(net_dims=(8,), horizon_len=4, minibatch_size=32, repeat_times=1, eval_gap=1e9, save_gap=10**6)
     runner = OnPolicyRunner(FaultyPointMass(8), cfg, print_fn=lines.append)
     history = runner.learn(max_iterations=5)
     # steps 1-4, 5-8: none; step 9-12: 3 (steps 10, 11, 12); then 4 more per iteration

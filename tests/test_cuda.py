@@ -30,7 +30,7 @@ def test_graph_captured_update_matches_the_eager_one():
     from agents.actor_critic import ActorCritic
     from agents.ppo import PPO
 
-    cfg = Config(net_dims=(32, 32), horizon_len=8, batch_size=512, repeat_times=3).validated()
+    cfg = Config(net_dims=(32, 32), horizon_len=8, minibatch_size=512, repeat_times=3).validated()
     torch.manual_seed(0)
     base = ActorCritic(12, 3, cfg.net_dims).to(DEV)
     results = []
@@ -82,7 +82,7 @@ def test_captured_rollout_matches_the_eager_one(task):
     from agents import Config, OnPolicyRunner
     from warpgym.envs import make_vec_env
 
-    cfg = Config.for_task(task, horizon_len=8, batch_size=256)
+    cfg = Config.for_task(task, horizon_len=8, minibatch_size=256)
     names = ("raw_obs", "actions", "rewards", "dones", "truncated", "final_obs", "advantages", "returns")
     runs = []
     for graph in ("off", "step", "rollout"):

@@ -38,16 +38,16 @@ def test_each_mode_divides_the_envs_and_the_mini_batches_as_documented(mode, env
 def test_a_split_that_does_not_divide_names_the_value_and_the_fix():
     with pytest.raises(ValueError, match=r"num_envs=8193 does not split over 4 processes .* e.g. 8192"):
         envs_per_process("split", 8193, 4)
-    with pytest.raises(ValueError, match=r"batch_size=100 does not split over 3 processes"):
+    with pytest.raises(ValueError, match=r"minibatch_size=100 does not split over 3 processes"):
         minibatches("split", 64, 16, 100, 3)
-    with pytest.raises(ValueError, match=r"batch_size=4096 exceeds the 2048 samples of one rollout \(2 processes x 64"):
+    with pytest.raises(ValueError, match=r"minibatch_size=4096 exceeds the 2048 samples of one rollout \(2 processes x 64"):
         minibatches("grow-steps", 64, 16, 4096, 2)
     with pytest.raises(ValueError, match="multi_gpu='pairs': choose one of split, grow-batch, grow-steps"):
         Config(multi_gpu="pairs").validated()
 
 
 def test_a_run_stops_at_its_target_and_records_the_row_that_reached_it():
-    cfg = Config(net_dims=(8,), horizon_len=4, batch_size=32, repeat_times=1, eval_gap=1e9, save_gap=10**6,
+    cfg = Config(net_dims=(8,), horizon_len=4, minibatch_size=32, repeat_times=1, eval_gap=1e9, save_gap=10**6,
                  target="return=-1e9")  # any finished episode reaches it
     runner = OnPolicyRunner(PointMassVecEnv(8, episode_length=8), cfg, print_fn=lambda s: None)
     history = runner.learn(max_iterations=100)
@@ -57,7 +57,7 @@ def test_a_run_stops_at_its_target_and_records_the_row_that_reached_it():
     # statistics are on their way already: the stop travels with iteration 4's, read during iteration 5, as a
     # stop request does (every process stops after the same iteration)
     assert hit["iteration"] == 2 and len(history) == 5
-    never = Config(net_dims=(8,), horizon_len=4, batch_size=32, repeat_times=1, eval_gap=1e9, target="return=1e9")
+    never = Config(net_dims=(8,), horizon_len=4, minibatch_size=32, repeat_times=1, eval_gap=1e9, target="return=1e9")
     assert len(OnPolicyRunner(PointMassVecEnv(8), never, print_fn=lambda s: None).learn(max_iterations=6)) == 6
     with pytest.raises(ValueError, match="target='speed': write KEY=VALUE"):
         Config(target="speed").validated()

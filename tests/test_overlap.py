@@ -18,7 +18,7 @@ from point_mass import PointMassVecEnv  # noqa: E402
 from agents import Config, OnPolicyRunner  # noqa: E402
 from agents.actor_critic import gaussian_log_prob  # noqa: E402
 
-SMALL = dict(net_dims=(16,), horizon_len=10, batch_size=320, repeat_times=2, eval_gap=1e9, save_gap=10**6)
+SMALL = dict(net_dims=(16,), horizon_len=10, minibatch_size=320, repeat_times=2, eval_gap=1e9, save_gap=10**6)
 
 
 def quiet(env, cfg, **kw):
@@ -66,7 +66,7 @@ def test_the_first_iteration_collects_the_rollout_its_update_learns_from():
 
 
 def test_overlapped_ppo_learns_the_point_mass_as_the_sequential_one_does():
-    cfg = Config(net_dims=(32, 32), horizon_len=25, batch_size=400, repeat_times=4, learning_rate=3e-3,
+    cfg = Config(net_dims=(32, 32), horizon_len=25, minibatch_size=400, repeat_times=4, learning_rate=3e-3,
                  eval_gap=1e9, save_gap=10**6, seed=0, overlap=True)
     runner = quiet(PointMassVecEnv(64, seed=0), cfg, eval_env=PointMassVecEnv(16, seed=1))
     history = runner.learn(max_iterations=50)
@@ -107,7 +107,7 @@ def test_a_lagged_update_clips_and_measures_kl_against_the_policy_it_starts_from
         for p in stale.actor.parameters():
             p.add_(0.3 * torch.randn_like(p))
     storage = lagged_rollout(policy, stale)
-    cfg = Config(net_dims=(8,), horizon_len=4, batch_size=32, repeat_times=1, desired_kl=0.0)
+    cfg = Config(net_dims=(8,), horizon_len=4, minibatch_size=32, repeat_times=1, desired_kl=0.0)
     obs, actions = storage.obs.flatten(0, 1), storage.actions.flatten(0, 1)
     with torch.no_grad():
         prox = gaussian_log_prob(actions, policy.actor(obs), policy.log_std)
@@ -131,7 +131,7 @@ def test_the_overlapped_learning_rate_follows_the_update_not_the_lag():
     import statistics
 
     def median_lr(overlap: bool) -> float:
-        cfg = Config(net_dims=(32, 32), horizon_len=25, batch_size=400, repeat_times=4, learning_rate=3e-3,
+        cfg = Config(net_dims=(32, 32), horizon_len=25, minibatch_size=400, repeat_times=4, learning_rate=3e-3,
                      eval_gap=1e9, save_gap=10**6, seed=0, overlap=overlap)
         history = quiet(PointMassVecEnv(64, seed=0), cfg).learn(max_iterations=50)
         return statistics.median(r["policy/lr"] for r in history)

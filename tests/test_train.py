@@ -35,7 +35,7 @@ def test_short_cpu_run_writes_logs_checkpoint_plots_resumes_and_plays(tmp_path, 
     assert all("eval/return" in r for r in rows) and rows[-1]["episodes"] >= 0
     assert load(os.path.join(run, "checkpoint.pt"), torch.device("cpu"))["iteration"] == 3
     saved = json.load(open(os.path.join(run, "config.json")))
-    assert saved["num_envs"] == 8 and saved["batch_size"] == 32  # 8 envs x 8 steps, two mini-batches
+    assert saved["num_envs"] == 8 and saved["minibatch_size"] == 32  # 8 envs x 8 steps, two mini-batches
     # the whole physics it trained with, so that later replays use it whatever the defaults become
     from warpgym.tasks import ANT
 
@@ -159,16 +159,16 @@ def test_every_task_has_defaults_and_the_gpu_default_trains_as_it_was_measured()
         envs = train.default_envs_and_iterations("cuda", task)[0]
         cfg = train.build_config(train.parse_args(["--task", task]), task, envs, "cuda:0")
         preset = Config.for_task(task)
-        assert cfg.batch_size == preset.batch_size, (task, envs)
-        assert (envs * cfg.horizon_len) % cfg.batch_size == 0
+        assert cfg.minibatch_size == preset.minibatch_size, (task, envs)
+        assert (envs * cfg.horizon_len) % cfg.minibatch_size == 0
         assert cfg.env_args["num_envs"] == envs
 
 
 def test_config_flags_set_any_ppo_setting_and_name_a_wrong_one():
     args = train.parse_args(["--task", "Hopper-v5", "--config", "gamma=0.999", "--config", "net_dims=64,32",
-                             "--config", "batch_size=512", "--config", "normalize_obs=false"])
+                             "--config", "batch_size=512", "--config", "normalize_obs=false"])  # batch_size: the earlier name
     cfg = train.build_config(args, "Hopper-v5", 64, "cpu")
-    assert (cfg.gamma, cfg.net_dims, cfg.batch_size, cfg.normalize_obs) == (0.999, (64, 32), 512, False)
+    assert (cfg.gamma, cfg.net_dims, cfg.minibatch_size, cfg.normalize_obs) == (0.999, (64, 32), 512, False)
     for bad, says in ((["--config", "gama=0.9"], "'gama' is not a PPO setting"),
                       (["--config", "seed=3"], "'seed' is not a PPO setting"),
                       (["--config", "net_dims=wide"], "comma-separated numbers")):

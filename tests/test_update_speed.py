@@ -21,7 +21,7 @@ from benchmarks.speed import update_speed
 def learn(compile_update: bool, lagged: bool = False):
     """Three updates of a small policy on a fixed random rollout; the weights and the last statistics."""
     torch.manual_seed(0)
-    cfg = Config(net_dims=(32, 16), horizon_len=8, batch_size=64, repeat_times=2, compile_update=compile_update)
+    cfg = Config(net_dims=(32, 16), horizon_len=8, minibatch_size=64, repeat_times=2, compile_update=compile_update)
     policy = ActorCritic(6, 2, cfg.net_dims)
     storage = RolloutStorage(8, 16, 6, 2, torch.device("cpu"))
     g = torch.Generator().manual_seed(1)

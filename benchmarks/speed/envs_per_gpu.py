@@ -116,7 +116,7 @@ BATCH: dict[str, int] = {}  # --batch-size: the mini-batch at 4096 envs, instead
 def batch_size(task: str, num_envs: int, scale: bool) -> int:
     from agents.config import PRESETS  # noqa: PLC0415
 
-    base = BATCH.get(task, PRESETS[task]["batch_size"])
+    base = BATCH.get(task, PRESETS[task]["minibatch_size"])
     return max(1, base * num_envs // BASE_ENVS) if scale else base
 
 

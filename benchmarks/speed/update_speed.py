@@ -57,7 +57,7 @@ def time_mode(task: str, num_envs: int, mode: str, args, device) -> dict:
 
     opts = MODES[mode]
     cfg = Config.for_task(task, compile_update=opts["compile_update"],
-                          **({"batch_size": args.batch_size} if args.batch_size else {}))
+                          **({"minibatch_size": args.batch_size} if args.batch_size else {}))
     minibatches = cfg.check_batch(num_envs)
     torch.manual_seed(0)
     if device.type == "cuda":
@@ -80,7 +80,7 @@ def time_mode(task: str, num_envs: int, mode: str, args, device) -> dict:
     times = [one() for _ in range(args.repeats)]
     steps = cfg.repeat_times * minibatches
     median = statistics.median(times)
-    return {"task": task, "num_envs": num_envs, "mode": mode, "minibatch_steps": steps, "batch_size": cfg.batch_size,
+    return {"task": task, "num_envs": num_envs, "mode": mode, "minibatch_steps": steps, "batch_size": cfg.minibatch_size,
             "first_update_s": first, "update_ms_median": 1e3 * median, "update_ms_all": [1e3 * t for t in times],
             "ms_per_minibatch_step": 1e3 * median / steps}
 

@@ -68,15 +68,16 @@ def build_config(args, task: str, num_envs: int, device: str, saved: dict | None
     is this process's share of ``num_envs`` among ``processes`` (Config.multi_gpu)."""
     if saved is not None:
         known = {f.name for f in fields(Config)} - {"env_class", "env_args", "eval_env_class", "eval_env_args"}
-        # a run saved before Config.multi_gpu gave each process num_envs envs and mini-batches of batch_size
-        saved = {"multi_gpu": "grow-batch", **saved}
+        # a run saved before Config.multi_gpu gave each process num_envs envs and mini-batches of minibatch_size;
+        # one saved before Config.minibatch_size wrote batch_size (Config.renamed)
+        saved = {"multi_gpu": "grow-batch", **Config.renamed(saved)}
         cfg = Config(**{k: (tuple(v) if k == "net_dims" else v) for k, v in saved.items() if k in known})
     else:
         cfg = Config.for_task(task, seed=args.seed)
     changes = {k: v for k, v in {
         "horizon_len": args.horizon_len, "repeat_times": args.repeat_times, "learning_rate": args.learning_rate,
         "save_gap": args.save_gap, "eval_gap": args.eval_gap, "eval_envs": args.eval_envs,
-        "batch_size": args.batch_size, "keep_checkpoints": args.keep_checkpoints or None,
+        "minibatch_size": args.minibatch_size, "keep_checkpoints": args.keep_checkpoints or None,
         "overlap": args.overlap or None, "compile_update": args.compile_update or None,
         "save_at": tuple(args.save_at) if args.save_at else None, "target": args.target,
         "multi_gpu": args.multi_gpu,
@@ -85,8 +86,8 @@ def build_config(args, task: str, num_envs: int, device: str, saved: dict | None
         changes["eval_envs"] = 4
     cfg = cfg.replace(**{**(args.config or {}), **changes})
     samples = num_envs * cfg.horizon_len
-    batch = cfg.batch_size
-    if saved is None and args.batch_size is None and "batch_size" not in (args.config or {}) and (
+    batch = cfg.minibatch_size
+    if saved is None and args.minibatch_size is None and "minibatch_size" not in (args.config or {}) and (
             batch > samples // 2 or samples % batch):
         batch = max(samples // 2, 1)  # the preset's mini-batch does not fit this env count
     from warpgym.envs import entry_point  # noqa: PLC0415
@@ -109,7 +110,7 @@ def build_config(args, task: str, num_envs: int, device: str, saved: dict | None
     env_class = entry_point(entry.vector_entry_point)
     local_envs = envs_per_process(cfg.multi_gpu, num_envs, processes)
     return cfg.replace(
-        batch_size=batch,
+        minibatch_size=batch,
         env_class=env_class,
         env_args={**common, "num_envs": local_envs, "seed": args.seed},
         eval_env_class=env_class,

@@ -33,7 +33,8 @@ def parser(description: str | None = None) -> CommandParser:
     ap.add_argument("--no-eval", action="store_true")
     ap.add_argument("--save-gap", type=positive_int(50), default=None, help="iterations between checkpoints")
     ap.add_argument("--horizon-len", type=positive_int(16), default=None)
-    ap.add_argument("--batch-size", type=positive_int(32768), default=None)
+    ap.add_argument("--minibatch-size", "--batch-size", dest="minibatch_size", type=positive_int(32768), default=None,
+                    help="samples per mini-batch step (Config.minibatch_size; --batch-size: its earlier name)")
     ap.add_argument("--repeat-times", type=positive_int(4), default=None)
     ap.add_argument("--learning-rate", type=positive_float(3e-4), default=None)
     ap.add_argument("--episode-length", type=positive_int(1000), default=None,
@@ -53,8 +54,8 @@ def parser(description: str | None = None) -> CommandParser:
                          "forward speed) or --target eval/return=5850; summary.json records the row that did")
     ap.add_argument("--multi-gpu", default=None, choices=MULTI_GPU_MODES,
                     help="under torchrun, how the GPUs divide the work (agents/data_parallel.py): grow-steps (default: "
-                         "each GPU --num-envs envs, a mini-batch of --batch-size samples across them, G times the "
-                         "mini-batch steps), split (--num-envs and --batch-size are the run's totals, the one-GPU "
+                         "each GPU --num-envs envs, a mini-batch of --minibatch-size samples across them, G times the "
+                         "mini-batch steps), split (--num-envs and --minibatch-size are the run's totals, the one-GPU "
                          "algorithm in shorter iterations) or grow-batch (each GPU --num-envs envs, mini-batches G "
                          "times larger)")
     ap.add_argument("--keep-checkpoints", action="store_true",
@@ -123,13 +124,14 @@ def parse_config(texts: list[str]) -> dict:
     field (agents/config.py), checked with the preset when the run is configured."""
     from dataclasses import fields  # noqa: PLC0415
 
-    from agents.config import Config  # noqa: PLC0415
+    from agents.config import RENAMED, Config  # noqa: PLC0415
     from warpgym.sim.physics import parse_setting  # noqa: PLC0415
 
     names = {f.name for f in fields(Config)} - set(NOT_CONFIGURABLE)
     out = {}
     for text in texts:
         name, value = parse_setting(text)
+        name = RENAMED.get(name, name)  # an earlier name still works
         if name not in names:
             raise ValueError(f"{name!r} is not a PPO setting; choose from {sorted(names)}")
         if name in ("net_dims", "save_at"):
@@ -142,7 +144,7 @@ def parse_config(texts: list[str]) -> dict:
 
 
 # Config fields that have a flag of their own: a config error names the flag (with_flag_names)
-FLAG_FIELDS = ("num_envs", "max_iterations", "total_steps", "eval_envs", "save_gap", "horizon_len", "batch_size",
+FLAG_FIELDS = ("num_envs", "max_iterations", "total_steps", "eval_envs", "save_gap", "horizon_len", "minibatch_size",
                "repeat_times", "episode_length", "substeps", "time_limit", "learning_rate", "eval_gap", "seed")
 
 
@@ -178,7 +180,7 @@ def check_values(ap, args) -> None:
 
 
 def with_flag_names(message: str) -> str:
-    """A config error as the user wrote it: ``batch_size=8`` becomes ``--batch-size 8``."""
+    """A config error as the user wrote it: ``minibatch_size=8`` becomes ``--minibatch-size 8``."""
     for name in sorted(FLAG_FIELDS, key=len, reverse=True):
         message = message.replace(f"{name}=", f"{flag(name)} ").replace(f"lower {name}", f"lower {flag(name)}")
     return message
