@@ -107,3 +107,19 @@ def test_benchmarks_are_a_package_in_folders_by_what_they_measure_and_edit_no_im
                 text = open(os.path.join(folder, name)).read()
                 edits += [os.path.relpath(os.path.join(folder, name), ROOT)] if "sys.path" in text else []
     assert not edits, edits
+
+
+def test_kernels_are_laid_out_by_family():
+    """What both families use is in kernels/common.py; the robots' kernels in kernels/robots/, the suite's in
+    kernels/suite/; what stays at the top serves the simulator (the Tensor API's layout, solver load, math)."""
+    top = os.path.join(ROOT, "kernels")
+    assert sorted(n for n in os.listdir(top) if n.endswith(".py")) == [
+        "__init__.py", "common.py", "math.py", "solver_load.py", "tensor_api.py"]
+    for family in ("robots", "suite"):
+        assert os.path.isfile(os.path.join(top, family, "__init__.py")), family
+        assert os.path.isfile(os.path.join(top, family, "step.py")) and os.path.isfile(os.path.join(top, family, "resets.py"))
+    # the families import what they share from common and nothing from each other
+    crossing = [(f, m) for f, m in imports_of("kernels")
+                if (f.startswith(os.path.join("kernels", "robots")) and m.startswith("kernels.suite"))
+                or (f.startswith(os.path.join("kernels", "suite")) and m.startswith("kernels.robots"))]
+    assert not crossing, crossing

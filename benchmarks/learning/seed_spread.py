@@ -18,7 +18,7 @@ import statistics
 import subprocess
 import sys
 
-from benchmarks.harness import ROOT, TRAIN  # noqa: E402
+from benchmarks.harness import ROOT, TRAIN, write_json  # noqa: E402
 
 
 def run(out: str, name: str, task: str, seed: int, seconds: float) -> dict:
@@ -100,8 +100,7 @@ def main() -> int:
             for k in range(args.repeats) for seed in args.seeds]
     result = {"command": " ".join(sys.argv), "task": args.task, "seconds": args.seconds, "rows": rows,
               "summary": summary(rows)}
-    with open(os.path.join(args.out, "seed_spread.json"), "w") as f:
-        json.dump(result, f, indent=1)
+    write_json(os.path.join(args.out, "seed_spread.json"), result)
     print(report(result))
     return 0
 

@@ -26,7 +26,7 @@ import subprocess
 import sys
 import time
 
-from benchmarks.harness import ROOT, TRAIN  # noqa: E402
+from benchmarks.harness import ROOT, TRAIN, write_json  # noqa: E402
 
 
 def ends(values: list[float]) -> tuple[float | None, float | None]:
@@ -170,8 +170,7 @@ def main() -> int:
     os.makedirs(args.out, exist_ok=True)
     result = soak_random(args) if args.mode == "random" else soak_train(args)
     path = os.path.join(args.out, f"soak_{args.mode}_{args.task}.json")
-    with open(path, "w") as f:
-        json.dump(result, f, indent=1)
+    write_json(path, result)
     print(report([path]), flush=True)
     return 0
 

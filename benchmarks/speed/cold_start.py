@@ -30,7 +30,7 @@ import sys
 import tempfile
 import time
 
-from benchmarks.harness import ROOT  # noqa: E402
+from benchmarks.harness import ROOT, write_json  # noqa: E402
 
 from benchmarks.targets import WALKING  # noqa: E402
 
@@ -102,8 +102,7 @@ def measure(args) -> dict:
     result = {"command": " ".join(sys.argv), "seconds": args.seconds, "extra": args.extra, "env": env_vars,
               "ant_cache": {"modules": modules, "mib": round(mib, 1)}, "runs": rows, "warm_profile": profile}
     path = os.path.join(args.out, "cold_start.json")
-    with open(path, "w") as f:
-        json.dump(result, f, indent=1)
+    write_json(path, result)
     return result
 
 

@@ -21,7 +21,7 @@ import subprocess
 import sys
 import time
 
-from benchmarks.harness import ROOT, TRAIN  # noqa: E402
+from benchmarks.harness import ROOT, TRAIN, write_json  # noqa: E402
 
 from benchmarks.targets import WALKING, walking_row  # noqa: E402
 
@@ -60,8 +60,7 @@ def run(args) -> int:
         pass
     summary = {"task": args.task, "num_envs": args.num_envs, "seconds": args.seconds, "device": device,
                "date": time.strftime("%Y-%m-%d"), "rows": results}
-    with open(os.path.join(args.out, "learners.json"), "w") as f:
-        json.dump(summary, f, indent=1)
+    write_json(os.path.join(args.out, "learners.json"), summary)
     return 0
 
 

@@ -16,7 +16,7 @@ import statistics
 import subprocess
 import sys
 
-from benchmarks.harness import TRAIN  # noqa: E402
+from benchmarks.harness import TRAIN, write_json  # noqa: E402
 
 
 def measure(run_dir: str) -> dict:
@@ -52,8 +52,7 @@ def main(argv=None) -> int:
         print(json.dumps({name: result[name]}), flush=True)
     if result["without"].get("samples_per_s") and result["with"].get("samples_per_s"):
         result["ratio_with_to_without"] = result["with"]["samples_per_s"] / result["without"]["samples_per_s"]
-    with open(os.path.join(args.out, "video_cost.json"), "w") as f:
-        json.dump(result, f, indent=1)
+    write_json(os.path.join(args.out, "video_cost.json"), result)
     print(json.dumps(result), flush=True)
     return 0
 

@@ -25,6 +25,7 @@ import time
 import torch
 import warp as wp
 
+from warpgym.cli import write_json
 from warpgym.cli.flags import CommandParser, check_device, positive_int
 from warpgym.envs import LocomotionVecEnv
 from warpgym.sim import newton_internals
@@ -205,19 +206,17 @@ def main(argv=None) -> int:
               f"{r['physics_steps_per_s'] / 1e6:.2f}M | {r['physics_over_raw']:.3f} | "
               f"{r['env_steps_per_s'] / 1e6:.2f}M | {r['env_over_physics']:.3f} | "
               f"{r['gpu_mem_mib'] / r['num_envs'] * 1000:.0f} |")
-    write_json(args, device, gpu, argv, rows)
+    save_results(args, device, gpu, argv, rows)
     return 0
 
 
-def write_json(args, device, gpu, argv, rows) -> None:
+def save_results(args, device, gpu, argv, rows) -> None:
     if args.out:
         meta = {"device": device, "gpu": gpu, "warp": wp.__version__, "torch": torch.__version__,
                 "mathdx_solver": bool(wp.config.enable_mathdx_solver),
                 "command": " ".join([os.path.basename(sys.argv[0])] + (argv if argv is not None else sys.argv[1:]))}
         os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
-        with open(args.out + ".tmp", "w") as f:
-            json.dump({"meta": meta, "results": rows}, f, indent=1)
-        os.replace(args.out + ".tmp", args.out)
+        write_json(args.out, {"meta": meta, "results": rows})
 
 
 def bench_suite(args, device, gpu, argv) -> int:
@@ -234,7 +233,7 @@ def bench_suite(args, device, gpu, argv) -> int:
     for r in rows:
         print(f"| {r['task']} | {r['num_envs']} | {r['mjwarp_steps_per_s'] / 1e6:.3f}M | "
               f"{r['env_steps_per_s'] / 1e6:.3f}M | {r['env_over_mjwarp']:.3f} |")
-    write_json(args, device, gpu, argv, rows)
+    save_results(args, device, gpu, argv, rows)
     return 0
 
 

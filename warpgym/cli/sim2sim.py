@@ -18,12 +18,12 @@ gait that only works at the training step exploits the integrator, not the robot
 from __future__ import annotations
 
 import json
-import os
 import sys
 import time
 
 import numpy as np
 
+from warpgym.cli import write_json
 from warpgym.cli.flags import CommandParser, check_checkpoint, check_device, non_negative_int, positive_int
 
 
@@ -232,9 +232,7 @@ def main(argv=None) -> int:
         out = {"checkpoint": path, "iteration": ckpt["iteration"], "samples": ckpt["samples"],
                "task": env_args["task"], "trained_substeps": trained, "physics": env_args.get("physics") or {},
                "device": device, "rows": rows}
-        with open(args.out + ".tmp", "w") as f:
-            json.dump(out, f, indent=1)
-        os.replace(args.out + ".tmp", args.out)
+        write_json(args.out, out)
     return 0
 
 

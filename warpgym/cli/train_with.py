@@ -21,7 +21,7 @@ import os
 import sys
 import time
 
-from warpgym.cli import process_start_time
+from warpgym.cli import process_start_time, write_json
 from warpgym.cli.flags import CommandParser, check_device, non_negative_int, positive_float, positive_int
 
 PROCESS_START = process_start_time()  # as train.py's: the clock starts with the process
@@ -314,8 +314,7 @@ def main(argv=None, args=None) -> int:
             stopped = "time limit"
     logger.close()
     summary = summarize(rows, args, device, num_envs, stopped)
-    with open(os.path.join(run_dir, "summary.json"), "w") as f:
-        json.dump(summary, f, indent=1)
+    write_json(os.path.join(run_dir, "summary.json"), summary)
     if not args.no_plots and rows:
         try:
             from agents.plotting import plot_runs  # noqa: PLC0415
