@@ -79,8 +79,9 @@ def test_short_cpu_run_writes_logs_checkpoint_plots_resumes_and_plays(tmp_path, 
     assert [r["simulator"] for r in rows] == ["warpgym", "warpgym", "native MuJoCo", "native MuJoCo"]
     assert rows[2]["robots"] == 2 and all(r["forward_speed"] == r["forward_speed"] for r in rows)
     capsys.readouterr()
-    assert eval_cmd.main([run, "--nudge", "1e-6"]) == 2
-    assert "--nudge: Gymnasium's env only" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as refused:
+        eval_cmd.main([run, "--nudge", "1e-6"])
+    assert refused.value.code == 2 and "--nudge: Gymnasium's env only" in capsys.readouterr().err
 
 
 def test_gait_meter_counts_flights_until_a_robot_ends():

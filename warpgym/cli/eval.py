@@ -124,9 +124,8 @@ def in_native_mujoco(args, episode_length: int) -> int:
     gym_only = [flag for flag, given in (("--nudge", args.nudge), ("--normalizer-from", args.normalizer_from),
                                          ("--env-version 4", args.env_version == 4)) if given]
     if gym_only:
-        print(f"warpgym eval: error: {', '.join(gym_only)}: Gymnasium's env only; {args.checkpoint} holds a policy "
-              "of warpgym's own robots, scored in native MuJoCo: drop it", file=sys.stderr)
-        return 2
+        parser().error(f"{', '.join(gym_only)}: Gymnasium's env only; {args.checkpoint} holds a policy of warpgym's "
+                       "own robots, scored in native MuJoCo: drop it")
     return sim2sim.main([args.checkpoint, "--native-copies", str(args.episodes * len(args.seeds)),
                          "--steps", str(episode_length), "--seed", str(args.seeds[0]), "--device", args.device,
                          *(["--out", args.json] if args.json else [])])
@@ -151,8 +150,8 @@ def main(argv=None) -> int:
         other_path, other = load_for_command(args.normalizer_from, torch.device(device))
         try:
             ckpt = with_normalizer(ckpt, other, (path, other_path))
-        except ValueError as e:
-            raise SystemExit(f"--normalizer-from {args.normalizer_from}: {e}") from None
+        except ValueError as e:  # a wrong value, found once the files are read: one line, status 2 as for a flag
+            parser().error(f"--normalizer-from {args.normalizer_from}: {e}")
         print(f"the policy of {path} with the observation statistics of {other_path} "
               f"(iteration {other['iteration']})")
     env_args = dict(ckpt["config"]["env_args"])
@@ -160,12 +159,12 @@ def main(argv=None) -> int:
     try:
         entry = task_entry(name)
     except ValueError as e:
-        raise SystemExit(f"{path}: {e}") from None
+        parser().error(f"{path}: {e}")
     if entry.scored_in == "native MuJoCo":
         return in_native_mujoco(args, int(env_args.get("max_episode_steps") or entry.episode_length))
     if args.env_version == 4 and SUITE[name].v4_observation is None:
-        raise SystemExit(f"--env-version 4: {name}'s v4 observation is not v5's plus entries after it (or v4 needs "
-                         f"MuJoCo < 3), so a v5 policy cannot play it; v4 is scored for {v4_tasks()}")
+        parser().error(f"--env-version 4: {name}'s v4 observation is not v5's plus entries after it (or v4 needs "
+                       f"MuJoCo < 3), so a v5 policy cannot play it; v4 is scored for {v4_tasks()}")
     unit = bool(env_args.get("unit_actions", False))
     task = SUITE[name]
     if env_args.get("max_episode_steps"):
