@@ -11,7 +11,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 import numpy as np  # noqa: E402
 from warpgym.cli import eval as eval_cmd  # noqa: E402
-from warpgym.cli import play, sim2sim, train  # noqa: E402
+from warpgym.cli import play, run_setup, sim2sim, train  # noqa: E402
 
 from agents.checkpoint import load  # noqa: E402
 from agents.logger import read_metrics  # noqa: E402
@@ -155,10 +155,10 @@ def test_every_task_has_defaults_and_the_gpu_default_trains_as_it_was_measured()
     assert set(PRESETS) == set(task_names())  # every task the registry has, PPO has a preset for
     for task in PRESETS:
         for kind in ("cuda", "cpu"):
-            envs, iterations = train.default_envs_and_iterations(kind, task)
+            envs, iterations = run_setup.default_envs_and_iterations(kind, task)
             assert envs > 0 and iterations > 0, (task, kind)
-        envs = train.default_envs_and_iterations("cuda", task)[0]
-        cfg = train.build_config(train.parse_args(["--task", task]), task, envs, "cuda:0")
+        envs = run_setup.default_envs_and_iterations("cuda", task)[0]
+        cfg = run_setup.build_config(train.parse_args(["--task", task]), task, envs, "cuda:0")
         preset = Config.for_task(task)
         assert cfg.minibatch_size == preset.minibatch_size, (task, envs)
         assert (envs * cfg.horizon_len) % cfg.minibatch_size == 0
@@ -168,7 +168,7 @@ def test_every_task_has_defaults_and_the_gpu_default_trains_as_it_was_measured()
 def test_config_flags_set_any_ppo_setting_and_name_a_wrong_one():
     args = train.parse_args(["--task", "Hopper-v5", "--config", "gamma=0.999", "--config", "net_dims=64,32",
                              "--config", "batch_size=512", "--config", "normalize_obs=false"])  # batch_size: the earlier name
-    cfg = train.build_config(args, "Hopper-v5", 64, "cpu")
+    cfg = run_setup.build_config(args, "Hopper-v5", 64, "cpu")
     assert (cfg.gamma, cfg.net_dims, cfg.minibatch_size, cfg.normalize_obs) == (0.999, (64, 32), 512, False)
     for bad, says in ((["--config", "gama=0.9"], "'gama' is not a PPO setting"),
                       (["--config", "seed=3"], "'seed' is not a PPO setting"),

@@ -52,13 +52,13 @@ def test_the_compiled_loss_learns_the_same_weights_as_the_eager_one(lagged):
 
 
 def test_compile_update_is_a_config_switch_the_command_line_sets():
-    from warpgym.cli import train
+    from warpgym.cli import run_setup, train
 
     with pytest.raises(ValueError, match="compile_update='yes' must be True or False"):
         Config(compile_update="yes").validated()
-    cfg = train.build_config(train.parse_args(["--task", "Ant", "--compile-update"]), "Ant", 64, "cpu")
+    cfg = run_setup.build_config(train.parse_args(["--task", "Ant", "--compile-update"]), "Ant", 64, "cpu")
     assert cfg.compile_update is True
-    assert train.build_config(train.parse_args(["--task", "Ant"]), "Ant", 64, "cpu").compile_update is False
+    assert run_setup.build_config(train.parse_args(["--task", "Ant"]), "Ant", 64, "cpu").compile_update is False
 
 
 def test_compiling_on_a_gpu_without_triton_says_how_to_go_on():
