@@ -10,12 +10,12 @@ runs eagerly and warms up every kernel the capture records. Two ways to capture 
 - ``"step"``: one env step (policy, env, storage writes) is captured once and replayed
   ``horizon_len`` times, then the bootstrap and GAE as a second graph. The capture records one
   step's launches: a MuJoCo Warp step launches hundreds of kernels per physics step, and recording
-  every one of 32 steps took 17-24 s of a start on an H100 (Ant-v5, Hopper-v5).
+  every step of a rollout costs seconds of each start (docs/benchmarks.md, "The step capture against the
+  whole rollout's").
 - ``"rollout"``: all ``horizon_len`` steps unrolled into one graph, replayed once.
 
 Both replay the launches of the eager rollout in its order, so all three give the same numbers up to
-MuJoCo Warp's float atomics (tests/test_cuda.py, passed on an H200 for Newton's Ant and Hopper-v5: within
-1e-3 of the eager rollout, 2e-2 for rewards).
+MuJoCo Warp's float atomics (tests/test_cuda.py holds the tolerances).
 """
 
 from __future__ import annotations

@@ -91,8 +91,8 @@ class Config:
     # collect the next rollout while PPO learns from the last one, on two CUDA streams, each rollout
     # learnt one update after the weights that collected it (agents.overlap)
     overlap: bool = False
-    # torch.compile the PPO mini-batch loss (forward and backward): fewer, fused kernels per step; the
-    # first update compiles it (on an H100 about 11-16 s with an empty Inductor cache, 3-5 s with a warm one)
+    # torch.compile the PPO mini-batch loss (forward and backward): fewer, fused kernels per step; the first
+    # update compiles it, seconds of a start (docs/benchmarks.md, "Compiled update")
     compile_update: bool = False
     obs_clip: float = 5.0
     # how several processes (torchrun, one per GPU) divide the work: agents/data_parallel.py. "grow-steps": each

@@ -5,9 +5,8 @@ With ``Config.overlap`` each rollout was drawn by the weights of one update earl
 uses the decoupled objective of Hilton et al. (2021, "Batch size-invariance for policy optimization"):
 the clip and the KL that steers the learning rate are taken against the proximal policy (the weights at
 the start of this update), and each sample's term is weighted by proximal over behaviour probability.
-Clipped against the behaviour policy instead, the lag counts as KL of its own: on an H200 the learning
-rate stayed 2-7x below the sequential run's and the Ant took twice as long to walk (docs/benchmarks.md,
-"Overlapped update").
+Clipped against the behaviour policy instead, the lag counts as KL of its own, holding the learning rate
+down (docs/benchmarks.md, "Overlapped update").
 Without a lag the proximal policy is the behaviour policy and the weight is exactly 1.
 
 The learning rate lives in a device tensor that the optimizer reads, so adapting it per mini-batch
@@ -28,9 +27,8 @@ from agents.storage import RolloutStorage
 
 LR_MIN, LR_MAX = 1e-5, 1e-2
 ACTION_BOUND = 1.1  # the env clips to [-1, 1]; a mean far outside it only wastes gradient
-# A sample the behaviour policy drew with a tiny probability gets a huge weight. With one update of lag
-# on the CPU (the point mass; the Ant at 32 envs) 80 % of the weights lay within 0.72-1.31 and under 1 %
-# above 2, so the bound trims only that rare tail's variance.
+# A sample the behaviour policy drew with a tiny probability gets a huge weight; with one update of lag
+# almost all weights lie well below 2, so the bound trims only that rare tail's variance
 MAX_BEHAVIOUR_WEIGHT = 2.0
 
 
