@@ -15,10 +15,9 @@ Every mode trains one policy, its gradients averaged over the processes at each 
                 minibatch_size samples across all processes, so an iteration makes G times the optimiser
                 steps (Beukman et al., 2026, keep the inner loop fixed as the envs grow).
 
-``grow-steps`` is the default (DEFAULT): of the three it reached the Ant's 9.5 m/s soonest on 2 and on 4 GPUs
-(0.71x and 0.36x of one GPU's learning time, against split's 0.90x and 0.61x) and 8 m/s no later than split;
-docs/benchmarks.md ("Several GPUs: time to target") has what each mode gave. With one process the three are
-the same run.
+``grow-steps`` is the default (DEFAULT): of the three it reached the Ant's targets soonest or as soon as split
+(docs/benchmarks.md, "Several GPUs: time to target", has what each mode gave). With one process the three
+are the same run.
 """
 
 from __future__ import annotations
@@ -52,14 +51,15 @@ def minibatches(mode: str, local_envs: int, horizon_len: int, minibatch_size: in
     check_mode(mode)
     shared = mode != "grow-batch" and processes > 1
     if shared and minibatch_size % processes:
-        raise ValueError(f"minibatch_size={minibatch_size} does not split over {processes} processes (multi_gpu={mode!r}: "
-                         f"a mini-batch is {minibatch_size} samples across them): pick a multiple of {processes}")
+        raise ValueError(f"minibatch_size={minibatch_size} does not split over {processes} processes "
+                         f"(multi_gpu={mode!r}: a mini-batch is {minibatch_size} samples across them): "
+                         f"pick a multiple of {processes}")
     samples = local_envs * horizon_len * (processes if shared else 1)  # the rollout a mini-batch is drawn from
     rollout = (f"{processes} processes x " if shared else "") + f"{local_envs} envs x horizon_len {horizon_len}"
     if minibatch_size > samples:
         raise ValueError(f"minibatch_size={minibatch_size} exceeds the {samples} samples of one rollout ({rollout}): "
                          "lower minibatch_size or raise num_envs")
     if samples % minibatch_size:
-        raise ValueError(f"minibatch_size={minibatch_size} does not divide the {samples} samples of one rollout ({rollout}): "
-                         f"pick a divisor, e.g. {samples // 4}")
+        raise ValueError(f"minibatch_size={minibatch_size} does not divide the {samples} samples of one rollout "
+                         f"({rollout}): pick a divisor, e.g. {samples // 4}")
     return samples // minibatch_size

@@ -9,7 +9,8 @@ from warpgym.compile import log as compile_log, preload
 
 def test_sim_modules_are_set_to_skip_adjoint_code():
     preload.Preload("cpu").wait()
-    for name in ("kernels.common", "kernels.robots.actions", "kernels.robots.step", "kernels.robots.resets", "kernels.tensor_api",
+    for name in ("kernels.common", "kernels.robots.actions", "kernels.robots.step", "kernels.robots.resets",
+                 "kernels.tensor_api",
                  *preload.NO_BACKWARD):
         assert wp.get_module_options(importlib.import_module(name))["enable_backward"] is False, name
 

@@ -288,6 +288,10 @@ def test_suite_training_refuses_the_robots_physics_flags(capsys):
     with pytest.raises(SystemExit) as done:
         train.main(["--task", "Hopper-v5", "--device", DEVICE, "--substeps", "2", "--max-iterations", "1"])
     assert done.value.code == 2 and "--substeps / --physics" in capsys.readouterr().err
+    # training clips film the robots only (the registry's training_clips): refused before anything is built
+    with pytest.raises(SystemExit) as done:
+        train.parse_args(["--task", "hopper-v5", "--video"])
+    assert done.value.code == 2 and "--video: training clips draw warpgym's own robots only" in capsys.readouterr().err
 
 
 def test_learner_adapters_and_elegantrl_take_the_tasks_sizes():

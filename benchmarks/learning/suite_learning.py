@@ -13,7 +13,7 @@ on different GPUs or with different budgets.
     python -m benchmarks.learning.suite_learning --out OUT --seeds 0 1 --gpus 2    # one seed per GPU, at once
     python -m benchmarks.learning.suite_learning --report OUT OUT2 ...
 
-The reference figures (``REFERENCE``) are Tianshou's MuJoCo benchmark for SAC: the best return, averaged
+The reference figures (``benchmarks.targets.REFERENCE``) are Tianshou's MuJoCo benchmark for SAC: the best return, averaged
 over 10 seeds, within the first 1 M steps, on gym's v3 tasks (v2 for Reacher and the two pendulums),
 from its examples/mujoco README; Tianshou has no Pusher or HumanoidStandup, whose figures are SLM-Lab's
 SAC on the v5 tasks themselves (its docs/BENCHMARKS.md: the moving average of training returns over 4
@@ -31,17 +31,9 @@ import sys
 import time
 
 from benchmarks.harness import ROOT, TRAIN, gpu_slot, read_summary
+from benchmarks.targets import REFERENCE, REFERENCE_SOURCE, REFERENCE_VERSION
 
 # as the sources print them (Tianshou's to one decimal: IDP's 9359.5 lies within 0.5 of the best return there is)
-REFERENCE = {"Ant-v5": 5850.2, "HalfCheetah-v5": 12138.8, "Hopper-v5": 3542.2, "Walker2d-v5": 5007.0,
-             "Swimmer-v5": 44.4, "Humanoid-v5": 5488.5, "Reacher-v5": -2.6, "InvertedPendulum-v5": 1000.0,
-             "InvertedDoublePendulum-v5": 9359.5, "Pusher-v5": -42.6, "HumanoidStandup-v5": 138222.0}
-REFERENCE_SOURCE = {task: "Tianshou SAC" for task in REFERENCE} | {"Pusher-v5": "SLM-Lab SAC",
-                                                                  "HumanoidStandup-v5": "SLM-Lab SAC"}
-# the task versions the figures were made on (v5's Pusher and HumanoidStandup: SLM-Lab's)
-REFERENCE_VERSION = {task: "v3" for task in REFERENCE} | {"Reacher-v5": "v2", "InvertedPendulum-v5": "v2",
-                                                         "InvertedDoublePendulum-v5": "v2", "Pusher-v5": "v5",
-                                                         "HumanoidStandup-v5": "v5"}
 HOLDS = 0.95  # the issue's goal for Gymnasium / warpgym; below it a policy is scored again, more widely
 NUDGE = 1e-9
 SEEDS = (0, 1, 2)  # Gymnasium's reset seeds 0, 1000, 2000 (warpgym eval), each starting --eval-episodes episodes

@@ -26,7 +26,8 @@ import subprocess
 import sys
 import time
 
-from benchmarks.learning.suite_learning import MARKS, REFERENCE, half, thin  # noqa: E402
+from benchmarks.learning.suite_learning import MARKS, half, thin  # noqa: E402
+from benchmarks.targets import REFERENCE  # noqa: E402
 
 _RELU_256 = dict(log_std_init=-2.0, ortho_init=False, activation_fn="relu", net_arch=dict(pi=[256, 256], vf=[256, 256]))
 # rl-baselines3-zoo, hyperparams/ppo.yml (the v4 entries; Ant-v4 takes its MuJoCo defaults: SB3's PPO defaults)
@@ -215,7 +216,8 @@ def main(argv=None) -> int:
             task, seed = jobs.pop(0)
             busy = {c for _, c in running}
             core = next(c for c in cores if c not in busy) if len(busy) < len(cores) else cores[0]
-            cmd = [sys.executable, "-m", "benchmarks.learning.suite_sb3", "--out", args.out, "--minutes", str(args.minutes),
+            cmd = [sys.executable, "-m", "benchmarks.learning.suite_sb3", "--out", args.out,
+                   "--minutes", str(args.minutes),
                    "--eval-episodes", str(args.eval_episodes), "--parallel", str(args.parallel),
                    "--one", task, str(seed)]
             log = open(os.path.join(args.out, f"sb3-{task}-seed{seed}.log"), "w")

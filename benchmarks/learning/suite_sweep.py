@@ -183,7 +183,8 @@ def spread(args, grid: dict[str, list[str]], argv: list[str]) -> dict:
     todo, lock = list(enumerate(jobs)), threading.Lock()
 
     def command_of(k: int, combo: dict, seed: int) -> list[str]:
-        cmd = [sys.executable, "-m", "benchmarks.learning.suite_sweep", *rest, "--out", os.path.join(args.out, "parts", f"{k:03d}"),
+        cmd = [sys.executable, "-m", "benchmarks.learning.suite_sweep", *rest,
+               "--out", os.path.join(args.out, "parts", f"{k:03d}"),
                "--seeds", str(seed), "--no-warm-up"]
         for name, value in combo.items():  # parse_grid read "256x128" as "256,128"
             cmd += ["--grid", f"{name}={value.replace(',', 'x')}"]

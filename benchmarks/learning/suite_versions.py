@@ -28,7 +28,8 @@ import sys
 import time
 
 
-from benchmarks.learning.suite_learning import REFERENCE, REFERENCE_VERSION, SEEDS, play  # noqa: E402
+from benchmarks.learning.suite_learning import SEEDS, play  # noqa: E402
+from benchmarks.targets import REFERENCE, REFERENCE_VERSION  # noqa: E402
 
 
 def earlier(ckpt: str, episodes: int) -> dict | None:

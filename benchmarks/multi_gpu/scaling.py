@@ -32,11 +32,10 @@ import sys
 import tarfile
 import time
 
-from benchmarks.harness import ROOT, TRAIN, read_summary  # noqa: E402
+from benchmarks.harness import ROOT, TRAIN, read_summary, write_json  # noqa: E402
 
 from benchmarks.multi_gpu.gpu_jobs import Job, run_jobs  # noqa: E402
 
-from warpgym.cli import write_json  # noqa: E402
 
 # the targets; a suite task without one here is timed to Tianshou's (or SLM-Lab's) figure
 TARGETS = {"Ant": ("eval/speed", (8.0, 9.5)), "Humanoid": ("eval/speed", (6.0,)),
@@ -46,7 +45,7 @@ TARGETS = {"Ant": ("eval/speed", (8.0, 9.5)), "Humanoid": ("eval/speed", (6.0,))
 def default_targets(task: str) -> tuple[str, tuple[float, ...]]:
     if task in TARGETS:
         return TARGETS[task]
-    from benchmarks.learning.suite_learning import REFERENCE  # noqa: PLC0415
+    from benchmarks.targets import REFERENCE  # noqa: PLC0415
 
     return "eval/return", (REFERENCE[task],)
 

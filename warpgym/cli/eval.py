@@ -30,7 +30,8 @@ from __future__ import annotations
 
 import sys
 
-from warpgym.cli.flags import CommandParser, check_checkpoint, check_device, non_negative_float, non_negative_int, positive_int
+from warpgym.cli.flags import (CommandParser, check_checkpoint, check_device, non_negative_float, non_negative_int,
+                               positive_int)
 
 
 def holds(gymnasium_return: float, warpgym_return: float) -> float:

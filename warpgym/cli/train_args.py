@@ -7,7 +7,7 @@ import os
 from agents.data_parallel import MODES as MULTI_GPU_MODES
 from warpgym.cli.flags import CommandParser, check_device, non_negative_float, non_negative_int, positive_float, \
     positive_int
-from warpgym.tasks.registry import task_names
+from warpgym.tasks.registry import task_entry, task_names
 
 TASK_NAMES = {t.lower(): t for t in task_names()}
 
@@ -17,7 +17,8 @@ def parser(description: str | None = None) -> CommandParser:
     ap = CommandParser(prog="warpgym train", description=description)
     ap.add_argument("--task", default=None, help="Ant (default), Humanoid, or one of Gymnasium's MuJoCo tasks "
                                                  "(InvertedPendulum-v5 ... HumanoidStandup-v5)")
-    ap.add_argument("--num-envs", type=positive_int(4096), default=None, help="default on a GPU: 8192 (Ant), 4096 (Humanoid); 64 on the CPU")
+    ap.add_argument("--num-envs", type=positive_int(4096), default=None,
+                    help="default on a GPU: 8192 (Ant), 4096 (Humanoid); 64 on the CPU")
     ap.add_argument("--device", default=None, help="default: cuda:0 when present, else cpu")
     ap.add_argument("--seed", type=non_negative_int(0), default=0)
     ap.add_argument("--max-iterations", type=positive_int(500), default=None)
@@ -108,7 +109,7 @@ def parse_args(argv=None, description: str | None = None):
     except ValueError as e:
         ap.error(f"--config: {e}")
     if args.video:
-        if args.task is not None and args.task.endswith("-v5"):
+        if not task_entry(args.task or "Ant").training_clips:
             ap.error(f"--video: training clips draw warpgym's own robots only so far, not {args.task}; drop --video "
                      "(a suite env draws its worlds with render_mode='rgb_array')")
         check_video_args(ap, args)

@@ -36,6 +36,7 @@ class TaskEntry:
     clip_keys: tuple[str, ...]
     clip_all_worlds: bool
     clip_drawer: str  # the function that draws a recorded clip, by entry point (warpgym.media.video)
+    training_clips: bool  # `warpgym train --video` can film its evaluations (media.clips draws the robots only)
     scored_in: str  # "native MuJoCo" or "Gymnasium's env": where `warpgym eval` plays a trained policy
     reports_speed: bool  # the env's forward speed is the task's measure (eval/speed beside eval/return)
     # `warpgym train`'s default envs and iterations on a GPU and on the CPU (docs/benchmarks.md, "Envs per GPU")
@@ -52,7 +53,8 @@ def _robot(name: str, episode_length: int, envs: tuple[int, int], iterations: tu
     return TaskEntry(name, "robots", f"warpgym/{name}-v0", episode_length,
                      "warpgym.envs.locomotion:LocomotionVecEnv", "warpgym.envs.single:LocomotionEnv", (),
                      physics_flags=True, clip_keys=(), clip_all_worlds=True,
-                     clip_drawer="warpgym.media.video:draw_robot_clip", scored_in="native MuJoCo",
+                     clip_drawer="warpgym.media.video:draw_robot_clip", training_clips=True,
+                     scored_in="native MuJoCo",
                      reports_speed=True, default_envs=envs, default_iterations=iterations)
 
 
@@ -60,7 +62,7 @@ def _suite(name: str, episode_length: int) -> TaskEntry:
     return TaskEntry(name, "suite", f"warpgym/{name}", episode_length,
                      "warpgym.envs.suite:SuiteVecEnv", "warpgym.envs.single:SuiteEnv", (("unit_actions", True),),
                      physics_flags=False, clip_keys=("dof_pos", "dof_vel"), clip_all_worlds=False,
-                     clip_drawer="warpgym.media.video:draw_suite_clip",
+                     clip_drawer="warpgym.media.video:draw_suite_clip", training_clips=False,
                      scored_in="Gymnasium's env", reports_speed=False, default_envs=(4096, 64),
                      default_iterations=(500, 100))
 
