@@ -1,6 +1,7 @@
 """Every run ends: short torchrun trainings back to back, and two failures, on G processes of one host.
 
     python -m benchmarks.reliability.exits --out OUT                          # 20 runs (Ant, Humanoid, ...) of 20 s on 2 GPUs
+    python -m benchmarks.reliability.exits --out OUT --runs 10 --failures 3   # 10 runs, each failure 3 times
     python -m benchmarks.reliability.exits --out OUT --runs 4 --device cpu --num-envs 4 --seconds 8
     python -m benchmarks.reliability.exits --report OUT/exits.json
 
@@ -8,8 +9,9 @@ Finished runs: each is ``torchrun --standalone --nproc_per_node=G scripts/train.
 the table gives its exit code and the seconds from its last metrics row (metrics.jsonl's last write)
 to the moment torchrun exited. Failures: SIGTERM to torchrun during an iteration, and an exception
 raised inside one worker's PPO update (tests/fail_worker.py, with ``--no-cuda-graph`` so that the
-update runs its Python); for each, the seconds from the event until no worker process is left, the
-exit code, and whether the output names ``--resume RUN_DIR``. Targets (issue 23): every finished run
+update runs its Python), and SIGKILL to the worker of rank 1 (a process the kernel's out-of-memory killer
+or a lost node ends without a word); each --failures times. For each, the seconds from the event until no
+worker process is left, the exit code, and whether the output names ``--resume RUN_DIR``. Targets (issue 23): every finished run
 exits with code 0 within 10 s of its last row; every failure stops all processes within 60 s.
 Writes OUT/exits.json after each run.
 """
@@ -28,6 +30,7 @@ from benchmarks.harness import ROOT, write_json  # noqa: E402
 TRAIN = os.path.join(ROOT, "scripts", "train.py")
 FAIL_WORKER = os.path.join(ROOT, "tests", "fail_worker.py")
 EXIT_WITHIN_S, STOP_WITHIN_S = 10.0, 60.0
+FAILURES = ["sigterm", "exception", "killed-rank"]
 
 
 def worker_pids(agent_pid: int) -> list[int]:
@@ -41,6 +44,19 @@ def worker_pids(agent_pid: int) -> list[int]:
         except (OSError, ValueError, IndexError):
             continue
     return found
+
+
+def rank_pid(workers: list[int], rank: int) -> int | None:
+    """The worker whose torchrun environment says RANK=``rank``."""
+    for pid in workers:
+        try:
+            with open(f"/proc/{pid}/environ", "rb") as f:
+                env = dict(kv.split(b"=", 1) for kv in f.read().split(b"\0") if b"=" in kv)
+        except OSError:
+            continue
+        if env.get(b"RANK") == str(rank).encode():
+            return pid
+    return None
 
 
 def rows_written(run_dir: str) -> int:
@@ -98,19 +114,24 @@ def finished_run(args, k: int) -> dict:
             "last_row_to_exit_s": None if last_row is None else round(ended - last_row, 2)}
 
 
-def failure(args, kind: str) -> dict:
+def failure(args, kind: str, name: str) -> dict:
     task = args.tasks[0]
     flags = ["--max-iterations", "1000000", "--save-gap", "3"]
-    if kind == "sigterm":
-        job = Job(args, "sigterm", task, flags)
+    if kind in ("sigterm", "killed-rank"):
+        job = Job(args, name, task, flags)
         deadline = time.time() + 600
         while rows_written(job.run_dir) < 6 and job.proc.poll() is None and time.time() < deadline:
             time.sleep(0.1)
         workers = worker_pids(job.proc.pid)
         event = time.time()
-        job.proc.send_signal(signal.SIGTERM)  # a cluster's pre-emption reaches torchrun
+        if kind == "sigterm":
+            job.proc.send_signal(signal.SIGTERM)  # a cluster's pre-emption reaches torchrun
+        else:
+            victim = rank_pid(workers, 1)
+            if victim is not None:
+                os.kill(victim, signal.SIGKILL)
     else:
-        job = Job(args, "exception", task, [*flags, "--no-cuda-graph"], script=FAIL_WORKER,
+        job = Job(args, name, task, [*flags, "--no-cuda-graph"], script=FAIL_WORKER,
                   env={"FAIL_AT": "1:6", "WARPGYM_PEER_TIMEOUT": "20"})
         deadline = time.time() + 600
         while "planted failure" not in job.output() and job.proc.poll() is None and time.time() < deadline:
@@ -149,6 +170,12 @@ def report(path: str) -> str:
     lines += ["", f"{sum(holds(r) for r in finished)} of {len(finished)} finished runs exited with code 0 within "
               f"{EXIT_WITHIN_S:.0f} s of their last row; slowest "
               f"{max((r['last_row_to_exit_s'] or 0) for r in finished):.1f} s." if finished else ""]
+    for kind in FAILURES:
+        made = [r for r in data["rows"] if r["kind"] == kind]
+        if made:
+            slowest = max((r["all_stopped_s"] or float("inf")) for r in made)
+            lines.append(f"{kind}: {sum(holds(r) for r in made)} of {len(made)} stopped every process within "
+                         f"{STOP_WITHIN_S:.0f} s naming --resume; slowest {slowest:.1f} s.")
     return "\n".join(lines)
 
 
@@ -161,7 +188,8 @@ def main(argv=None) -> int:
     ap.add_argument("--gpus", type=int, default=2, help="processes per run (one per GPU)")
     ap.add_argument("--device", default=None, help="default: train.py's (cuda when present)")
     ap.add_argument("--num-envs", type=int, default=None, help="default: train.py's")
-    ap.add_argument("--no-failures", action="store_true", help="skip the SIGTERM and exception cases")
+    ap.add_argument("--failures", type=int, default=1, help="times each failure is made (default 1)")
+    ap.add_argument("--no-failures", action="store_true", help="skip the failures")
     ap.add_argument("--report", metavar="EXITS_JSON", help="print the table of an earlier run and stop")
     args = ap.parse_args(argv)
     if args.report:
@@ -169,9 +197,9 @@ def main(argv=None) -> int:
         return 0
     if not args.out:
         ap.error("--out is required (or --report EXITS_JSON)")
-    if args.runs < 0 or args.gpus < 1 or args.seconds <= 0:
-        ap.error(f"--runs {args.runs}, --gpus {args.gpus}, --seconds {args.seconds}: need runs >= 0, gpus >= 1, "
-                 "seconds > 0")
+    if args.runs < 0 or args.gpus < 1 or args.seconds <= 0 or args.failures < 0:
+        ap.error(f"--runs {args.runs}, --gpus {args.gpus}, --seconds {args.seconds}, --failures {args.failures}: "
+                 "need runs >= 0, gpus >= 1, seconds > 0, failures >= 0")
     if not os.path.isdir("/proc"):
         raise SystemExit("exits.py finds torchrun's workers through /proc: run it on Linux")
     import torch  # noqa: PLC0415
@@ -180,9 +208,9 @@ def main(argv=None) -> int:
     cuda = torch.cuda.is_available() and args.device in (None, "cuda") or str(args.device).startswith("cuda")
     data = {"argv": sys.argv[1:] if argv is None else argv, "gpus": args.gpus, "date": time.strftime("%Y-%m-%d"),
             "device_name": torch.cuda.get_device_name(0) if cuda else "CPU", "rows": []}
-    kinds = ["finished"] * args.runs + ([] if args.no_failures else ["sigterm", "exception"])
+    kinds = ["finished"] * args.runs + ([] if args.no_failures else FAILURES * args.failures)
     for k, kind in enumerate(kinds):
-        row = finished_run(args, k) if kind == "finished" else failure(args, kind)
+        row = finished_run(args, k) if kind == "finished" else failure(args, kind, f"{kind}{k - args.runs:02d}")
         data["rows"].append(row)
         print(json.dumps(row), flush=True)
         write_json(os.path.join(args.out, "exits.json"), data)
