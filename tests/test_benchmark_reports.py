@@ -3,7 +3,6 @@
 import json
 import os
 import shutil
-import sys
 
 import pytest
 
@@ -469,20 +468,55 @@ def test_the_published_suite_tables_are_what_their_scripts_print_from_the_commit
     assert len(readme_rows) == 1 + 11 and [r for r in readme_rows if r not in readme] == []
 
 
-def test_the_published_multi_gpu_table_is_what_scaling_prints_from_the_committed_runs(tmp_path, capsys):
-    """docs/benchmarks.md's time-to-target table for several GPUs, row for row, as ``benchmarks/multi_gpu/scaling.py
-    --report`` prints it from the runs' metrics committed in docs/bench/multi_gpu (read again, not from the JSON's
-    numbers): a number changed on the page or in the reading of the runs fails here."""
+@pytest.mark.parametrize("task, settings", [("Ant", 9), ("Humanoid", 3)])
+def test_the_published_multi_gpu_table_is_what_scaling_prints_from_the_committed_runs(tmp_path, capsys, task, settings):
+    """docs/benchmarks.md's time-to-target tables for several GPUs, row for row, as ``benchmarks/multi_gpu/scaling.py
+    --report`` prints them from the runs' metrics committed in docs/bench/multi_gpu (read again, not from the JSON's
+    numbers): a number changed on the page or in the reading of the runs fails here. The folder holds both tasks."""
     root = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
     from benchmarks.multi_gpu import scaling
 
     shutil.copytree(os.path.join(root, "docs", "bench", "multi_gpu"), tmp_path / "mg")
-    assert scaling.main(["--report", str(tmp_path / "mg")]) == 0
-    rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| ") and "---" not in line]
+    assert scaling.main(["--report", str(tmp_path / "mg"), "--task", task]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith(f"{task}: ")
+    rows = [line for line in out.splitlines() if line.startswith("| ") and "---" not in line]
     with open(os.path.join(root, "docs", "benchmarks.md")) as f:
         page = set(f.read().splitlines())
-    assert len(rows) == 1 + 9  # the header, one GPU and eight multi-GPU settings
+    assert len(rows) == 1 + settings  # the header, one GPU and the multi-GPU settings
     assert [r for r in rows if r not in page] == []
+
+
+def test_a_folder_of_several_tasks_asks_which(tmp_path):
+    from benchmarks.multi_gpu import scaling
+
+    for task in ("Ant", "Humanoid"):
+        (tmp_path / f"scaling_{task}.json").write_text("{}")
+    assert scaling.task_json(str(tmp_path), "Humanoid").endswith("scaling_Humanoid.json")
+    with pytest.raises(SystemExit, match="Ant, Humanoid but not Hopper-v5: name one with --task"):
+        scaling.task_json(str(tmp_path), "Hopper-v5")
+
+
+@pytest.mark.parametrize("script, args", [
+    ("nodes", ["docs/bench/multi_gpu/nodes/nodes-1.json", "docs/bench/multi_gpu/nodes/nodes-2.json"]),
+    ("exits", ["docs/bench/gpu_exits.json"])])
+def test_the_published_gpu_reliability_and_nodes_tables_are_what_their_scripts_print(capsys, script, args):
+    """The two-node and the GPU exits tables in docs/benchmarks.md, row for row, from the committed JSON."""
+    import importlib
+
+    root = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
+    module = importlib.import_module({"nodes": "benchmarks.multi_gpu.nodes",
+                                      "exits": "benchmarks.reliability.exits"}[script])
+    paths = [os.path.join(root, a) for a in args]
+    assert module.main(["--report", *paths]) == 0
+    out = capsys.readouterr().out
+    rows = [line for line in out.splitlines() if line.startswith("| ") and "---" not in line]
+    with open(os.path.join(root, "docs", "benchmarks.md")) as f:
+        page = f.read()
+    assert len(rows) >= 8 and [r for r in rows if r not in page.splitlines()] == []
+    if script == "nodes":  # the verdict the page states
+        assert "2 nodes / 1 node: 1.003 (median of 3: 1.002, 1.003, 1.006); target within 5%: met" in out
+        assert "1.003x" in page
 
 
 def test_the_comparison_gives_warpgym_as_many_robots_per_gpu_as_rllibs_runners_in_every_mode():

@@ -268,3 +268,20 @@ def test_an_exception_in_one_worker_mid_update_stops_every_process(tmp_path):
     out = log.read_text()
     assert code != 0 and "planted failure in worker 1's update 6" in out
     assert f"--resume {run}" in out, out[-3000:]
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc"), reason="reads the processes' environments in /proc")
+def test_exits_finds_the_worker_of_a_rank_by_its_environment():
+    """benchmarks/reliability/exits.py kills rank 1, not whichever child /proc lists second."""
+    from benchmarks.reliability.exits import rank_pid
+
+    kids = [subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"], env=dict(ENV, RANK=str(r)))
+            for r in (1, 0)]
+    try:
+        pids = [k.pid for k in kids]
+        assert rank_pid(pids, 1) == kids[0].pid and rank_pid(pids, 0) == kids[1].pid
+        assert rank_pid(pids, 2) is None
+    finally:
+        for k in kids:
+            k.kill()
+            k.wait()

@@ -164,3 +164,35 @@ def test_the_benchmark_names_a_wrong_flag_before_it_starts_anything():
         done = subprocess.run([sys.executable, "-m", "benchmarks.multi_gpu.scaling", "--out", "/nowhere", *flags],
                               cwd=ROOT, capture_output=True, text=True, timeout=120)
         assert done.returncode == 2 and says in done.stderr, done.stderr[-2000:]
+
+
+def test_the_two_node_layout_meets_at_one_rendezvous_with_its_own_gpus_and_cores(monkeypatch):
+    """Each torchrun agent of a K-node layout gets G/K processes, its own GPUs and cores, and the one
+    rendezvous id and endpoint they all meet at (agents that differ in their id never meet: they wait for ever)."""
+    import argparse
+
+    from benchmarks.multi_gpu import nodes
+
+    monkeypatch.setattr(nodes, "core_shares", lambda k: [[2 * i, 2 * i + 1] for i in range(k)])
+    monkeypatch.setenv("CUDA_VISIBLE_DEVICES", "4,5,6,7")
+    args = argparse.Namespace(task="Ant", seconds=30.0, seed=0, device=None, num_envs=None, gpus=4)
+    two = nodes.node_commands(args, "/r", 2, 29500)
+    assert [g for _, g, _ in two] == [["4", "5"], ["6", "7"]] and [c for _, _, c in two] == [[0, 1], [2, 3]]
+    flags = [{a.split("=")[0]: a.split("=", 1)[1] for a in cmd if a.startswith("--") and "=" in a} for cmd, _, _ in two]
+    assert flags[0] == flags[1] and flags[0]["--nnodes"] == "2" and flags[0]["--nproc_per_node"] == "2"
+    assert flags[0]["--rdzv-endpoint"] == "127.0.0.1:29500" and flags[0]["--rdzv-id"]
+    assert nodes.node_commands(args, "/r", 2, 29500)[0][0] != two[0][0]  # a new rendezvous for the next run
+    (one,) = nodes.node_commands(args, "/r", 1, None)
+    assert "--standalone" in one[0] and "--nproc_per_node=4" in one[0] and one[1] == ["4", "5", "6", "7"]
+
+
+def test_the_nodes_verdict_pairs_only_repeats_with_both_layouts():
+    from benchmarks.multi_gpu import nodes
+
+    rows = [dict(repeat=0, nodes=1, samples_per_s=100.0), dict(repeat=0, nodes=2, samples_per_s=94.0),
+            dict(repeat=1, nodes=2, samples_per_s=99.0), dict(repeat=1, nodes=1, samples_per_s=100.0),
+            dict(repeat=2, nodes=1, samples_per_s=50.0)]  # its 2-node run was cut: no pair
+    s = nodes.summarize({"nodes": 2, "rows": rows})
+    assert s["ratios"] == [0.94, 0.99] and s["median_ratio"] == 0.965 and s["holds"]
+    s = nodes.summarize({"nodes": 2, "rows": rows[:2]})
+    assert s["median_ratio"] == 0.94 and not s["holds"]  # 6 % slower

@@ -2,7 +2,7 @@
 
     python -m benchmarks.multi_gpu.nodes --out OUT --gpus 4 --nodes 2 --task Ant --seconds 60 --repeats 3
     python -m benchmarks.multi_gpu.nodes --out OUT --gpus 2 --nodes 2 --device cpu --num-envs 4 --seconds 15 --repeats 1
-    python -m benchmarks.multi_gpu.nodes --report OUT/nodes.json
+    python -m benchmarks.multi_gpu.nodes --report OUT/nodes.json [OUT2/nodes.json ...]   # the table, runs joined
 
 One node: ``torchrun --standalone --nproc_per_node=G -m warpgym train ...``. K nodes: K torchrun agents, each
 ``--nnodes=K --nproc_per_node=G/K`` with its own G/K GPUs (``CUDA_VISIBLE_DEVICES``) and its share of the cores,
@@ -100,10 +100,26 @@ def summarize(data: dict) -> dict:
             "holds": ratio is not None and abs(1.0 - ratio) <= WITHIN}
 
 
-def report(path: str) -> str:
-    if not os.path.isfile(path):
-        raise SystemExit(f"--report {path}: no such file; pass the nodes.json a run of this script wrote")
-    data = json.load(open(path))
+def joined(paths: list[str]) -> dict:
+    """Several runs' nodes.json as one: their repeats numbered on, the first's task and layout."""
+    data = None
+    for path in paths:
+        if not os.path.isfile(path):
+            raise SystemExit(f"--report {path}: no such file; pass the nodes.json a run of this script wrote")
+        with open(path) as f:
+            more = json.load(f)
+        if data is None:
+            data = dict(more, rows=[])
+        elif [more[k] for k in ("task", "gpus", "nodes")] != [data[k] for k in ("task", "gpus", "nodes")]:
+            raise SystemExit(f"--report {path}: {more['task']}, {more['gpus']} processes in {more['nodes']} nodes, "
+                             f"but the first has {data['task']}, {data['gpus']} in {data['nodes']}: join like runs")
+        first = 1 + max((r["repeat"] for r in data["rows"]), default=-1)
+        data["rows"] += [dict(r, repeat=first + r["repeat"]) for r in more["rows"]]
+    return data
+
+
+def report(paths: list[str]) -> str:
+    data = joined(paths)
     s = summarize(data)
     lines = [f"{data['task']}, {data['gpus']} processes ({data['device_name']}), {data['date']}: one node of "
              f"{data['gpus']} against {data['nodes']} nodes of {data['gpus'] // data['nodes']}", "",
@@ -124,7 +140,7 @@ def report(path: str) -> str:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", help="directory for nodes.json and the runs")
-    ap.add_argument("--report", metavar="NODES_JSON", help="print the table of an earlier run and stop")
+    ap.add_argument("--report", nargs="+", metavar="NODES_JSON", help="print the table of earlier runs (joined) and stop")
     ap.add_argument("--task", default="Ant")
     ap.add_argument("--gpus", type=int, default=4, help="processes in all, one per GPU (default 4)")
     ap.add_argument("--nodes", type=int, default=2, help="torchrun agents to split them over (default 2)")
@@ -161,7 +177,7 @@ def main(argv=None) -> int:
             data["summary"] = summarize(data)
             print(json.dumps(row), flush=True)
             write_json(os.path.join(args.out, "nodes.json"), data)
-    print(report(os.path.join(args.out, "nodes.json")))
+    print(report([os.path.join(args.out, "nodes.json")]))
     return 0 if all(c == 0 for r in data["rows"] for c in r["exit_codes"]) else 1
 
 

@@ -3,6 +3,7 @@
     python -m benchmarks.multi_gpu.scaling --out OUT --task Ant --gpus 1 2 4 --modes split grow-batch --seeds 0 1
     python -m benchmarks.multi_gpu.scaling --out OUT --task Humanoid-v5 --gpus 1 4 --seconds 600
     python -m benchmarks.multi_gpu.scaling --report OUT [OUT2 ...]   # the table and figures again, runs joined
+    python -m benchmarks.multi_gpu.scaling --report docs/bench/multi_gpu --task Humanoid   # a folder of several tasks
 
 One `warpgym train` per GPU count, mode (``--multi-gpu``, agents/data_parallel.py) and seed, G GPUs under
 `torchrun --nproc_per_node=G`, with the same flags; one GPU is every mode's baseline. The jobs share the host
@@ -303,14 +304,24 @@ def write_report(doc: dict, runs_dir: str, out: str) -> str:
     return table
 
 
-def report(folders: list[str]) -> int:
-    """Join the runs of one or more outputs for one task (a grid split over calls) into the first's report."""
+def task_json(folder: str, task: str) -> str:
+    """The folder's scaling_<task>.json, or its only scaling JSON (a folder may hold several tasks' reports)."""
+    found = sorted(glob.glob(os.path.join(folder, "scaling_*.json")))
+    mine = os.path.join(folder, f"scaling_{task}.json")
+    if mine in found or len(found) == 1:
+        return mine if mine in found else found[0]
+    if not found:
+        raise SystemExit(f"--report {folder}: no scaling_<task>.json there")
+    tasks = ", ".join(os.path.basename(f)[len("scaling_"):-len(".json")] for f in found)
+    raise SystemExit(f"--report {folder}: it holds the reports of {tasks} but not {task}: name one with --task")
+
+
+def report(folders: list[str], task: str = "Ant", targets: str | None = None) -> int:
+    """Join the runs of one or more outputs for one task (a grid split over calls) into the first's report;
+    ``targets`` (KEY=V1,V2) times the runs to other values of a logged key, read again from their metrics."""
     docs = []
     for folder in folders:
-        found = sorted(glob.glob(os.path.join(folder, "scaling_*.json")))
-        if not found:
-            raise SystemExit(f"--report {folder}: no scaling_<task>.json there")
-        with open(found[0]) as f:
+        with open(task_json(folder, task)) as f:
             docs.append((folder, json.load(f)))
     first = docs[0][1]
     same = ("task", "targets", "eval_gap")  # runs of other lengths join: each run's misses are bounds of its own
@@ -328,6 +339,9 @@ def report(folders: list[str]) -> int:
             tar.extractall(out, filter="data")
     names = {r["name"] for r in first["runs"]}
     first["runs"] += [r for _, doc in docs[1:] for r in doc["runs"] if r["name"] not in names]
+    if targets:
+        key, values = parse_targets(targets)
+        first["targets"] = {"key": key, "values": list(values)}
     key, values = first["targets"]["key"], tuple(first["targets"]["values"])
     for r in first["runs"]:  # read again from the runs' files, as this version of the script reads them
         r.update(run_row(os.path.join(runs_dir, r["name"]), key, values))
@@ -374,7 +388,10 @@ def main(argv=None) -> int:
                          "check a grid before a GPU machine runs it; its times mean nothing)")
     args = ap.parse_args(argv)
     if args.report:
-        return report(args.report)
+        try:
+            return report(args.report, args.task, args.targets)
+        except ValueError as e:
+            ap.error(str(e))
     if not args.out:
         ap.error("--out is required (or --report OUT)")
     if min(args.gpus) < 1:
