@@ -46,4 +46,15 @@ def gpu_slot(gpu: int, gpus: int) -> dict:
     return {"env": dict(os.environ, CUDA_VISIBLE_DEVICES=ids[gpu]), "preexec_fn": lambda: os.sched_setaffinity(0, mine)}
 
 
-__all__ = ["ROOT", "TRAIN", "core_shares", "gpu_slot", "read_summary", "visible_gpus", "write_json"]
+def reported(ap, args, report, what: str) -> bool:
+    """A benchmark's two modes: with ``--report`` print ``report(args.report)`` and say so; else ``--out`` is needed
+    (``what`` names the file --report reads, for the error)."""
+    if args.report:
+        print(report(args.report))
+        return True
+    if not args.out:
+        ap.error(f"--out is required (or --report {what})")
+    return False
+
+
+__all__ = ["ROOT", "TRAIN", "core_shares", "gpu_slot", "read_summary", "reported", "visible_gpus", "write_json"]

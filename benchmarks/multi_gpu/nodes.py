@@ -28,7 +28,7 @@ import time
 from datetime import timedelta
 
 from agents.logger import read_metrics, steady_median
-from benchmarks.harness import ROOT, core_shares, visible_gpus, write_json
+from benchmarks.harness import ROOT, core_shares, reported, visible_gpus, write_json
 
 WITHIN = 0.05
 
@@ -150,11 +150,8 @@ def main(argv=None) -> int:
     ap.add_argument("--device", default=None, help="cpu to check the script on a machine without GPUs")
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args(argv)
-    if args.report:
-        print(report(args.report))
+    if reported(ap, args, report, "NODES_JSON"):
         return 0
-    if not args.out:
-        ap.error("--out is required (or --report NODES_JSON)")
     if args.nodes < 2 or args.gpus % args.nodes:
         ap.error(f"--gpus {args.gpus} --nodes {args.nodes}: need at least 2 nodes and a whole number of GPUs "
                  f"on each, e.g. --gpus 4 --nodes 2")

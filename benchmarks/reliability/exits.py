@@ -26,7 +26,7 @@ import subprocess
 import sys
 import time
 
-from benchmarks.harness import ROOT, write_json  # noqa: E402
+from benchmarks.harness import ROOT, reported, write_json  # noqa: E402
 TRAIN = os.path.join(ROOT, "scripts", "train.py")
 FAIL_WORKER = os.path.join(ROOT, "tests", "fail_worker.py")
 EXIT_WITHIN_S, STOP_WITHIN_S = 10.0, 60.0
@@ -192,11 +192,8 @@ def main(argv=None) -> int:
     ap.add_argument("--no-failures", action="store_true", help="skip the failures")
     ap.add_argument("--report", metavar="EXITS_JSON", help="print the table of an earlier run and stop")
     args = ap.parse_args(argv)
-    if args.report:
-        print(report(args.report))
+    if reported(ap, args, report, "EXITS_JSON"):
         return 0
-    if not args.out:
-        ap.error("--out is required (or --report EXITS_JSON)")
     if args.runs < 0 or args.gpus < 1 or args.seconds <= 0 or args.failures < 0:
         ap.error(f"--runs {args.runs}, --gpus {args.gpus}, --seconds {args.seconds}, --failures {args.failures}: "
                  "need runs >= 0, gpus >= 1, seconds > 0, failures >= 0")
