@@ -500,7 +500,8 @@ def test_a_folder_of_several_tasks_asks_which(tmp_path):
 @pytest.mark.parametrize("module, args, count", [
     ("benchmarks.multi_gpu.nodes", ["docs/bench/multi_gpu/nodes/nodes-1.json", "docs/bench/multi_gpu/nodes/nodes-2.json"], 9),
     ("benchmarks.reliability.exits", ["docs/bench/gpu_exits.json"], 8),
-    ("benchmarks.learning.reacher_planner", ["docs/bench/reacher_planner.json"], 4)])
+    ("benchmarks.learning.reacher_planner", ["docs/bench/reacher_planner.json"], 4),
+    ("benchmarks.learning.reacher_planner", ["docs/bench/reacher_planner_25knots.json"], 3)])
 def test_the_published_nodes_exits_and_planner_tables_are_what_their_scripts_print(capsys, module, args, count):
     """The two-node, GPU exits and Reacher planner tables in docs/benchmarks.md, row for row, from the
     committed JSON (the planner's table sits in a list item, indented)."""

@@ -50,3 +50,14 @@ def test_the_report_says_how_many_episodes_reach_the_figure(tmp_path):
     out = rp.report(str(path))
     assert "| cem 30 | -3.00 | -3.00 | -3.50 | -2.50 | 1 of 2 episodes |" in out
     assert "largest difference 2.0e-04" in out
+
+
+def test_knots_join_into_a_plan_through_them():
+    rng = np.random.default_rng(0)
+    free = rng.uniform(-1.0, 1.0, (3, rp.STEPS, 2))
+    np.testing.assert_allclose(rp.joined(free), free)  # as many knots as steps: every action its own
+    knots = rng.uniform(-1.0, 1.0, (3, 10, 2))
+    plan = rp.joined(knots)
+    assert plan.shape == (3, rp.STEPS, 2)
+    np.testing.assert_allclose(plan[:, [0, -1]], knots[:, [0, -1]])  # it starts and ends at the first and last
+    assert np.abs(np.diff(plan, axis=1)).max() <= np.abs(np.diff(knots, axis=1)).max()  # and only joins them

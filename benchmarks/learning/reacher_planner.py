@@ -36,14 +36,14 @@ from benchmarks.harness import reported, write_json
 
 STEPS = 50  # Reacher-v5's TimeLimit
 PUBLISHED = -2.6  # Tianshou's PPO, Reacher-v2
-KNOTS = 10  # the cross-entropy method's actions per episode
+KNOTS = 10  # the cross-entropy method's actions per episode (--knots)
 PREDICTION_GAP = 0.02  # the planner's return against the env's: RK4's reading of the fingertip, about 1e-4 a step
 
 
 class Planner:
     """The cross-entropy method over a whole episode's actions, on the env's own MjModel."""
 
-    def __init__(self, env, samples: int, elites: int, threads: int, seed: int):
+    def __init__(self, env, samples: int, elites: int, threads: int, seed: int, knots: int = KNOTS):
         import mujoco  # noqa: PLC0415
         from mujoco import rollout  # noqa: PLC0415
 
@@ -54,7 +54,7 @@ class Planner:
         self.nstate = mujoco.mj_stateSize(self.model, self.spec)
         self.datas = [mujoco.MjData(self.model) for _ in range(threads)]
         self.runner = rollout.Rollout(nthread=threads)
-        self.samples, self.elites = samples, elites
+        self.samples, self.elites, self.knots = samples, elites, knots
         self.rng = np.random.default_rng(seed)
         # where qpos lies in the full physics state: after the time
         self.qpos = slice(1, 1 + self.model.nq)
@@ -111,13 +111,13 @@ class Planner:
         """The best plan found after each of ``rounds`` (sorted) rounds of the cross-entropy method, then after
         each of ``polish`` (sorted) steps of gradient ascent from the method's last plan; keyed "cem N" and
         "cem N + grad M"."""
-        # the method searches KNOTS actions, linearly joined over the episode: 20 numbers where a whole plan has
-        # 100, which it could not rank well with a few hundred samples; the gradient then refines all 100
-        mean, std = np.zeros((KNOTS, 2)), np.full((KNOTS, 2), 0.5)
+        # the method searches a few actions (knots), linearly joined over the episode: 20 numbers where a whole
+        # plan has 100, which it could not rank well with a few hundred samples; the gradient may refine all 100
+        mean, std = np.zeros((self.knots, 2)), np.full((self.knots, 2), 0.5)
         best, best_return, kept = np.zeros((STEPS, 2)), -np.inf, {}
         best_knots = mean.copy()
         for k in range(1, max(rounds) + 1):
-            knots = np.clip(mean + std * self.rng.standard_normal((self.samples, KNOTS, 2)), -1.0, 1.0)
+            knots = np.clip(mean + std * self.rng.standard_normal((self.samples, self.knots, 2)), -1.0, 1.0)
             knots[0] = best_knots  # the best so far competes again, so a round never loses it
             plans = joined(knots)
             totals = self.rewards(start, plans).sum(1)
@@ -152,9 +152,10 @@ class Planner:
 
 
 def joined(knots: np.ndarray) -> np.ndarray:
-    """(N, KNOTS, 2) actions at evenly spaced steps -> (N, STEPS, 2) plans, linear between them."""
-    at = np.linspace(0, KNOTS - 1, STEPS)
-    low = np.minimum(at.astype(int), KNOTS - 2)
+    """(N, K, 2) actions at K evenly spaced steps -> (N, STEPS, 2) plans, linear between them."""
+    k = knots.shape[1]
+    at = np.linspace(0, k - 1, STEPS)
+    low = np.minimum(at.astype(int), k - 2)
     w = (at - low)[None, :, None]
     return knots[:, low] * (1 - w) + knots[:, low + 1] * w
 
@@ -174,7 +175,7 @@ def run(args) -> dict:
     import gymnasium as gym  # noqa: PLC0415
 
     env = gym.make("Reacher-v5")
-    planner = Planner(env, args.samples, args.elites, args.threads, args.plan_seed)
+    planner = Planner(env, args.samples, args.elites, args.threads, args.plan_seed, args.knots)
     rounds = sorted(set(args.rounds))
     rows = []
     for seed in args.seeds:
@@ -198,7 +199,7 @@ def run(args) -> dict:
             rows.append(row)
             print(json.dumps(row), flush=True)
     return {"argv": sys.argv[1:], "date": time.strftime("%Y-%m-%d"), "gymnasium": gym.__version__,
-            "mujoco": planner.mujoco.__version__, "samples": args.samples, "elites": args.elites,
+            "mujoco": planner.mujoco.__version__, "samples": args.samples, "elites": args.elites, "knots": args.knots,
             "stages": list(plans), "rows": rows}
 
 
@@ -210,7 +211,7 @@ def report(path: str) -> str:
     rows = data["rows"]
     lines = [f"Reacher-v5 in gymnasium {data['gymnasium']} (MuJoCo {data['mujoco']}), {len(rows)} episodes "
              f"(reset seeds {rows[0]['reset_seed']}-{rows[-1]['reset_seed']}), the cross-entropy method with "
-             f"{data['samples']} plans a round, {data['elites']} elites, {data['date']}", "",
+             f"{data['samples']} plans a round, {data['elites']} elites, {data.get('knots', KNOTS)} knots, {data['date']}", "",
              "| search | return: mean | median | lowest | highest | Tianshou's -2.6 reached |",
              "|---:|---:|---:|---:|---:|---|"]
     for k in data["stages"]:
@@ -234,6 +235,9 @@ def main(argv=None) -> int:
                     help="steps of gradient ascent (forward differences) after the last round, after which the best "
                          "plan is played (default none: from the method's plans, whose actions sit on the bounds, "
                          "it found no step up)")
+    ap.add_argument("--knots", type=int, default=KNOTS,
+                    help=f"actions a plan is drawn through, joined linearly over the {STEPS} steps (default {KNOTS}; "
+                         f"{STEPS}: every action free)")
     ap.add_argument("--samples", type=int, default=512, help="plans a round (default 512)")
     ap.add_argument("--elites", type=int, default=32, help="best plans a round keeps (default 32)")
     ap.add_argument("--threads", type=int, default=os.cpu_count() or 1)
@@ -241,9 +245,11 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     if reported(ap, args, report, "JSON"):
         return 0
-    if min(args.rounds) < 1 or any(k < 0 for k in args.polish) or args.episodes < 1 or not 1 <= args.elites < args.samples:
+    if min(args.rounds) < 1 or any(k < 0 for k in args.polish) or args.episodes < 1 or not 1 <= args.elites < args.samples \
+            or not 2 <= args.knots <= STEPS:
         ap.error(f"--rounds {args.rounds} --polish {args.polish} --episodes {args.episodes} --elites {args.elites} --samples "
-                 f"{args.samples}: need rounds and episodes of at least 1, no negative polish, and fewer elites than plans")
+                 f"{args.samples} --knots {args.knots}: need rounds and episodes of at least 1, no negative polish, fewer "
+                 f"elites than plans, and 2 to {STEPS} knots")
     os.makedirs(args.out, exist_ok=True)
     data = run(args)
     path = os.path.join(args.out, "reacher_planner.json")
