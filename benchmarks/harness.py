@@ -46,6 +46,18 @@ def gpu_slot(gpu: int, gpus: int) -> dict:
     return {"env": dict(os.environ, CUDA_VISIBLE_DEVICES=ids[gpu]), "preexec_fn": lambda: os.sched_setaffinity(0, mine)}
 
 
+def read_report(path: str, what: str) -> dict:
+    """The JSON an earlier run of a benchmark wrote, for its ``--report``; a missing or damaged file ends the
+    process with one line naming it and ``what`` to pass instead."""
+    try:
+        with open(path) as f:
+            return json.load(f)
+    except FileNotFoundError:
+        raise SystemExit(f"--report {path}: no such file; pass {what}") from None
+    except (OSError, ValueError) as e:
+        raise SystemExit(f"--report {path}: cannot be read as JSON ({e}); pass {what}") from None
+
+
 def reported(ap, args, report, what: str) -> bool:
     """A benchmark's two modes: with ``--report`` print ``report(args.report)`` and say so; else ``--out`` is needed
     (``what`` names the file --report reads, for the error)."""
@@ -57,4 +69,4 @@ def reported(ap, args, report, what: str) -> bool:
     return False
 
 
-__all__ = ["ROOT", "TRAIN", "core_shares", "gpu_slot", "read_summary", "reported", "visible_gpus", "write_json"]
+__all__ = ["ROOT", "TRAIN", "core_shares", "gpu_slot", "read_report", "read_summary", "reported", "visible_gpus", "write_json"]

@@ -46,6 +46,13 @@ CASES = [
     ("fidelity.py", ["--out", MISSING, "--probes", MISSING], None, f"--probes {MISSING}: no such checkpoint file"),
     ("fidelity.py", ["--report", MISSING], None, f"--report {MISSING}: no fidelity.json"),
     ("exits.py", ["--report", MISSING], None, f"--report {MISSING}: no such file"),
+    ("nodes.py", ["--report", MISSING], None, f"--report {MISSING}: no such file"),
+    ("nodes.py", ["--out", MISSING, "--gpus", "3", "--nodes", "2"], None, "--gpus 3 --nodes 2: need at least 2 nodes"),
+    ("reacher_planner.py", ["--report", MISSING], None, f"--report {MISSING}: no such file"),
+    ("reacher_planner.py", ["--out", MISSING, "--knots", "1"], None, "--knots 1: need"),
+    ("conformance.py", ["--report", MISSING], None, f"--report {MISSING}: no such file"),
+    ("rollout_capture.py", ["--report", MISSING], None, f"--report {MISSING}: no such file"),
+    ("suite_versions.py", ["--report", MISSING], None, f"--report {MISSING}: no such file"),
     ("exits.py", ["--out", MISSING, "--gpus", "0"], None, "--gpus 0"),
     ("envs_per_gpu.py", ["--out", MISSING, "--envs", "1000"], None,
      "1000 envs: a rollout of 16000 samples (x horizon_len 16) does not split into mini-batches of 32768"),
@@ -74,3 +81,14 @@ def test_a_bad_input_is_named_in_one_line(tmp_path, name, args, missing, says):
     done = subprocess.run([*command, *args], cwd=tmp_path, env=env, capture_output=True, text=True, timeout=120)
     assert done.returncode != 0 and "Traceback" not in done.stderr, done.stderr[-2000:]
     assert says in done.stderr, done.stderr[-2000:]
+
+
+def test_a_damaged_report_is_named_in_one_line(tmp_path):
+    from benchmarks.harness import read_report
+
+    bad = tmp_path / "half.json"
+    bad.write_text('{"rows": [')
+    with pytest.raises(SystemExit, match=f"--report {bad}: cannot be read as JSON .*; pass the exits.json"):
+        read_report(str(bad), "the exits.json a run of this script wrote")
+    bad.write_text('{"rows": []}')
+    assert read_report(str(bad), "x") == {"rows": []}

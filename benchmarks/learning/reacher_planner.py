@@ -32,7 +32,7 @@ import time
 
 import numpy as np
 
-from benchmarks.harness import reported, write_json
+from benchmarks.harness import read_report, reported, write_json
 
 STEPS = 50  # Reacher-v5's TimeLimit
 PUBLISHED = -2.6  # Tianshou's PPO, Reacher-v2
@@ -204,10 +204,7 @@ def run(args) -> dict:
 
 
 def report(path: str) -> str:
-    if not os.path.isfile(path):
-        raise SystemExit(f"--report {path}: no such file; pass the reacher_planner.json a run of this script wrote")
-    with open(path) as f:
-        data = json.load(f)
+    data = read_report(path, "the reacher_planner.json a run of this script wrote")
     rows = data["rows"]
     lines = [f"Reacher-v5 in gymnasium {data['gymnasium']} (MuJoCo {data['mujoco']}), {len(rows)} episodes "
              f"(reset seeds {rows[0]['reset_seed']}-{rows[-1]['reset_seed']}), the cross-entropy method with "

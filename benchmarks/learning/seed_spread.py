@@ -18,7 +18,7 @@ import statistics
 import subprocess
 import sys
 
-from benchmarks.harness import ROOT, TRAIN, write_json  # noqa: E402
+from benchmarks.harness import ROOT, TRAIN, read_report, write_json  # noqa: E402
 
 
 def run(out: str, name: str, task: str, seed: int, seconds: float) -> dict:
@@ -84,10 +84,7 @@ def main() -> int:
     ap.add_argument("--report", metavar="JSON")
     args = ap.parse_args()
     if args.report:
-        if not os.path.isfile(args.report):
-            ap.error(f"--report {args.report}: no such file; pass the seed_spread.json of an earlier run")
-        with open(args.report) as f:
-            print(report(json.load(f)))
+        print(report(read_report(args.report, "the seed_spread.json of an earlier run")))
         return 0
     if not args.out:
         ap.error("--out OUT is needed to measure (or --report JSON)")

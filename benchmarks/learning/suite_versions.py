@@ -28,6 +28,7 @@ import sys
 import time
 
 
+from benchmarks.harness import read_report  # noqa: E402
 from benchmarks.learning.suite_learning import SEEDS, play  # noqa: E402
 from benchmarks.targets import REFERENCE, REFERENCE_VERSION  # noqa: E402
 
@@ -105,7 +106,7 @@ def main(argv=None) -> int:
     ap.add_argument("--device", default=None)
     args = ap.parse_args(argv)
     if args.report:
-        print(table(json.load(open(args.report))["rows"]))
+        print(table(read_report(args.report, "the file an earlier --json wrote")["rows"]))
         return 0
     if not args.runs:
         ap.error("--runs OUT... (suite_learning.py's output folders) or --report JSON")

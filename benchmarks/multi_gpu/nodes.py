@@ -28,7 +28,7 @@ import time
 from datetime import timedelta
 
 from agents.logger import read_metrics, steady_median
-from benchmarks.harness import ROOT, core_shares, reported, visible_gpus, write_json
+from benchmarks.harness import ROOT, core_shares, read_report, reported, visible_gpus, write_json
 
 WITHIN = 0.05
 
@@ -104,10 +104,7 @@ def joined(paths: list[str]) -> dict:
     """Several runs' nodes.json as one: their repeats numbered on, the first's task and layout."""
     data = None
     for path in paths:
-        if not os.path.isfile(path):
-            raise SystemExit(f"--report {path}: no such file; pass the nodes.json a run of this script wrote")
-        with open(path) as f:
-            more = json.load(f)
+        more = read_report(path, "the nodes.json a run of this script wrote")
         if data is None:
             data = dict(more, rows=[])
         elif [more[k] for k in ("task", "gpus", "nodes")] != [data[k] for k in ("task", "gpus", "nodes")]:

@@ -15,6 +15,7 @@ import json
 import sys
 import time
 
+from benchmarks.harness import read_report
 
 
 def measure(name: str, samples: dict, episodes: int, seed: int) -> dict:
@@ -71,7 +72,7 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args(argv)
     if args.report:
-        data = json.load(open(args.report))
+        data = read_report(args.report, "the JSON an earlier --out wrote")
         print(f"{data['meta']['date']}, {data['meta']['command']}")
         print(table(data["rows"]))
         return 0

@@ -26,7 +26,7 @@ import subprocess
 import sys
 import time
 
-from benchmarks.harness import ROOT, reported, write_json  # noqa: E402
+from benchmarks.harness import ROOT, read_report, reported, write_json  # noqa: E402
 TRAIN = os.path.join(ROOT, "scripts", "train.py")
 FAIL_WORKER = os.path.join(ROOT, "tests", "fail_worker.py")
 EXIT_WITHIN_S, STOP_WITHIN_S = 10.0, 60.0
@@ -153,9 +153,7 @@ def holds(row: dict) -> bool:
 
 
 def report(path: str) -> str:
-    if not os.path.isfile(path):
-        raise SystemExit(f"--report {path}: no such file; pass the exits.json a run of this script wrote")
-    data = json.load(open(path))
+    data = read_report(path, "the exits.json a run of this script wrote")
     lines = [f"{data['gpus']} processes on {data['device_name']}, {data['date']}", "",
              "| # | kind | task | exit code | last row to exit | all processes stopped | names --resume | holds |",
              "|---:|---|---|---:|---:|---:|---|---|"]

@@ -30,7 +30,7 @@ import sys
 import tempfile
 import time
 
-from benchmarks.harness import ROOT, write_json  # noqa: E402
+from benchmarks.harness import ROOT, read_report, write_json  # noqa: E402
 
 from benchmarks.targets import WALKING  # noqa: E402
 
@@ -166,10 +166,7 @@ def main() -> int:
     ap.add_argument("extra", nargs="*", help="more train.py flags, after --, e.g. -- --no-mathdx")
     args = ap.parse_args()
     if args.report:
-        if not os.path.isfile(args.report):
-            ap.error(f"--report {args.report}: no such file; pass the cold_start.json of an earlier run")
-        with open(args.report) as f:
-            print(report(json.load(f)))
+        print(report(read_report(args.report, "the cold_start.json of an earlier run")))
         return 0
     if not args.out:
         ap.error("--out OUT is needed to measure (or --report JSON to print a table)")

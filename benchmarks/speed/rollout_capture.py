@@ -15,14 +15,13 @@ OUT/rollout_capture.json after every run; prints the medians over the rounds and
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import statistics
 import subprocess
 import sys
 import time
 
-from benchmarks.harness import ROOT, TRAIN, read_summary  # noqa: E402
+from benchmarks.harness import ROOT, TRAIN, read_report, read_summary  # noqa: E402
 
 MODES = ("step", "rollout", "off")
 
@@ -70,8 +69,7 @@ def main(argv=None) -> int:
     ap.add_argument("--device", default=None)
     args = ap.parse_args(argv)
     if args.report:
-        with open(args.report) as f:
-            print(table(json.load(f)))
+        print(table(read_report(args.report, "the JSON an earlier --out wrote")))
         return 0
     if not args.out:
         ap.error("--out OUT is required (or --report JSON)")
