@@ -95,9 +95,9 @@ class Config:
     # update compiles it, seconds of a start (docs/benchmarks.md, "Compiled update")
     compile_update: bool = False
     obs_clip: float = 5.0
-    # how several processes (torchrun, one per GPU) divide the work: agents/data_parallel.py. "grow-steps": each
+    # how several processes (torchrun, one per GPU) divide the work: agents/data_parallel.py. "grow-kl": each
     # GPU steps num_envs envs and a mini-batch stays minibatch_size samples across them, so G GPUs make G times the
-    # optimiser steps of one in an iteration about as long
+    # optimiser steps of one in an iteration about as long, under a KL target G times desired_kl
     multi_gpu: str = data_parallel.DEFAULT
     # stop once a logged value reaches a number, "KEY=VALUE" (e.g. "eval/speed=9.5", "eval/return=5850"): the
     # first row whose KEY is at least VALUE ends the run as its time limit would (rl_games' score_to_win)

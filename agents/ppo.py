@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import torch
 
+from agents import data_parallel
 from agents.actor_critic import ActorCritic, gaussian_kl, gaussian_log_prob
 from agents.config import Config
 from agents.distributed import Workers
@@ -78,6 +79,8 @@ class PPO:
         self.workers = workers or Workers()
         self.cfg = cfg
         self.device = device
+        # the KL target of this run's processes (grow-kl widens it with their number)
+        self.desired_kl = data_parallel.kl_target(cfg.multi_gpu, cfg.desired_kl, self.workers.size)
         self.lr = torch.tensor(cfg.learning_rate, dtype=torch.float32, device=device)
         # the rate the KL rule adapts (or the fixed one) and Config.anneal_lr's decay factor (1 without it),
         # which the runner sets before each update; the captured step reads both by address, lr = their product
@@ -137,8 +140,8 @@ class PPO:
         loss.backward()
         # one collective per mini-batch: every process's gradients and KL, averaged
         (kl,) = self.workers.mean_grads_(policy.parameters(), terms[3])
-        if cfg.desired_kl > 0:
-            self.lr_free.copy_(adapted_lr(self.lr_free, kl, cfg.desired_kl))
+        if self.desired_kl > 0:
+            self.lr_free.copy_(adapted_lr(self.lr_free, kl, self.desired_kl))
         self.lr.copy_(self.lr_free * self.lr_scale)
         torch.nn.utils.clip_grad_norm_(policy.parameters(), cfg.max_grad_norm, foreach=True)
         self.optimizer.step()

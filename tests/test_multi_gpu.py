@@ -10,7 +10,7 @@ import sys
 import pytest
 
 from agents import Config, OnPolicyRunner
-from agents.data_parallel import envs_per_process, minibatches
+from agents.data_parallel import envs_per_process, kl_target, minibatches
 from agents.logger import time_to_target
 from point_mass import PointMassVecEnv
 
@@ -25,6 +25,7 @@ from benchmarks.multi_gpu import scaling
     ("split", 2048, 4, 32768),        # the one-GPU run: 4 steps of 32768 samples, each GPU a quarter of them
     ("grow-batch", 8192, 4, 131072),  # 4x the envs, each step 4x the samples
     ("grow-steps", 8192, 16, 32768),  # 4x the envs, 4x the steps of the one-GPU size
+    ("grow-kl", 8192, 16, 32768),     # grow-steps' division; only the KL target differs
 ])
 def test_each_mode_divides_the_envs_and_the_mini_batches_as_documented(mode, envs, steps, samples_per_step):
     local = envs_per_process(mode, 8192, 4)
@@ -35,6 +36,29 @@ def test_each_mode_divides_the_envs_and_the_mini_batches_as_documented(mode, env
     assert envs_per_process(mode, 8192, 1) == 8192 and minibatches(mode, 8192, 16, 32768, 1) == 4
 
 
+def test_grow_kl_widens_the_kl_target_with_the_processes_and_the_rate_rule_follows_it():
+    assert kl_target("grow-kl", 0.008, 2) == pytest.approx(0.016) and kl_target("grow-kl", 0.008, 4) == pytest.approx(0.032)
+    assert kl_target("grow-kl", 0.0, 4) == 0.0  # the rule off stays off
+    assert all(kl_target(m, 0.008, 4) == 0.008 for m in ("split", "grow-batch", "grow-steps"))
+    assert all(kl_target(m, 0.008, 1) == 0.008 for m in ("split", "grow-batch", "grow-steps", "grow-kl"))
+    # a PPO among 2 processes steers to the widened target: a mini-batch KL of 0.02 keeps its rate under grow-kl
+    # (within 2 x 0.016) and lowers it under grow-steps (past 2 x 0.008)
+    import torch
+
+    from agents.actor_critic import ActorCritic
+    from agents.ppo import PPO, adapted_lr
+
+    class TwoProcesses:  # the update's view of 2 processes whose gradients are already averaged
+        size, rank, active = 2, 0, False
+
+    rates = {}
+    for mode in ("grow-steps", "grow-kl"):
+        cfg = Config(net_dims=(8,), multi_gpu=mode).validated()
+        ppo = PPO(ActorCritic(3, 2, cfg.net_dims), cfg, torch.device("cpu"), workers=TwoProcesses())
+        rates[mode] = (ppo.desired_kl, float(adapted_lr(torch.tensor(1e-3), torch.tensor(0.02), ppo.desired_kl)))
+    assert rates == {"grow-steps": (0.008, pytest.approx(1e-3 / 1.5)), "grow-kl": (0.016, pytest.approx(1e-3))}
+
+
 def test_a_split_that_does_not_divide_names_the_value_and_the_fix():
     with pytest.raises(ValueError, match=r"num_envs=8193 does not split over 4 processes .* e.g. 8192"):
         envs_per_process("split", 8193, 4)
@@ -42,7 +66,7 @@ def test_a_split_that_does_not_divide_names_the_value_and_the_fix():
         minibatches("split", 64, 16, 100, 3)
     with pytest.raises(ValueError, match=r"minibatch_size=4096 exceeds the 2048 samples of one rollout \(2 processes x 64"):
         minibatches("grow-steps", 64, 16, 4096, 2)
-    with pytest.raises(ValueError, match="multi_gpu='pairs': choose one of split, grow-batch, grow-steps"):
+    with pytest.raises(ValueError, match="multi_gpu='pairs': choose one of split, grow-batch, grow-steps, grow-kl"):
         Config(multi_gpu="pairs").validated()
 
 
@@ -135,6 +159,21 @@ def test_the_table_takes_medians_over_seeds_and_ratios_to_one_gpu(tmp_path):
     assert "| 4 | split | 64 |" in table and "3.0 s (0.27x; <= 0.5: met), 2 of 2" in table
     assert "5.0 s, > 19 s | > 12.0 s (> 1.09x; <= 0.7: not met), 1 of 2" in table
     assert "4.0 s (< 0.36x; <= 0.5: met), 2 of 2" in table and "> 10 s, 12.0 s | > 11.0 s, 1 of 2" in table
+
+
+def test_every_line_is_measured_against_the_plain_one_gpu_runs_not_a_labelled_control(tmp_path):
+    doc = {"task": "Humanoid", "targets": {"key": "eval/speed", "values": [6.0]}, "seconds": 60, "eval_gap": 1,
+           "host_gpus": 2, "date": "2026-11-26", "runs": []}
+    # one GPU: 10 s plainly, 20 s with other flags (a control, "-+kl16"); two GPUs with those flags: 5 s
+    plan = {"gpu1-seed0": [1] * 10 + [6], "gpu1-+kl16-seed0": [1] * 20 + [6], "gpu2-grow-steps+kl16-seed0": [1] * 5 + [6]}
+    for name, speeds in plan.items():
+        doc["runs"].append(scaling.run_row(fake_run(tmp_path, name, speeds), "eval/speed", (6.0,)))
+    summary = scaling.summarize(doc)
+    lines = {(ln["gpus"], ln["mode"]): ln["targets"]["6"] for ln in summary}
+    assert lines[(1, "-")]["ratio"] == (1.0, 1.0)
+    assert lines[(1, "-+kl16")]["ratio"] == (pytest.approx(2.0), pytest.approx(2.0))
+    assert lines[(2, "grow-steps+kl16")]["ratio"] == (pytest.approx(0.5), pytest.approx(0.5))
+    assert [ln["samples_speedup"] for ln in summary][0] == 1.0
 
 
 def test_runs_of_several_lengths_give_the_interval_the_median_lies_in(tmp_path):

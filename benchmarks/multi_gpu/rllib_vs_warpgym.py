@@ -235,7 +235,7 @@ def main(argv=None) -> int:
     ap.add_argument("--gpus", type=int, nargs="+", default=[1, 2], help="GPU counts to run (default 1 2)")
     ap.add_argument("--learners", nargs="+", default=["warpgym", "rllib"], choices=["warpgym", "rllib"])
     ap.add_argument("--num-envs", type=int, default=4096, help="robots per GPU (per env runner for RLlib)")
-    ap.add_argument("--warpgym-multi-gpu", choices=("grow-batch", "split", "grow-steps"), default="grow-batch",
+    ap.add_argument("--warpgym-multi-gpu", choices=("grow-batch", "split", "grow-steps", "grow-kl"), default="grow-batch",
                     help="warpgym's --multi-gpu on several GPUs, each GPU stepping --num-envs robots (default "
                          "grow-batch: each GPU's own mini-batch, as RLlib's DDP learners)")
     ap.add_argument("--seconds", type=float, default=240.0, help="wall-clock budget per run, from process start")

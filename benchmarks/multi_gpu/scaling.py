@@ -155,17 +155,21 @@ def groups(doc: dict) -> dict[tuple[int, str], list[dict]]:
 
 
 def summarize(doc: dict) -> list[dict]:
-    """One line per (GPUs, mode): medians over seeds, and the ratios to one GPU's medians."""
+    """One line per (GPUs, mode): medians over seeds, and the ratios to one GPU's medians. The baseline is one
+    GPU with the plain flags (mode "-"); a 1-GPU line made with other flags (a control, "-+label") is measured
+    against it too, as every multi-GPU line is."""
     lines = []
     base: dict[str, dict] = {}
     base_rate = math.nan
-    for (gpus, mode), runs in groups(doc).items():
+    # the plain 1-GPU line first, whatever its labelled controls sort as
+    ordered = sorted(groups(doc).items(), key=lambda item: (item[0][0], item[0][1] != "-", item[0][1]))
+    for (gpus, mode), runs in ordered:
         line = {"gpus": gpus, "mode": mode, "seeds": sorted(r["seed"] for r in runs),
                 "samples_per_s": statistics.median(r["samples_per_s"] or 0.0 for r in runs),
                 "iteration_ms": statistics.median(r["iteration_ms"] for r in runs),
                 "first_iteration_s": statistics.median(r["first_iteration_s"] or math.nan for r in runs),
                 "targets": {}}
-        if gpus == 1:
+        if gpus == 1 and math.isnan(base_rate):
             base_rate = line["samples_per_s"]
         line["samples_speedup"] = line["samples_per_s"] / base_rate if base_rate else math.nan
         for v in doc["targets"]["values"]:
@@ -177,9 +181,10 @@ def summarize(doc: dict) -> list[dict]:
                  "bounds_s": [None if h else r.get("learned_s") for h, r in zip(hits, runs)],
                  "median_learning_s": learn, "median_upper_s": upper, "exact": learn == upper,
                  "median_time_s": statistics.median(walls)}
-            if gpus == 1:
+            first = gpus == 1 and f"{v:g}" not in base
+            if first:
                 base[f"{v:g}"] = t
-            t["ratio"] = ((1.0, 1.0) if t["exact"] else None) if gpus == 1 else ratio_of(t, base.get(f"{v:g}"))
+            t["ratio"] = ((1.0, 1.0) if t["exact"] else None) if first else ratio_of(t, base.get(f"{v:g}"))
             line["targets"][f"{v:g}"] = t
         lines.append(line)
     return lines
@@ -278,7 +283,8 @@ def figures(doc: dict, runs_dir: str, out: str) -> list[str]:
                 xs = learning_clock(rows) if axis == "time" else [x["samples"] for x in rows]
                 pts = [(x, row[key]) for x, row in zip(xs, rows) if row.get(key) is not None]
                 ax.plot([p[0] for p in pts], [p[1] for p in pts], color=f"C{i}", lw=1.2, alpha=0.8,
-                        label=(f"{gpus} GPU" + ("s, " + mode if gpus > 1 else "")) if j == 0 else None)
+                        label=f"{gpus} GPU{'s' if gpus > 1 else ''}{'' if mode == '-' else ', ' + mode.lstrip('-')}"
+                        if j == 0 else None)
         for v in values:
             ax.axhline(v, color="grey", ls=":", lw=0.8)
         ax.set_xlabel(label)
