@@ -21,8 +21,8 @@ Every mode trains one policy, its gradients averaged over the processes at each 
                 iterations to 6 m/s, at a lower learning rate). Widened with the data, the iteration moves as
                 far as its samples support.
 
-``grow-kl`` is the default (DEFAULT): on 2 GPUs it brought the Humanoid to 6 m/s in 0.49x of one GPU's learning
-time, where grow-steps took 1.08x and split 1.50x; the same wider target on one GPU gave 1.09x
+``grow-kl`` is the default (DEFAULT): on 2 GPUs it brought the Humanoid to 6 m/s in at most 0.53x of one GPU's
+learning time, where grow-steps took 1.08x and split 1.50x; the same wider target on one GPU was no sooner
 (docs/benchmarks.md, "Several GPUs: time to target", has what each mode gave on each task and how many GPUs).
 With one process every mode is the same run.
 """

@@ -176,6 +176,14 @@ def test_every_line_is_measured_against_the_plain_one_gpu_runs_not_a_labelled_co
     assert [ln["samples_speedup"] for ln in summary][0] == 1.0
 
 
+def test_a_seeds_second_run_is_named_apart_and_counted_beside_the_first():
+    assert scaling.run_name(1, "grow-kl", 0, repeat=2) == "gpu1-seed0-r2"
+    assert scaling.run_name(2, "grow-kl", 3, "kl16", repeat=3) == "gpu2-grow-kl+kl16-seed3-r3"
+    assert scaling.parse_name("gpu1-seed0-r2") == (1, "-", 0)
+    assert scaling.parse_name("gpu2-grow-kl+kl16-seed3-r3") == (2, "grow-kl+kl16", 3)
+    assert scaling.parse_name(scaling.run_name(4, "split", 1)) == (4, "split", 1)
+
+
 def test_runs_of_several_lengths_give_the_interval_the_median_lies_in(tmp_path):
     doc = {"task": "Ant", "targets": {"key": "eval/speed", "values": [9.0]}, "seconds": 60, "eval_gap": 1,
            "host_gpus": 4, "date": "2026-11-26", "runs": []}
@@ -199,7 +207,8 @@ def test_runs_of_several_lengths_give_the_interval_the_median_lies_in(tmp_path):
 def test_the_benchmark_names_a_wrong_flag_before_it_starts_anything():
     for flags, says in ((["--gpus", "0", "2"], "--gpus 0 2: each is a number of GPUs, 1 or more"),
                         (["--targets", "eval/speed"], "--targets 'eval/speed': write KEY=V1,V2"),
-                        (["--task", "Hopper"], "--task Hopper: choose one of Ant, Humanoid")):
+                        (["--task", "Hopper"], "--task Hopper: choose one of Ant, Humanoid"),
+                        (["--repeat", "0"], "--repeat 0: the run's number among runs of the same seeds, 1 or more")):
         done = subprocess.run([sys.executable, "-m", "benchmarks.multi_gpu.scaling", "--out", "/nowhere", *flags],
                               cwd=ROOT, capture_output=True, text=True, timeout=120)
         assert done.returncode == 2 and says in done.stderr, done.stderr[-2000:]

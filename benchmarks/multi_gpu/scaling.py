@@ -63,17 +63,20 @@ def parse_targets(text: str) -> tuple[str, tuple[float, ...]]:
     return key, numbers
 
 
-def run_name(gpus: int, mode: str, seed: int, label: str = "") -> str:
-    """gpu1-seed0, gpu4-split-seed0; with a label (runs made with other flags) gpu1-+16k-seed0, gpu4-split+16k-seed0."""
+def run_name(gpus: int, mode: str, seed: int, label: str = "", repeat: int = 1) -> str:
+    """gpu1-seed0, gpu4-split-seed0; with a label (runs made with other flags) gpu1-+16k-seed0, gpu4-split+16k-seed0;
+    a seed's second run (--repeat 2: GPU runs of one seed differ, their reductions adding in no fixed order)
+    gpu1-seed0-r2."""
     setting = ("" if gpus == 1 else mode) + (f"+{label}" if label else "")
-    return f"gpu{gpus}-{setting}-seed{seed}" if setting else f"gpu{gpus}-seed{seed}"
+    name = f"gpu{gpus}-{setting}-seed{seed}" if setting else f"gpu{gpus}-seed{seed}"
+    return name + (f"-r{repeat}" if repeat > 1 else "")
 
 
 def parse_name(name: str) -> tuple[int, str, int]:
     """run_name's (GPUs, setting, seed); one GPU's setting is "-", or "-+label"."""
     head, _, seed = name.rpartition("-seed")
     gpus, _, setting = head.partition("-")
-    return int(gpus[3:]), (setting if not setting.startswith("+") else "-" + setting) or "-", int(seed)
+    return int(gpus[3:]), (setting if not setting.startswith("+") else "-" + setting) or "-", int(seed.split("-r")[0])
 
 
 def jobs_for(args, runs: str, key: str, last: float) -> list[Job]:
@@ -85,7 +88,7 @@ def jobs_for(args, runs: str, key: str, last: float) -> list[Job]:
     plan += [(g, m, s) for g in sorted(set(args.gpus) - {1}) for m in args.modes for s in args.seeds]
     jobs = []
     for gpus, mode, seed in plan:
-        name = run_name(gpus, mode, seed, args.label)
+        name = run_name(gpus, mode, seed, args.label, args.repeat)
         d = os.path.join(runs, name)
         # one GPU: `warpgym train`; G GPUs: the same command under torchrun, as the README writes it
         launch = TRAIN if gpus == 1 else [sys.executable, "-m", "torch.distributed.run", "--standalone",
@@ -389,6 +392,9 @@ def main(argv=None) -> int:
     ap.add_argument("--train-flags", default="", help="more `warpgym train` flags for every run, quoted")
     ap.add_argument("--label", default="", help="a name for runs made with other flags (--num-envs, --train-flags), "
                                                "added to their setting (split+LABEL), so --report keeps them apart")
+    ap.add_argument("--repeat", type=int, default=1, metavar="N",
+                    help="these runs are the Nth of their seeds: names end in -rN, so --report keeps them beside "
+                         "the first (where a name repeats, it keeps the first output's run)")
     ap.add_argument("--device", choices=("cuda", "cpu"), default="cuda",
                     help="cpu: a rehearsal of the whole benchmark on the CPU, each 'GPU' a share of the cores (to "
                          "check a grid before a GPU machine runs it; its times mean nothing)")
@@ -413,6 +419,8 @@ def main(argv=None) -> int:
     except ValueError as e:
         ap.error(str(e))
     args.baseline_seeds = args.baseline_seeds or args.seeds
+    if args.repeat < 1:
+        ap.error(f"--repeat {args.repeat}: the run's number among runs of the same seeds, 1 or more")
     if any(c in args.label for c in "-/ ") or "seed" in args.label:
         ap.error(f"--label {args.label!r}: letters, digits, '+' and '_' only, e.g. --label 16k")
 
