@@ -73,10 +73,11 @@ def test_train_command_under_torchrun_on_the_cpu(tmp_path):
     done = torchrun("-m", "warpgym", "train", "--task", "Ant", "--device", "cpu", "--num-envs", "4",
                     "--max-iterations", "2", "--horizon-len", "4", "--episode-length", "20",
                     "--no-eval", "--no-plots", "--run-dir", str(run))
-    # --multi-gpu grow-kl (the default): --num-envs on each process
-    assert "x 2 processes, 4 envs each (--multi-gpu grow-kl: 8 in all)" in done.stdout
+    # --multi-gpu grow-kl (the default): --num-envs on each process, the KL target twice the preset's 0.008
+    assert "x 2 processes, 4 envs each (--multi-gpu grow-kl: 8 in all, KL target 0.016)" in done.stdout
     summary = json.loads((run / "summary.json").read_text())
     assert (summary["iterations"], summary["workers"], summary["num_envs"], summary["num_envs_total"]) == (2, 2, 4, 8)
+    assert summary["kl_target"] == pytest.approx(0.016)
     rows = (run / "metrics.jsonl").read_text().splitlines()
     assert len(rows) == 2 and '"samples": 64' in rows[1]  # 2 processes x 4 envs x 4 steps x 2 iterations
 

@@ -17,6 +17,7 @@ import sys
 import time
 
 from agents import Config, OnPolicyRunner
+from agents.data_parallel import kl_target
 from warpgym.cli import process_start_time, train_args, write_json
 from warpgym.cli.run_setup import RunPlan, configure, device_kind, plan_run
 
@@ -35,6 +36,7 @@ def summarize(history: list[dict], device_name: str, cfg: Config) -> dict:
     workers = int(os.environ.get("WORLD_SIZE", "1"))
     out = {"device": device_name, "num_envs": cfg.env_args["num_envs"], "iterations": len(history),
            "workers": workers, "num_envs_total": cfg.env_args["num_envs"] * workers, "multi_gpu": cfg.multi_gpu,
+           "kl_target": kl_target(cfg.multi_gpu, cfg.desired_kl, workers),
            "steady_samples_per_s_median": steady_median(history) or 0.0}
     phases = sorted({k for r in rows for k in r if k.startswith("phase/")} | {"iteration_s"})
     out["steady_phase_s_median"] = {k: steady_median(history, k) for k in phases if any(k in r for r in rows)}
@@ -258,8 +260,10 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
                                                           **cfg.to_dict()})
     say = print if rank == 0 else (lambda *a, **k: None)
     local_envs = cfg.env_args["num_envs"]
+    widened = kl_target(cfg.multi_gpu, cfg.desired_kl, processes)
     shares = (f" x {processes} processes, {local_envs} envs each (--multi-gpu {cfg.multi_gpu}: "
-              f"{local_envs * processes} in all)") if processes > 1 else ""
+              f"{local_envs * processes} in all" + (f", KL target {widened:g}" if widened != cfg.desired_kl else "")
+              + ")") if processes > 1 else ""
     say(f"warpgym PPO | {plan.task} | {plan.num_envs} envs on {plan.device} ({device_name}){shares} | run dir "
         f"{run_dir}", flush=True)
     startup = Startup(say)
