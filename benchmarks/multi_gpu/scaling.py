@@ -65,8 +65,7 @@ def parse_targets(text: str) -> tuple[str, tuple[float, ...]]:
 
 def run_name(gpus: int, mode: str, seed: int, label: str = "", repeat: int = 1) -> str:
     """gpu1-seed0, gpu4-split-seed0; with a label (runs made with other flags) gpu1-+16k-seed0, gpu4-split+16k-seed0;
-    a seed's second run (--repeat 2: GPU runs of one seed differ, their reductions adding in no fixed order)
-    gpu1-seed0-r2."""
+    a seed's second run (--repeat 2: a seed's runs on a GPU are not repeatable bit for bit) gpu1-seed0-r2."""
     setting = ("" if gpus == 1 else mode) + (f"+{label}" if label else "")
     name = f"gpu{gpus}-{setting}-seed{seed}" if setting else f"gpu{gpus}-seed{seed}"
     return name + (f"-r{repeat}" if repeat > 1 else "")
