@@ -12,6 +12,14 @@ from warpgym.cli import write_json
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))  # the repository
 # `warpgym train` as a child process, however warpgym is installed (a checkout or a wheel)
 TRAIN = [sys.executable, "-m", "warpgym", "train"]
+# NVLink multicast stays off in every child that may run NCCL (the lending host's rule: a program that uses it
+# can take the host's GPUs out of service), also where a job is given an environment of its own
+NO_MULTICAST = {"NCCL_NVLS_ENABLE": "0", "TORCH_SYMM_MEM_DISABLE_MULTICAST": "1", "NVSHMEM_DISABLE_NVLS": "1"}
+
+
+def child_env(**extra: str) -> dict:
+    """The environment of a benchmark's child process: this one's, ``extra``, and multicast off."""
+    return {**os.environ, **extra, **NO_MULTICAST}
 
 
 def read_summary(run_dir: str) -> dict:
@@ -69,4 +77,4 @@ def reported(ap, args, report, what: str) -> bool:
     return False
 
 
-__all__ = ["ROOT", "TRAIN", "core_shares", "gpu_slot", "read_report", "read_summary", "reported", "visible_gpus", "write_json"]
+__all__ = ["NO_MULTICAST", "ROOT", "TRAIN", "child_env", "core_shares", "gpu_slot", "read_report", "read_summary", "reported", "visible_gpus", "write_json"]

@@ -286,3 +286,39 @@ def test_exits_finds_the_worker_of_a_rank_by_its_environment():
         for k in kids:
             k.kill()
             k.wait()
+
+
+def test_a_failure_that_was_not_made_does_not_hold():
+    from benchmarks.reliability.exits import holds
+
+    stopped = {"kind": "killed-rank", "all_stopped_s": 30.2, "names_resume": True}
+    assert holds(stopped) and holds({**stopped, "made": True}) and not holds({**stopped, "made": False})
+
+
+def test_every_benchmark_child_that_may_run_nccl_has_nvlink_multicast_off(tmp_path, monkeypatch):
+    """The lending host's rule: exits.py's and nodes.py's torchrun jobs, like gpu_jobs', start with multicast off,
+    whatever the caller's environment says."""
+    import argparse
+
+    from benchmarks import harness
+    from benchmarks.multi_gpu import nodes
+    from benchmarks.reliability import exits
+
+    monkeypatch.setenv("NCCL_NVLS_ENABLE", "1")
+    seen = []
+
+    class Recorded:
+        pid, returncode = 0, 0
+
+        def __init__(self, cmd, **kw):
+            seen.append(kw["env"])
+
+        def wait(self, timeout=None):
+            return 0
+
+    monkeypatch.setattr(subprocess, "Popen", Recorded)
+    args = argparse.Namespace(out=str(tmp_path), gpus=2, device="cpu", num_envs=None, task="Ant", seconds=1.0,
+                              seed=0, tasks=["Ant"])
+    exits.Job(args, "one", "Ant", []).log.close()
+    nodes.run_layout(args, "r0-2node", 2)
+    assert len(seen) == 3 and all({k: env[k] for k in harness.NO_MULTICAST} == harness.NO_MULTICAST for env in seen)

@@ -16,11 +16,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-from benchmarks.harness import core_shares, visible_gpus
-
-# NVLink multicast stays off in every child, also where a job is given an environment of its own
-# (the lending host's rule: a program that uses it can take the host's GPUs out of service)
-NO_MULTICAST = {"NCCL_NVLS_ENABLE": "0", "TORCH_SYMM_MEM_DISABLE_MULTICAST": "1", "NVSHMEM_DISABLE_NVLS": "1"}
+from benchmarks.harness import child_env, core_shares, visible_gpus
 
 
 @dataclass
@@ -51,7 +47,7 @@ def run_jobs(jobs: list[Job], gpus: int, on_done: Callable[[Job, int], None] | N
                 job = pending.pop(0)
                 mine, free = free[:job.gpus], free[job.gpus:]
                 mask = {c for k in mine for c in shares[k]}
-                env = {**os.environ, **job.env, **NO_MULTICAST, "CUDA_VISIBLE_DEVICES": ",".join(ids[k] for k in mine)}
+                env = child_env(**job.env, CUDA_VISIBLE_DEVICES=",".join(ids[k] for k in mine))
                 os.makedirs(os.path.dirname(os.path.abspath(job.log)), exist_ok=True)
                 log = open(job.log, "w")  # noqa: SIM115 (closed when the job ends)
                 proc = subprocess.Popen(job.cmd, cwd=job.cwd, stdout=log, stderr=subprocess.STDOUT, env=env,

@@ -28,7 +28,7 @@ import time
 from datetime import timedelta
 
 from agents.logger import read_metrics, steady_median
-from benchmarks.harness import ROOT, core_shares, read_report, reported, visible_gpus, write_json
+from benchmarks.harness import ROOT, child_env, core_shares, read_report, reported, visible_gpus, write_json
 
 WITHIN = 0.05
 
@@ -71,7 +71,7 @@ def run_layout(args, name: str, nodes: int) -> dict:
     procs = []
     started = time.time()
     for node, (cmd, gpus, cores) in enumerate(node_commands(args, run_dir, nodes, store.port if store else None)):
-        env = dict(os.environ, OMP_NUM_THREADS="1")
+        env = child_env(OMP_NUM_THREADS="1")
         if args.device in (None, "cuda"):
             env["CUDA_VISIBLE_DEVICES"] = ",".join(gpus)
         log = open(os.path.join(args.out, "runs", f"{name}-node{node}.log"), "w")

@@ -26,7 +26,7 @@ import subprocess
 import sys
 import time
 
-from benchmarks.harness import ROOT, read_report, reported, write_json  # noqa: E402
+from benchmarks.harness import ROOT, child_env, read_report, reported, write_json  # noqa: E402
 TRAIN = os.path.join(ROOT, "scripts", "train.py")
 FAIL_WORKER = os.path.join(ROOT, "tests", "fail_worker.py")
 EXIT_WITHIN_S, STOP_WITHIN_S = 10.0, 60.0
@@ -77,7 +77,7 @@ class Job:
         self.log = open(self.log_path, "w")
         self.started = time.time()
         self.proc = subprocess.Popen(cmd, cwd=ROOT, stdout=self.log, stderr=subprocess.STDOUT,
-                                     env=dict(os.environ, OMP_NUM_THREADS="1", **(env or {})), start_new_session=True)
+                                     env=child_env(OMP_NUM_THREADS="1", **(env or {})), start_new_session=True)
 
     def output(self) -> str:
         if not self.log.closed:
@@ -117,6 +117,7 @@ def finished_run(args, k: int) -> dict:
 def failure(args, kind: str, name: str) -> dict:
     task = args.tasks[0]
     flags = ["--max-iterations", "1000000", "--save-gap", "3"]
+    made = True
     if kind in ("sigterm", "killed-rank"):
         job = Job(args, name, task, flags)
         deadline = time.time() + 600
@@ -128,7 +129,8 @@ def failure(args, kind: str, name: str) -> dict:
             job.proc.send_signal(signal.SIGTERM)  # a cluster's pre-emption reaches torchrun
         else:
             victim = rank_pid(workers, 1)
-            if victim is not None:
+            made = victim is not None  # no rank 1 found: the row says no failure was made, and does not hold
+            if made:
                 os.kill(victim, signal.SIGKILL)
     else:
         job = Job(args, name, task, [*flags, "--no-cuda-graph"], script=FAIL_WORKER,
@@ -140,7 +142,7 @@ def failure(args, kind: str, name: str) -> dict:
         event = time.time()
     gone = job.wait_gone(event, workers, STOP_WITHIN_S + 30)
     job.log.close()
-    return {"kind": kind, "task": task, "exit_code": job.proc.returncode, "workers": len(workers),
+    return {"kind": kind, "task": task, "made": made, "exit_code": job.proc.returncode, "workers": len(workers),
             "all_stopped_s": None if gone == float("inf") else round(gone, 2),
             "names_resume": f"--resume {job.run_dir}" in job.output(), "rows": rows_written(job.run_dir)}
 
@@ -149,7 +151,8 @@ def holds(row: dict) -> bool:
     if row["kind"] == "finished":
         return row["exit_code"] == 0 and row["last_row_to_exit_s"] is not None and \
             row["last_row_to_exit_s"] < EXIT_WITHIN_S
-    return row["all_stopped_s"] is not None and row["all_stopped_s"] < STOP_WITHIN_S and row["names_resume"]
+    return row.get("made", True) and row["all_stopped_s"] is not None and row["all_stopped_s"] < STOP_WITHIN_S and \
+        row["names_resume"]
 
 
 def report(path: str) -> str:
