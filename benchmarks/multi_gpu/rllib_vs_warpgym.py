@@ -39,7 +39,7 @@ import sys
 import threading
 import time
 
-from benchmarks.harness import ROOT  # noqa: E402
+from benchmarks.harness import ROOT, child_env  # noqa: E402
 
 from benchmarks.targets import WALKING, walking_row  # noqa: E402
 PRESET = {"Ant": {"horizon_len": 16, "batch_size": 32768, "repeat_times": 4, "learning_rate": 3e-4},
@@ -211,7 +211,7 @@ def run(args) -> int:
         for gpus in args.gpus:
             for learner in args.learners:
                 run_dir = os.path.join(args.out, f"{task}-{learner}-{gpus}gpu")
-                env = {**os.environ, "PYTHONPATH": os.pathsep.join([ROOT, os.environ.get("PYTHONPATH", "")])}
+                env = child_env(PYTHONPATH=os.pathsep.join([ROOT, os.environ.get("PYTHONPATH", "")]))
                 if device != "cpu":
                     env["CUDA_VISIBLE_DEVICES"] = ",".join(str(i) for i in range(gpus))
                 t0 = time.time()
