@@ -204,6 +204,77 @@ def test_runs_of_several_lengths_give_the_interval_the_median_lies_in(tmp_path):
     assert scaling.verdict(four["ratio"], 0.3) == "; <= 0.3: open"
 
 
+def scaling_output(folder, runs, seconds=60, packed=True):
+    """An output of scaling.py as it leaves it: the JSON with ``runs``'s rows, their folders packed or (a benchmark
+    stopped before it packed) loose."""
+    folder.mkdir()
+    doc = {"task": "Ant", "targets": {"key": "eval/speed", "values": [9.0]}, "seconds": seconds, "eval_gap": 1,
+           "num_envs": None, "train_flags": "", "host_gpus": 4, "date": "2026-11-26", "runs": []}
+    for name, (speeds, in_json) in runs.items():
+        row = scaling.run_row(fake_run(folder / "runs_Ant", name, speeds), "eval/speed", (9.0,))
+        if in_json:
+            doc["runs"].append(row)
+    (folder / "scaling_Ant.json").write_text(json.dumps(doc))
+    if packed:
+        scaling.pack_runs(str(folder / "runs_Ant"), str(folder), "Ant")
+        import shutil
+
+        shutil.rmtree(folder / "runs_Ant")
+    return folder
+
+
+def test_a_report_reads_the_runs_a_stopped_benchmark_left_unpacked_and_keeps_one_run_of_a_name(tmp_path, capsys):
+    # A: stopped before it packed; its JSON lacks gpu1-seed1 (cut after 6 s of learning, short of 9) and gpu1-seed2
+    # (it had reached 9 after 12 s when the stop came). B and C each hold a run named gpu4-split-seed0: B's counts.
+    a = scaling_output(tmp_path / "A", {"gpu1-seed0": ([1] * 10 + [9], True), "gpu1-seed1": ([1] * 7, False),
+                                        "gpu1-seed2": ([1] * 12 + [9], False)}, packed=False)
+    b = scaling_output(tmp_path / "B", {"gpu4-split-seed0": ([1] * 3 + [9], True)})
+    c = scaling_output(tmp_path / "C", {"gpu4-split-seed0": ([1] * 8 + [9], True)})
+    assert scaling.main(["--report", str(a), str(b), str(c)]) == 0
+    out = capsys.readouterr().out
+    assert "gpu1-seed1: not in" in out and "gpu1-seed2: not in" in out
+    doc = json.loads((a / "scaling_Ant.json").read_text())
+    assert sorted(r["name"] for r in doc["runs"]) == ["gpu1-seed0", "gpu1-seed1", "gpu1-seed2", "gpu4-split-seed0"]
+    one, four = ({ln["gpus"]: ln["targets"]["9"] for ln in doc["summary"]}[g] for g in (1, 4))
+    assert one["learning_s"] == [10.0, None, 12.0] and one["bounds_s"][1] == pytest.approx(6.0)
+    # the cut seed may have needed 7 s or for ever: the median lies between 10 and 12 s
+    assert (one["median_learning_s"], one["median_upper_s"]) == (10.0, 12.0) and four["learning_s"] == [3.0]
+    table = (a / "scaling_Ant.md").read_text()
+    assert "10.0 s, > 6 s, 12.0 s | 10.0-12.0 s, 2 of 3" in table
+    assert "gpu1-seed1: cut after 6 s of learning, when the benchmark was stopped" in table
+    assert "gpu1-seed2: cut" not in table  # it had reached its last target: nothing was cut
+    assert (a / "runs_Ant.tar.gz").exists() and not (a / "runs_Ant").exists()  # packed now, and drawn again alone
+    assert scaling.main(["--report", str(a)]) == 0 and "> 6 s" in capsys.readouterr().out
+
+
+def test_a_benchmark_stopped_by_sigterm_keeps_the_rows_of_the_runs_it_stopped(tmp_path, monkeypatch):
+    """A device call's time limit sends SIGTERM: the runs that had ended are in the JSON already, and the runs it
+    stopped (which write their summary when stopped on request) join them, as runs cut short; the table, figures and
+    runs' archive are still written."""
+    calls = []
+
+    def fake_jobs(jobs, gpus, on_done=None, say=print, **_):
+        calls.append([j.name for j in jobs])
+        if jobs[0].name == "warmup":
+            (tmp_path / "out" / "runs_Ant" / "warmup").mkdir(parents=True)
+            return {"warmup": 0}
+        for job, speeds in zip(jobs, ([1] * 4 + [9], [1] * 5)):  # the first ends at its target, the second is cut
+            fake_run(tmp_path / "out" / "runs_Ant", job.name, speeds)
+        on_done(jobs[0], 0)
+        raise SystemExit(143)  # the SIGTERM handler's exit, in the middle of the second job
+
+    monkeypatch.setattr(scaling, "run_jobs", fake_jobs)
+    with pytest.raises(SystemExit) as stop:
+        scaling.main(["--out", str(tmp_path / "out"), "--gpus", "1", "--seeds", "0", "1", "--targets",
+                      "eval/speed=9", "--device", "cpu", "--seconds", "30"])
+    assert stop.value.code == 143 and calls[1] == ["gpu1-seed0", "gpu1-seed1"]
+    doc = json.loads((tmp_path / "out" / "scaling_Ant.json").read_text())
+    rows = {r["name"]: r for r in doc["runs"]}
+    assert rows["gpu1-seed0"]["exit_code"] == 0 and rows["gpu1-seed1"]["exit_code"] is None
+    assert rows["gpu1-seed1"]["to_target"] == {"9": None} and "cut after 4 s" in rows["gpu1-seed1"]["note"]
+    assert (tmp_path / "out" / "runs_Ant.tar.gz").exists() and (tmp_path / "out" / "scaling_Ant.md").exists()
+
+
 def test_the_benchmark_names_a_wrong_flag_before_it_starts_anything():
     for flags, says in ((["--gpus", "0", "2"], "--gpus 0 2: each is a number of GPUs, 1 or more"),
                         (["--targets", "eval/speed"], "--targets 'eval/speed': write KEY=V1,V2"),

@@ -16,7 +16,9 @@ iteration with the evaluations left out; the goal's ratio is G GPUs' median lear
 
 Writes, as the runs end, OUT/scaling_<task>.json (every run: its times, samples/s, phases, last evaluation)
 and at the end OUT/scaling_<task>.md (the table), OUT/<task>_gpus_<key>_vs_time.png and _vs_samples.png, and
-OUT/runs_<task>.tar.gz (each run's metrics.jsonl, summary, config and log; no checkpoints).
+OUT/runs_<task>.tar.gz (each run's metrics.jsonl, summary, config and log; no checkpoints). Stopped early (SIGTERM:
+a device call's time limit), it stops its jobs and still writes all of these, with the stopped runs' rows as far as
+they went (a miss counts as a seed cut short); `--report` reads an output left unpacked (runs_<task>/) the same way.
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ import signal
 import statistics
 import sys
 import tarfile
+import tempfile
 import time
 
 from benchmarks.harness import ROOT, TRAIN, read_summary, write_json  # noqa: E402
@@ -125,6 +128,31 @@ def run_row(run_dir: str, key: str, values: tuple[float, ...]) -> dict:
         "evaluations": len(evals), "evaluation_s": round(sum(r.get("eval_s", 0.0) for r in rows), 2),
     })
     return row
+
+
+def stopped_rows(doc: dict, runs_dir: str) -> list[str]:
+    """Rows for the runs in ``runs_dir`` that ``doc`` lacks, added to it; their names. A benchmark stopped while jobs
+    ran (a SIGTERM: a device call's time limit) stops them too, and a run stopped on request still writes its
+    summary, so its rows up to the stop count: one that had not reached the last target is a seed cut short,
+    whose learning time is the bound of its miss (censored_median), with a note saying so."""
+    known = {r["name"] for r in doc["runs"]}
+    key, values = doc["targets"]["key"], tuple(doc["targets"]["values"])
+    added = []
+    for d in sorted(glob.glob(os.path.join(runs_dir, "gpu*-seed*"))):
+        name = os.path.basename(d)
+        if name in known or not os.path.isfile(os.path.join(d, "summary.json")):
+            continue
+        row = run_row(d, key, values)
+        if "error" in row:
+            continue
+        row.update(exit_code=None, num_envs=doc.get("num_envs"), train_flags=doc.get("train_flags", ""),
+                   seconds=doc["seconds"])
+        if row["to_target"].get(f"{max(values):g}") is None:
+            row["note"] = (f"cut after {row['learned_s']:.0f} s of learning, when the benchmark was stopped (a call's "
+                           f"time limit), not by its {doc['seconds']:g}-s limit")
+        doc["runs"].append(row)
+        added.append(name)
+    return added
 
 
 def censored_median(hits: list[dict | None], bounds: list[float]) -> tuple[float, float]:
@@ -342,11 +370,15 @@ def report(folders: list[str], task: str = "Ant", targets: str | None = None) ->
                              f"{', '.join(f'{k} {first[k]}' for k in same)}: join runs timed alike")
     out = docs[0][0]
     runs_dir = os.path.join(out, f"runs_{first['task']}")
-    for folder, doc in reversed(docs):  # a run in several outputs: the first output's files are kept
-        with tarfile.open(os.path.join(folder, f"runs_{doc['task']}.tar.gz")) as tar:
-            tar.extractall(out, filter="data")
+    first_packed = os.path.exists(runs_dir + ".tar.gz")
+    for folder, doc in docs:
+        gather_runs(folder, doc, runs_dir)
     names = {r["name"] for r in first["runs"]}
-    first["runs"] += [r for _, doc in docs[1:] for r in doc["runs"] if r["name"] not in names]
+    for _, doc in docs[1:]:  # a run in several outputs: the first output's is kept
+        for r in doc["runs"]:
+            if r["name"] not in names:
+                first["runs"].append(r)
+                names.add(r["name"])
     if targets:
         key, values = parse_targets(targets)
         first["targets"] = {"key": key, "values": list(values)}
@@ -354,10 +386,36 @@ def report(folders: list[str], task: str = "Ant", targets: str | None = None) ->
     for r in first["runs"]:  # read again from the runs' files, as this version of the script reads them
         r.update(run_row(os.path.join(runs_dir, r["name"]), key, values))
     print(write_report(first, runs_dir, out), flush=True)
-    if len(docs) > 1:  # the first output now holds every run: its report can be drawn again alone
+    if len(docs) > 1 or not first_packed:  # the first output now holds every run: its report can be drawn again alone
         pack_runs(runs_dir, out, first["task"])
     shutil.rmtree(runs_dir)
     return 0
+
+
+def gather_runs(folder: str, doc: dict, runs_dir: str) -> None:
+    """One output's run folders into ``runs_dir``, beside those already there (a name already there is kept). An
+    output is packed (runs_<task>.tar.gz) or, where its benchmark was stopped before it packed, still a folder
+    (runs_<task>/), whose runs the JSON may lack: their rows are read from their files (stopped_rows)."""
+    loose = os.path.join(folder, f"runs_{doc['task']}")
+    packed = loose + ".tar.gz"
+    if not os.path.exists(packed):
+        if not os.path.isdir(loose):
+            raise SystemExit(f"--report {folder}: neither runs_{doc['task']}.tar.gz nor runs_{doc['task']}/ is there")
+        for name in stopped_rows(doc, loose):
+            print(f"{name}: not in {folder}'s JSON (its benchmark was stopped); read from its files", flush=True)
+    if os.path.abspath(loose) == os.path.abspath(runs_dir) and not os.path.exists(packed):
+        return  # the first output's own folder: already in place
+    with tempfile.TemporaryDirectory() as tmp:
+        source = loose
+        if os.path.exists(packed):
+            with tarfile.open(packed) as tar:
+                tar.extractall(tmp, filter="data")
+            source = os.path.join(tmp, f"runs_{doc['task']}")
+        os.makedirs(runs_dir, exist_ok=True)
+        for entry in os.listdir(source):
+            if not os.path.exists(os.path.join(runs_dir, entry)):
+                (shutil.copytree if os.path.isdir(os.path.join(source, entry)) else shutil.copy2)(
+                    os.path.join(source, entry), os.path.join(runs_dir, entry))
 
 
 def pack_runs(runs_dir: str, out: str, task: str) -> None:
@@ -461,10 +519,15 @@ def main(argv=None) -> int:
         hits = ", ".join(f"{v}: {h['learning_s']:.1f} s" if h else f"{v}: -" for v, h in row.get("to_target", {}).items())
         say(f"{job.name}: {hits or row.get('error')}")
 
-    run_jobs(jobs_for(args, runs, key, max(values)), available, on_done=done, say=say)
-    print(write_report(doc, runs, out), flush=True)
-    pack_runs(runs, out, args.task)
-    shutil.rmtree(runs)
+    try:
+        run_jobs(jobs_for(args, runs, key, max(values)), available, on_done=done, say=say)
+    finally:  # also when stopped (SIGTERM): the runs it stopped still count, as far as they went
+        for name in stopped_rows(doc, runs):
+            say(f"{name}: stopped with the benchmark; its rows up to the stop are kept")
+        if doc["runs"]:
+            print(write_report(doc, runs, out), flush=True)
+            pack_runs(runs, out, args.task)
+            shutil.rmtree(runs)
     return 0
 
 
