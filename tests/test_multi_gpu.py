@@ -241,8 +241,9 @@ def test_a_report_reads_the_runs_a_stopped_benchmark_left_unpacked_and_keeps_one
     assert (one["median_learning_s"], one["median_upper_s"]) == (10.0, 12.0) and four["learning_s"] == [3.0]
     table = (a / "scaling_Ant.md").read_text()
     assert "10.0 s, > 6 s, 12.0 s | 10.0-12.0 s, 2 of 3" in table
-    assert "gpu1-seed1: cut after 6 s of learning, when the benchmark was stopped" in table
-    assert "gpu1-seed2: cut" not in table  # it had reached its last target: nothing was cut
+    assert "gpu1-seed1: still running when the benchmark was stopped (a call's time limit), short of the target after " \
+           "6 s of learning" in table
+    assert "gpu1-seed2: still" not in table  # it had reached its last target: nothing was cut
     assert (a / "runs_Ant.tar.gz").exists() and not (a / "runs_Ant").exists()  # packed now, and drawn again alone
     assert scaling.main(["--report", str(a)]) == 0 and "> 6 s" in capsys.readouterr().out
 
@@ -271,7 +272,7 @@ def test_a_benchmark_stopped_by_sigterm_keeps_the_rows_of_the_runs_it_stopped(tm
     doc = json.loads((tmp_path / "out" / "scaling_Ant.json").read_text())
     rows = {r["name"]: r for r in doc["runs"]}
     assert rows["gpu1-seed0"]["exit_code"] == 0 and rows["gpu1-seed1"]["exit_code"] is None
-    assert rows["gpu1-seed1"]["to_target"] == {"9": None} and "cut after 4 s" in rows["gpu1-seed1"]["note"]
+    assert rows["gpu1-seed1"]["to_target"] == {"9": None} and "short of the target after 4 s" in rows["gpu1-seed1"]["note"]
     assert (tmp_path / "out" / "runs_Ant.tar.gz").exists() and (tmp_path / "out" / "scaling_Ant.md").exists()
 
 

@@ -148,8 +148,8 @@ def stopped_rows(doc: dict, runs_dir: str) -> list[str]:
         row.update(exit_code=None, num_envs=doc.get("num_envs"), train_flags=doc.get("train_flags", ""),
                    seconds=doc["seconds"])
         if row["to_target"].get(f"{max(values):g}") is None:
-            row["note"] = (f"cut after {row['learned_s']:.0f} s of learning, when the benchmark was stopped (a call's "
-                           f"time limit), not by its {doc['seconds']:g}-s limit")
+            row["note"] = (f"still running when the benchmark was stopped (a call's time limit), short of the target after "
+                           f"{row['learned_s']:.0f} s of learning")
         doc["runs"].append(row)
         added.append(name)
     return added
