@@ -22,8 +22,9 @@ Every mode trains one policy, its gradients averaged over the processes at each 
                 far as its samples support.
 
 ``grow-kl`` is the default (DEFAULT): on 2 GPUs it brought the Humanoid to 6 m/s in at most 0.53x of one GPU's
-learning time, where grow-steps took 1.08x and split 1.50x; the same wider target on one GPU was no sooner
-(docs/benchmarks.md, "Several GPUs: time to target", has what each mode gave on each task and how many GPUs).
+learning time, where grow-steps took 1.08x and split 1.50x; the same wider target on one GPU was no sooner. On 4
+H200s it took the Ant to 9.5 m/s in 0.30x and the Humanoid to 6 m/s in 0.33x (docs/benchmarks.md, "Several GPUs:
+time to target", has what each mode gave on each task and how many GPUs).
 With one process every mode is the same run.
 """
 

@@ -51,7 +51,7 @@ def gpu_slot(gpu: int, gpus: int) -> dict:
     that one GPU's run does not take another's CPU; under ``CUDA_VISIBLE_DEVICES=2,3`` and ``taskset`` two
     commands share a host, each on its own GPUs and cores."""
     ids, mine = visible_gpus(gpus), set(core_shares(gpus)[gpu])
-    return {"env": dict(os.environ, CUDA_VISIBLE_DEVICES=ids[gpu]), "preexec_fn": lambda: os.sched_setaffinity(0, mine)}
+    return {"env": child_env(CUDA_VISIBLE_DEVICES=ids[gpu]), "preexec_fn": lambda: os.sched_setaffinity(0, mine)}
 
 
 def read_report(path: str, what: str) -> dict:

@@ -296,8 +296,8 @@ def test_a_failure_that_was_not_made_does_not_hold():
 
 
 def test_every_benchmark_child_that_may_run_nccl_has_nvlink_multicast_off(tmp_path, monkeypatch):
-    """The lending host's rule: exits.py's and nodes.py's torchrun jobs, like gpu_jobs', start with multicast off,
-    whatever the caller's environment says."""
+    """The lending host's rule: exits.py's and nodes.py's torchrun jobs, like gpu_jobs', and the suite's one-GPU runs
+    (harness.gpu_slot) start with multicast off, whatever the caller's environment says."""
     import argparse
 
     from benchmarks import harness
@@ -321,4 +321,5 @@ def test_every_benchmark_child_that_may_run_nccl_has_nvlink_multicast_off(tmp_pa
                               seed=0, tasks=["Ant"])
     exits.Job(args, "one", "Ant", []).log.close()
     nodes.run_layout(args, "r0-2node", 2)
-    assert len(seen) == 3 and all({k: env[k] for k in harness.NO_MULTICAST} == harness.NO_MULTICAST for env in seen)
+    seen.append(harness.gpu_slot(0, 1)["env"])  # the suite's one-GPU runs, side by side on a host
+    assert len(seen) == 4 and all({k: env[k] for k in harness.NO_MULTICAST} == harness.NO_MULTICAST for env in seen)

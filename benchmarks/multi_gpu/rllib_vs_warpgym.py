@@ -8,8 +8,8 @@
 For each task and GPU count G, one run of each learner, one after another:
 - warpgym: ``warpgym train`` (G = 1) or ``torchrun --nproc_per_node=G -m warpgym train``: G processes, each
   stepping --num-envs robots and all-reducing every minibatch's gradients (``--multi-gpu grow-batch``, as RLlib's
-  DDP learners divide the work: each its own mini-batch; ``--warpgym-multi-gpu split`` or ``grow-steps`` runs
-  warpgym's other ways with the same robots per GPU);
+  DDP learners divide the work: each its own mini-batch; ``--warpgym-multi-gpu split``, ``grow-steps`` or ``grow-kl``
+  runs warpgym's other ways with the same robots per GPU);
 - RLlib: ``warpgym train-with rllib --gpus G``: PPO on RLlib's new API stack, G env runners each stepping
   --num-envs robots in one warpgym vector env, and G learners training one policy with torch DDP. That is
   RLlib's successor of DD-PPO (see warpgym/cli/rllib_run.py for how they map). ``--rllib-env-runners R``
@@ -39,6 +39,7 @@ import sys
 import threading
 import time
 
+from agents.data_parallel import MODES  # noqa: E402
 from benchmarks.harness import ROOT, child_env  # noqa: E402
 
 from benchmarks.targets import WALKING, walking_row  # noqa: E402
@@ -235,7 +236,7 @@ def main(argv=None) -> int:
     ap.add_argument("--gpus", type=int, nargs="+", default=[1, 2], help="GPU counts to run (default 1 2)")
     ap.add_argument("--learners", nargs="+", default=["warpgym", "rllib"], choices=["warpgym", "rllib"])
     ap.add_argument("--num-envs", type=int, default=4096, help="robots per GPU (per env runner for RLlib)")
-    ap.add_argument("--warpgym-multi-gpu", choices=("grow-batch", "split", "grow-steps", "grow-kl"), default="grow-batch",
+    ap.add_argument("--warpgym-multi-gpu", choices=MODES, default="grow-batch",
                     help="warpgym's --multi-gpu on several GPUs, each GPU stepping --num-envs robots (default "
                          "grow-batch: each GPU's own mini-batch, as RLlib's DDP learners)")
     ap.add_argument("--seconds", type=float, default=240.0, help="wall-clock budget per run, from process start")
