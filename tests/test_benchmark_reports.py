@@ -470,19 +470,20 @@ def test_the_published_suite_tables_are_what_their_scripts_print_from_the_commit
 
 @pytest.mark.parametrize("folder, task, settings", [("multi_gpu", "Ant", 9), ("multi_gpu", "Humanoid", 3),
                                                     ("multi_gpu/kl_target", "Humanoid", 4),
-                                                    ("multi_gpu/grow_kl", "Ant", 3), ("multi_gpu/grow_kl", "Humanoid", 3)])
+                                                    ("multi_gpu/grow_kl", "Ant", 3), ("multi_gpu/grow_kl", "Humanoid", 3),
+                                                    ("multi_gpu/suite", "Humanoid-v5", 2), ("multi_gpu/suite", "Ant-v5", 2)])
 def test_the_published_multi_gpu_table_is_what_scaling_prints_from_the_committed_runs(tmp_path, capsys, folder, task,
                                                                                     settings):
     """docs/benchmarks.md's time-to-target tables for several GPUs, row for row, as ``benchmarks/multi_gpu/scaling.py
     --report`` prints them from the runs' metrics committed in docs/bench/multi_gpu (read again, not from the JSON's
     numbers): a number changed on the page or in the reading of the runs fails here. The first folder holds both
     tasks; kl_target the Humanoid's KL-target runs of another lease; grow_kl both tasks under the default on 1, 2 and 4
-    GPUs, a third lease."""
+    GPUs, a third lease; suite Gymnasium's Humanoid-v5 and Ant-v5 on 1 and 4 GPUs, a fourth."""
     root = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
     from benchmarks.multi_gpu import scaling
 
     shutil.copytree(os.path.join(root, "docs", "bench", *folder.split("/")), tmp_path / "mg",
-                    ignore=shutil.ignore_patterns("kl_target", "grow_kl", "nodes"))
+                    ignore=shutil.ignore_patterns("kl_target", "grow_kl", "nodes", "suite"))
     assert scaling.main(["--report", str(tmp_path / "mg"), "--task", task]) == 0
     out = capsys.readouterr().out
     assert out.startswith(f"{task}: ")

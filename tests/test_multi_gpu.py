@@ -204,12 +204,12 @@ def test_runs_of_several_lengths_give_the_interval_the_median_lies_in(tmp_path):
     assert scaling.verdict(four["ratio"], 0.3) == "; <= 0.3: open"
 
 
-def scaling_output(folder, runs, seconds=60, packed=True):
+def scaling_output(folder, runs, seconds=60, packed=True, host_gpus=4):
     """An output of scaling.py as it leaves it: the JSON with ``runs``'s rows, their folders packed or (a benchmark
     stopped before it packed) loose."""
     folder.mkdir()
     doc = {"task": "Ant", "targets": {"key": "eval/speed", "values": [9.0]}, "seconds": seconds, "eval_gap": 1,
-           "num_envs": None, "train_flags": "", "host_gpus": 4, "date": "2026-11-26", "runs": []}
+           "num_envs": None, "train_flags": "", "host_gpus": host_gpus, "date": "2026-11-26", "runs": []}
     for name, (speeds, in_json) in runs.items():
         row = scaling.run_row(fake_run(folder / "runs_Ant", name, speeds), "eval/speed", (9.0,))
         if in_json:
@@ -227,7 +227,7 @@ def test_a_report_reads_the_runs_a_stopped_benchmark_left_unpacked_and_keeps_one
     # A: stopped before it packed; its JSON lacks gpu1-seed1 (cut after 6 s of learning, short of 9) and gpu1-seed2
     # (it had reached 9 after 12 s when the stop came). B and C each hold a run named gpu4-split-seed0: B's counts.
     a = scaling_output(tmp_path / "A", {"gpu1-seed0": ([1] * 10 + [9], True), "gpu1-seed1": ([1] * 7, False),
-                                        "gpu1-seed2": ([1] * 12 + [9], False)}, packed=False)
+                                        "gpu1-seed2": ([1] * 12 + [9], False)}, packed=False, host_gpus=2)
     b = scaling_output(tmp_path / "B", {"gpu4-split-seed0": ([1] * 3 + [9], True)})
     c = scaling_output(tmp_path / "C", {"gpu4-split-seed0": ([1] * 8 + [9], True)})
     assert scaling.main(["--report", str(a), str(b), str(c)]) == 0
@@ -240,6 +240,7 @@ def test_a_report_reads_the_runs_a_stopped_benchmark_left_unpacked_and_keeps_one
     # the cut seed may have needed 7 s or for ever: the median lies between 10 and 12 s
     assert (one["median_learning_s"], one["median_upper_s"]) == (10.0, 12.0) and four["learning_s"] == [3.0]
     table = (a / "scaling_Ant.md").read_text()
+    assert "(4 GPUs of one host)" in table.splitlines()[0]  # A saw 2 of the host's GPUs, B and C all 4
     assert "10.0 s, > 6 s, 12.0 s | 10.0-12.0 s, 2 of 3" in table
     assert "gpu1-seed1: still running when the benchmark was stopped (a call's time limit), short of the target after " \
            "6 s of learning" in table

@@ -379,6 +379,8 @@ def report(folders: list[str], task: str = "Ant", targets: str | None = None) ->
             if r["name"] not in names:
                 first["runs"].append(r)
                 names.add(r["name"])
+    # outputs made under CUDA_VISIBLE_DEVICES see part of the host (1-GPU baselines on GPUs 0,1 beside a job on 2,3)
+    first["host_gpus"] = max(doc.get("host_gpus", 0) for _, doc in docs)
     if targets:
         key, values = parse_targets(targets)
         first["targets"] = {"key": key, "values": list(values)}
