@@ -508,6 +508,7 @@ def test_a_folder_of_several_tasks_asks_which(tmp_path):
     ("benchmarks.multi_gpu.nodes", ["docs/bench/multi_gpu/nodes/nodes-1.json", "docs/bench/multi_gpu/nodes/nodes-2.json"], 9),
     ("benchmarks.multi_gpu.nodes", ["docs/bench/multi_gpu/nodes/nodes-4.json"], 5),
     ("benchmarks.reliability.exits", ["docs/bench/gpu_exits.json"], 8),
+    ("benchmarks.reliability.exits", ["docs/bench/reliability/gpu_exits_h200.json"], 4),
     ("benchmarks.learning.reacher_planner", ["docs/bench/reacher_planner.json"], 4),
     ("benchmarks.learning.reacher_planner", ["docs/bench/reacher_planner_25knots.json"], 3)])
 def test_the_published_nodes_exits_and_planner_tables_are_what_their_scripts_print(capsys, module, args, count):
