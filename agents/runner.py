@@ -71,7 +71,8 @@ class OnPolicyRunner:
         self.elapsed_before = 0.0  # wall-clock seconds of earlier processes of this run (resume)
         self.last_eval_time = 0.0  # set when learn() starts: the first evaluation waits eval_gap
         self.history: list[dict] = []
-        self.kept: list[dict] = []  # the checkpoints kept at cfg.save_at: mark, iteration, time
+        self.kept: list[dict] = []  # the checkpoints kept at cfg.save_at: mark, iteration, time (resumes included)
+        self.resumes: list[dict] = []  # where each later process of this run took over: iteration, seconds
         self._marks_after = -1.0  # save_at marks up to this many seconds are done (by an earlier process)
         self.timer = PhaseTimer(self.device, enabled=profile)  # --profile: synchronising, per step
         self.clock = IterationClock(self.device)  # always on: events, read one iteration late
@@ -330,6 +331,8 @@ class OnPolicyRunner:
             "policy": self.policy.state_dict(), "normalizer": self.normalizer.state_dict(),
             "optimizer": self.ppo.optimizer.state_dict(), "lr": self.ppo.lr.item(), "lr_free": self.ppo.lr_free.item(),
             "rng": rng_state(self.device), "config": self.cfg.to_dict(),
+            # a resumed run's summary speaks of the whole run: the marks kept and the resumes before this one
+            "kept": list(self.kept), "resumes": list(self.resumes),
             "spec": {"num_obs": self.spec.num_obs, "num_actions": self.spec.num_actions},
         }
 
@@ -376,6 +379,8 @@ class OnPolicyRunner:
             self.iteration, self.samples = ckpt["iteration"], ckpt["samples"]
             self.elapsed_before = ckpt["elapsed_s"]
             self._marks_after = self.elapsed_before
+            self.kept = list(ckpt.get("kept", []))  # checkpoints written before 2026-11-27 lack both
+            self.resumes = [*ckpt.get("resumes", []), {"iteration": self.iteration, "time_s": round(self.elapsed_before, 3)}]
             if self.pipeline is not None:  # its rollout was not saved: the next iteration collects one first
                 self.pipeline.pending = False
             self.start_time = time.time()

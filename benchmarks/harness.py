@@ -28,6 +28,52 @@ def read_summary(run_dir: str) -> dict:
         return json.load(f)
 
 
+def train_in_parts(args: list[str], run_dir: str, resume_args: list[str], device: str | None = None) -> int:
+    """``warpgym train ARGS --run-dir RUN_DIR --no-plots``, its output appended to RUN_DIR/train.log; its exit code.
+
+    A run longer than a machine's call limit (a device call's 10 minutes against a 10-minute run) trains in parts:
+    stopped by SIGTERM, the training saves its last iteration and this waits for it, then exits 143; called again
+    with the same ``run_dir`` it goes on with ``warpgym train --resume RUN_DIR RESUME_ARGS`` (its clock, marks and
+    rows carry on), and a run that had ended on its own is not trained again (0 at once). A folder without a
+    checkpoint (stopped before its first save) starts afresh."""
+    import shutil  # noqa: PLC0415
+    import signal  # noqa: PLC0415
+    import subprocess  # noqa: PLC0415
+    import threading  # noqa: PLC0415
+
+    has = lambda name: os.path.isfile(os.path.join(run_dir, name))  # noqa: E731
+    if has("checkpoint.pt") and has("config.json"):
+        if has("summary.json") and not read_summary(run_dir).get("stopped_on_request", False):
+            return 0  # ended by its own budget: done
+        cmd = [*TRAIN, "--resume", run_dir, *resume_args, "--no-plots"]
+    else:
+        shutil.rmtree(run_dir, ignore_errors=True)
+        cmd = [*TRAIN, *args, "--run-dir", run_dir, "--no-plots"]
+    os.makedirs(run_dir, exist_ok=True)
+    stopped = []
+    with open(os.path.join(run_dir, "train.log"), "a") as log:
+        main = threading.current_thread() is threading.main_thread()  # only the main thread may set handlers
+        # In its own session, a SIGTERM to this process group (`timeout`'s) reaches the training once, from here: a
+        # second one would stop it at once, unsaved. Off the main thread it stays in the group and gets it directly.
+        child = subprocess.Popen(cmd + (["--device", device] if device else []), cwd=ROOT, stdout=log,
+                                 stderr=subprocess.STDOUT, start_new_session=main)
+
+        def forward(signum, frame):  # the training saves its iteration; this waits for it below
+            if not stopped:  # once: a second SIGTERM would stop it unsaved
+                child.send_signal(signal.SIGTERM)
+            stopped.append(signum)
+
+        previous = signal.signal(signal.SIGTERM, forward) if main else None
+        try:
+            code = child.wait()
+        finally:
+            if main:
+                signal.signal(signal.SIGTERM, previous)
+    if stopped:
+        raise SystemExit(128 + signal.SIGTERM)
+    return code
+
+
 def visible_gpus(count: int) -> list[str]:
     """The ids of the first ``count`` GPUs this process may hand out (``CUDA_VISIBLE_DEVICES``, or 0..count-1)."""
     visible = [d.strip() for d in os.environ.get("CUDA_VISIBLE_DEVICES", "").split(",") if d.strip()]
@@ -77,4 +123,5 @@ def reported(ap, args, report, what: str) -> bool:
     return False
 
 
-__all__ = ["NO_MULTICAST", "ROOT", "TRAIN", "child_env", "core_shares", "gpu_slot", "read_report", "read_summary", "reported", "visible_gpus", "write_json"]
+__all__ = ["NO_MULTICAST", "ROOT", "TRAIN", "child_env", "core_shares", "gpu_slot", "read_report", "read_summary", "reported", "train_in_parts", "visible_gpus",
+           "write_json"]

@@ -215,7 +215,7 @@ def test_suite_sweep_ranks_combinations_by_their_return_in_gymnasiums_env():
         "gamma": ["0.99", "0.995"], "net_dims": ["256,128", "64,64"]}
     with pytest.raises(ValueError, match="NAME=V1,V2"):
         sw.parse_grid(["gamma"])
-    cmd = sw.command("Hopper-v5", {"num_envs": "4096", "gamma": "0.995"}, 1, 60.0, "R", None)
+    cmd = sw.command("Hopper-v5", {"num_envs": "4096", "gamma": "0.995"}, 1, 60.0)
     assert cmd[-4:] == ["--num-envs", "4096", "--config", "gamma=0.995"]
     assert cmd[cmd.index("--time-limit") + 1] == "60.0"
 
@@ -254,7 +254,7 @@ def test_suite_sweep_spreads_settings_and_seeds_over_gpus_and_joins_them(monkeyp
 
     from benchmarks.learning import suite_sweep as sw
 
-    calls = []
+    calls, crashed = [], []
     both_running = threading.Barrier(2, timeout=20)  # the first two children run at once, or the test fails
 
     def fake_child(cmd, env, **kw):
@@ -266,8 +266,9 @@ def test_suite_sweep_spreads_settings_and_seeds_over_gpus_and_joins_them(monkeyp
                 both_running.wait()
             except threading.BrokenBarrierError:
                 pass
-        if out.endswith("003"):
-            return  # crashed before writing anything
+        if out.endswith("003") and not crashed:
+            crashed.append(out)
+            return  # crashed before writing anything (the first time)
         os.makedirs(os.path.join(out, "runs", "InvertedPendulum-v5-0"))
         combo = {"net_dims": grid[0].split("=")[1].replace("x", ",")}
         value = 100.0 * seed + (1000.0 if combo["net_dims"] == "64,64" else 0.0)
@@ -313,6 +314,16 @@ def test_suite_sweep_spreads_settings_and_seeds_over_gpus_and_joins_them(monkeyp
         for run in r["runs"]:
             if "run_dir" in run:
                 assert os.path.dirname(run["run_dir"]) == str(tmp_path / "runs") and os.path.isdir(run["run_dir"])
+    # the same command in a later call (the first stopped by a call's limit): only the part that wrote no sweep runs
+    # again, and the join finds the runs it moved before
+    calls.clear()
+    again = sw.spread(args, {"net_dims": ["64,64", "32,32"]},
+                      ["--out", str(tmp_path), "--task", "InvertedPendulum-v5", "--grid", "net_dims=64x64,32x32",
+                       "--seeds", "0", "1", "--gpus", "2", "--seconds", "180"])
+    assert [(g, s) for _, g, s, _ in calls] == [(["net_dims=32x32"], 1)]
+    assert {r["label"]: r["gymnasium_return"] for r in again["rows"]} == {"net_dims=64,64": 1050.0,
+                                                                        "net_dims=32,32": 50.0}
+    assert sw.run_name("Hopper-v5", "gamma=0.999 net_dims=64,64", 3) == "Hopper-v5-gamma=0.999_net_dims=64x64-seed3"
 
 
 def test_suite_sweep_scores_its_policies_again_and_keeps_the_first_score(monkeypatch, tmp_path):
@@ -547,3 +558,25 @@ def test_the_comparison_gives_warpgym_as_many_robots_per_gpu_as_rllibs_runners_i
     ours = cmp.command("warpgym", "Ant", 2, args, "/x/w")
     assert (flag(ours, "--num-envs"), flag(ours, "--multi-gpu")) == ("8192", "split")
     assert "--multi-gpu" not in cmp.command("warpgym", "Ant", 1, args, "/x/w")
+
+
+def test_suite_sweep_called_again_sweeps_only_the_settings_not_done(monkeypatch, tmp_path):
+    """On one GPU a sweep writes its JSON after each setting: the same command in a later call (the first stopped by
+    a call's time limit) keeps those rows and sweeps the rest; a JSON of another budget is refused, not mixed."""
+    from benchmarks.learning import suite_sweep as sw
+
+    argv = ["--out", str(tmp_path), "--task", "Hopper-v5", "--grid", "gamma=0.99,0.999", "--seeds", "0",
+            "--seconds", "60", "--device", "cpu", "--no-warm-up"]
+    swept = []
+    monkeypatch.setattr(sw, "run_combo", lambda task, combo, *a: swept.append(combo) or {
+        "combo": combo, "label": sw.label_of(combo), "runs": [], "gymnasium_return": 2.0})
+    assert sw.main(argv) == 0 and swept == [{"gamma": "0.99"}, {"gamma": "0.999"}]
+    doc = json.loads((tmp_path / "sweep-Hopper-v5.json").read_text())
+    doc["rows"] = doc["rows"][:1]  # as a call stopped after the first setting left it
+    (tmp_path / "sweep-Hopper-v5.json").write_text(json.dumps(doc))
+    swept.clear()
+    assert sw.main(argv) == 0 and swept == [{"gamma": "0.999"}]
+    assert [r["label"] for r in json.loads((tmp_path / "sweep-Hopper-v5.json").read_text())["rows"]] == [
+        "gamma=0.99", "gamma=0.999"]
+    with pytest.raises(SystemExit, match="holds a sweep with other task, seconds, seeds, scoring"):
+        sw.main([*argv[:-5], "--seconds", "90", "--device", "cpu", "--no-warm-up"])

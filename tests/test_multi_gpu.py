@@ -262,19 +262,23 @@ def test_a_benchmark_stopped_by_sigterm_keeps_the_rows_of_the_runs_it_stopped(tm
             return {"warmup": 0}
         for job, speeds in zip(jobs, ([1] * 4 + [9], [1] * 5)):  # the first ends at its target, the second is cut
             fake_run(tmp_path / "out" / "runs_Ant", job.name, speeds)
+        (tmp_path / "out" / "runs_Ant" / "gpu1-seed0" / "checkpoint.pt").write_bytes(b"weights")  # only the first saved
         on_done(jobs[0], 0)
         raise SystemExit(143)  # the SIGTERM handler's exit, in the middle of the second job
 
     monkeypatch.setattr(scaling, "run_jobs", fake_jobs)
     with pytest.raises(SystemExit) as stop:
         scaling.main(["--out", str(tmp_path / "out"), "--gpus", "1", "--seeds", "0", "1", "--targets",
-                      "eval/speed=9", "--device", "cpu", "--seconds", "30"])
+                      "eval/speed=9", "--device", "cpu", "--seconds", "30", "--keep-checkpoints"])
     assert stop.value.code == 143 and calls[1] == ["gpu1-seed0", "gpu1-seed1"]
     doc = json.loads((tmp_path / "out" / "scaling_Ant.json").read_text())
     rows = {r["name"]: r for r in doc["runs"]}
     assert rows["gpu1-seed0"]["exit_code"] == 0 and rows["gpu1-seed1"]["exit_code"] is None
     assert rows["gpu1-seed1"]["to_target"] == {"9": None} and "short of the target after 4 s" in rows["gpu1-seed1"]["note"]
     assert (tmp_path / "out" / "runs_Ant.tar.gz").exists() and (tmp_path / "out" / "scaling_Ant.md").exists()
+    # --keep-checkpoints: the archive leaves checkpoints out, so they are kept beside it, one per run that saved
+    assert sorted(os.listdir(tmp_path / "out" / "checkpoints")) == ["gpu1-seed0.pt"]
+    assert (tmp_path / "out" / "checkpoints" / "gpu1-seed0.pt").read_bytes() == b"weights"
 
 
 def test_the_benchmark_names_a_wrong_flag_before_it_starts_anything():

@@ -133,3 +133,67 @@ def test_a_resume_from_another_task_or_a_broken_run_fails_before_any_model_is_bu
     proc = run(["--resume", str(tmp_path / "missing"), "--no-plots"], timeout=60)
     assert proc.returncode != 0 and "no config.json there" in proc.stderr
     assert "training env" not in proc.stdout
+
+
+
+def test_a_training_stopped_by_a_call_limit_goes_on_in_the_next_call(tmp_path):
+    """benchmarks.harness.train_in_parts, as the learning benchmarks start their runs (10 minutes of training against a
+    10-minute machine call): SIGTERM to the call's process group stops the training, which saves its iteration, and
+    the caller exits 143; the same call again resumes the run where it stopped (clock, marks and rows going on)
+    instead of starting it again; once the run has ended on its own, a third call trains nothing."""
+    import signal
+    import time
+
+    run_dir = tmp_path / "run"
+    budget = ["--time-limit", "12", "--save-at", "2", "4", "12"]
+    driver = ("import sys; from benchmarks.harness import train_in_parts; "
+              f"sys.exit(train_in_parts({SMALL_FAST + ['--seed', '0'] + budget!r}, {str(run_dir)!r}, {budget!r}))")
+    cmd = [sys.executable, "-c", driver]
+    first = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                             start_new_session=True)  # a group of its own, as a call's `timeout` signals one
+    metrics = run_dir / "metrics.jsonl"
+    deadline = time.time() + 240
+    while time.time() < deadline and first.poll() is None:
+        if metrics.exists() and any(json.loads(line)["time_s"] > 4.0 for line in metrics.read_text().splitlines()
+                                    if line.endswith("}")):
+            break
+        time.sleep(0.2)
+    assert first.poll() is None, first.communicate()[0][-3000:] + (run_dir / "train.log").read_text()[-3000:]
+    os.killpg(first.pid, signal.SIGTERM)  # the whole group, as `timeout` does: the training hears it once
+    assert first.wait(timeout=120) == 128 + signal.SIGTERM, first.communicate()[0][-3000:]
+    summary = json.loads((run_dir / "summary.json").read_text())
+    stopped_at = summary["final"]["time_s"]
+    assert summary["stopped_on_request"] and 4.0 < stopped_at < 12.0, (run_dir / "train.log").read_text()[-3000:]
+
+    second = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert second.returncode == 0, second.stdout[-3000:] + second.stderr[-3000:]
+    summary = json.loads((run_dir / "summary.json").read_text())
+    assert not summary["stopped_on_request"] and len(summary["resumes"]) == 1
+    assert summary["resumes"][0]["time_s"] == pytest.approx(stopped_at, abs=0.01)
+    kept = summary["kept_checkpoints"]  # every mark once, across the two processes; the first ones by the first
+    assert sorted({m for k in kept for m in k["marks_s"]}) == [2.0, 4.0, 12.0] and kept[0]["time_s"] < stopped_at
+    rows, _ = rows_of(str(run_dir))
+    assert [r["iteration"] for r in rows] == list(range(1, len(rows) + 1))  # no iteration twice, none missing
+    assert all(b["time_s"] > a["time_s"] for a, b in zip(rows, rows[1:])) and rows[-1]["time_s"] >= 12.0
+    log = (run_dir / "train.log").read_text()
+    assert log.count("warpgym PPO | HalfCheetah-v5") == 2 and "resumed at iteration" in log  # both parts' output
+
+    t = time.time()
+    assert subprocess.run(cmd, cwd=ROOT, capture_output=True, timeout=120).returncode == 0
+    assert (run_dir / "train.log").read_text() == log and time.time() - t < 30  # ended on its own: not trained again
+
+
+def test_a_learning_benchmark_called_again_trains_only_the_runs_not_done(tmp_path, monkeypatch):
+    """suite_learning with the same --out in a later call: a run whose JSON an earlier call wrote is not trained
+    again; one that failed, or has no JSON yet (stopped part-way, resumed by train_in_parts), is."""
+    from benchmarks.learning import suite_learning
+
+    for seed, run in ((0, {"task": "Hopper-v5", "seed": 0}), (1, {"task": "Hopper-v5", "seed": 1, "error": "x"})):
+        (tmp_path / f"Hopper-v5-seed{seed}.json").write_text(json.dumps({"meta": {}, "run": run}))
+    trained = []
+    monkeypatch.setattr(suite_learning, "train_one", lambda task, seed, *a, **k: trained.append(seed) or {
+        "task": task, "seed": seed, "error": "not trained here"})
+    monkeypatch.setattr(suite_learning, "report", lambda outs, figure=None: 0)
+    assert suite_learning.main(["--out", str(tmp_path), "--tasks", "Hopper-v5", "--seeds", "0", "1", "2",
+                                "--device", "cpu", "--no-warm-up", "--no-score"]) == 0
+    assert trained == [1, 2]

@@ -20,7 +20,7 @@ from agents.logger import read_metrics  # noqa: E402
 def test_short_cpu_run_writes_logs_checkpoint_plots_resumes_and_plays(tmp_path, capsys):
     run = str(tmp_path / "ant")
     common = ["--horizon-len", "8", "--save-gap", "2", "--eval-gap", "0", "--eval-envs", "2",
-              "--episode-length", "40"]
+              "--episode-length", "40", "--save-at", "0"]
     assert train.main(["--task", "Ant", "--device", "cpu", "--num-envs", "8", "--max-iterations", "3",
                        "--run-dir", run, *common]) == 0
     last = capsys.readouterr().out.strip().splitlines()[-1]  # a sentence for a person, the next command in it
@@ -48,6 +48,11 @@ def test_short_cpu_run_writes_logs_checkpoint_plots_resumes_and_plays(tmp_path, 
     assert [r["iteration"] for r in rows] == [1, 2, 3, 4, 5]
     assert rows[3]["time_s"] > rows[2]["time_s"]  # the wall-clock axis carries on across processes
     assert load(os.path.join(run, "checkpoint.pt"), torch.device("cpu"))["samples"] == 5 * 64
+    # the resumed run's summary is the whole run's: its iterations, the mark kept by the first process, the resume
+    summary = json.load(open(os.path.join(run, "summary.json")))
+    assert summary["iterations"] == 5 and summary["first_iteration_time_s"] == rows[0]["time_s"]
+    assert [(k["mark_s"], k["iteration"]) for k in summary["kept_checkpoints"]] == [(0.0, 1)]
+    assert [r["iteration"] for r in summary["resumes"]] == [3] and 0 < summary["resumes"][0]["time_s"] < rows[3]["time_s"]
 
     # the deterministic policy of that run plays full 40-step episodes and reports return and speed
     assert play.main([run, "--device", "cpu", "--num-envs", "2", "--json", str(tmp_path / "play.json")]) == 0

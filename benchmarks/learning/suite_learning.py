@@ -13,6 +13,10 @@ on different GPUs or with different budgets.
     python -m benchmarks.learning.suite_learning --out OUT --seeds 0 1 --gpus 2    # one seed per GPU, at once
     python -m benchmarks.learning.suite_learning --report OUT OUT2 ...
 
+A machine call shorter than a run (10-minute runs, 10-minute calls) stops it with SIGTERM: the run saves its
+iteration, and the same command in the next call goes on with it (``warpgym train --resume``, its clock, marks and
+rows carrying on from the checkpoint; the restart's start-up is not counted) and skips the runs already written.
+
 The reference figures (``benchmarks.targets.REFERENCE``) are Tianshou's MuJoCo benchmark for SAC: the best return, averaged
 over 10 seeds, within the first 1 M steps, on gym's v3 tasks (v2 for Reacher and the two pendulums),
 from its examples/mujoco README; Tianshou has no Pusher or HumanoidStandup, whose figures are SLM-Lab's
@@ -26,11 +30,13 @@ import argparse
 import glob
 import json
 import os
+import shutil
+import signal
 import subprocess
 import sys
 import time
 
-from benchmarks.harness import ROOT, TRAIN, gpu_slot, read_summary
+from benchmarks.harness import gpu_slot, read_summary, train_in_parts
 from benchmarks.targets import REFERENCE, REFERENCE_SOURCE, REFERENCE_VERSION
 
 # as the sources print them (Tianshou's to one decimal: IDP's 9359.5 lies within 0.5 of the best return there is)
@@ -60,15 +66,6 @@ def reaching(rows: list[dict], target: float | None) -> dict:
                                                                                 ("half", half(target)))}
 
 
-def run_train(args: list[str], run_dir: str, device: str | None) -> int:
-    """``warpgym train ARGS --run-dir RUN_DIR --no-plots``, its output in RUN_DIR/train.log; its exit code."""
-    cmd = [*TRAIN, *args, "--run-dir", run_dir, "--no-plots"]
-    os.makedirs(run_dir, exist_ok=True)
-    with open(os.path.join(run_dir, "train.log"), "w") as log:
-        return subprocess.run(cmd + (["--device", device] if device else []), cwd=ROOT, stdout=log,
-                              stderr=subprocess.STDOUT, check=False).returncode
-
-
 def train_one(task: str, seed: int, out: str, scale: float, device: str | None, rollout_graph: str | None = None
               ) -> dict:
     """Train, keeping the policies at the marks; the run's row for the JSON, not yet scored."""
@@ -77,8 +74,9 @@ def train_one(task: str, seed: int, out: str, scale: float, device: str | None, 
     marks = marks_of(task, scale)
     run_dir = os.path.join(out, "runs", f"{task}-seed{seed}")
     capture = ["--rollout-graph", rollout_graph] if rollout_graph else []
-    code = run_train(["--task", task, "--seed", str(seed), "--time-limit", str(marks[-1]), "--save-at",
-                      *[str(m) for m in marks], *capture], run_dir, device)
+    budget = ["--time-limit", str(marks[-1]), "--save-at", *[str(m) for m in marks], *capture]
+    # a 10-minute run outlasts a 10-minute machine call: stopped, it goes on in the next call (train_in_parts)
+    code = train_in_parts(["--task", task, "--seed", str(seed), *budget], run_dir, budget, device)
     if code != 0:
         return {"task": task, "seed": seed, "error": f"warpgym train exited {code}: see {run_dir}/train.log"}
     summary = read_summary(run_dir)
@@ -102,11 +100,21 @@ def train_one(task: str, seed: int, out: str, scale: float, device: str | None, 
                       for r in rows if r.get("eval/return") is not None]}
 
 
+def finished(out: str, task: str, seed: int) -> bool:
+    """Whether an earlier call wrote this run's JSON without an error (a run stopped part-way has none yet)."""
+    path = os.path.join(out, f"{task}-seed{seed}.json")
+    if not os.path.isfile(path):
+        return False
+    with open(path) as f:
+        return "error" not in json.load(f)["run"]
+
+
 def warm_up(task: str, out: str, device: str | None) -> None:
     """A short training of ``task`` that fills Warp's kernel cache, so that each timed run starts as a
     user's second run does (the first compiles the task's kernels: 10-50 s on an H100)."""
     run_dir = os.path.join(out, "runs", f"{task}-warm-up")
-    code = run_train(["--task", task, "--time-limit", "1"], run_dir, device)
+    shutil.rmtree(run_dir, ignore_errors=True)  # each call's warm-up is a new short run
+    code = train_in_parts(["--task", task, "--time-limit", "1"], run_dir, [], device)
     if code != 0:
         raise SystemExit(f"the warm-up of {task} failed (exit {code}): see {run_dir}/train.log")
 
@@ -399,14 +407,27 @@ def spread_seeds(args, argv: list[str]) -> int:
     for wave in waves:
         procs, logs = [], []
         for gpu, seed in enumerate(wave):
-            logs.append(open(os.path.join(args.out, f"seed{seed}.log"), "w"))  # noqa: SIM115 (closed below)
+            logs.append(open(os.path.join(args.out, f"seed{seed}.log"), "a"))  # noqa: SIM115 (closed below)
             procs.append(subprocess.Popen([sys.executable, "-m", "benchmarks.learning.suite_learning", *rest,
                                            "--seeds", str(seed), "--runs-at-once", str(len(wave))],
                                           stdout=logs[-1], stderr=subprocess.STDOUT,
                                           **gpu_slot(gpu, args.gpus)))
-        failed += sum(p.wait() != 0 for p in procs)
-        for log in logs:
-            log.close()
+        stopped = []
+
+        def forward(signum, frame, procs=procs):  # each seed's process saves its run's iteration (train_in_parts)
+            stopped.append(signum)
+            for p in procs:
+                p.send_signal(signal.SIGTERM)
+
+        previous = signal.signal(signal.SIGTERM, forward)
+        try:
+            failed += sum(p.wait() != 0 for p in procs)
+        finally:
+            signal.signal(signal.SIGTERM, previous)
+            for log in logs:
+                log.close()
+        if stopped:
+            raise SystemExit(128 + signal.SIGTERM)
     if failed:
         print(f"{failed} seed process(es) failed: see {args.out}/seed<k>.log", file=sys.stderr)
     return report([args.out]) if glob.glob(os.path.join(args.out, "*-seed*.json")) else 1
@@ -466,9 +487,10 @@ def main(argv=None) -> int:
         return spread_seeds(args, list(argv if argv is not None else sys.argv[1:]))
     gpu = torch.cuda.get_device_name(0) if torch.cuda.is_available() and args.device != "cpu" else "cpu"
     for task in tasks:
-        if not args.no_warm_up:
+        todo = [seed for seed in args.seeds if not finished(args.out, task, seed)]  # not done by an earlier call
+        if todo and not args.no_warm_up:
             warm_up(task, args.out, args.device)
-        for seed in args.seeds:
+        for seed in todo:
             run = train_one(task, seed, args.out, args.scale, args.device, args.rollout_graph)
             if "error" not in run and not args.no_score:
                 run = score_run(run, args.out, args.eval_episodes, args.device)

@@ -23,6 +23,10 @@ kernel cache first (``--no-warm-up``: none), so that no combination's budget pay
 plays each final policy again (its runs/ folder beside the JSON) and rewrites the JSON, keeping the earlier
 score beside the new.
 
+A machine call shorter than the sweep (10-minute calls) stops it with SIGTERM: each run saves its iteration, and
+the same command in the next call keeps what is done (the settings in the JSON; under ``--gpus``, the parts with a
+sweep) and goes on with the stopped runs (``warpgym train --resume``, their clocks carrying on).
+
 Grid names: ``num_envs`` (the command's --num-envs) and any ``Config`` field ``warpgym train --config``
 takes (learning_rate, gamma, net_dims as 256x128, reward_scale, normalize_obs, ...).
 """
@@ -39,7 +43,7 @@ import sys
 import threading
 import time
 
-from benchmarks.harness import ROOT, TRAIN, read_summary  # noqa: E402
+from benchmarks.harness import ROOT, read_summary, train_in_parts  # noqa: E402
 
 
 def parse_grid(texts: list[str]) -> dict[str, list[str]]:
@@ -56,12 +60,17 @@ def parse_grid(texts: list[str]) -> dict[str, list[str]]:
     return grid
 
 
-def command(task: str, combo: dict, seed: int, seconds: float, run_dir: str, device: str | None) -> list[str]:
-    cmd = [*TRAIN, "--task", task, "--seed", str(seed), "--time-limit", str(seconds),
-           "--run-dir", run_dir, "--no-plots"]
+def command(task: str, combo: dict, seed: int, seconds: float) -> list[str]:
+    """``warpgym train``'s flags for one setting and seed (train_in_parts adds the run folder and the device)."""
+    cmd = ["--task", task, "--seed", str(seed), "--time-limit", str(seconds)]
     for name, value in combo.items():
         cmd += ["--num-envs", value] if name == "num_envs" else ["--config", f"{name}={value}"]
-    return cmd + (["--device", device] if device else [])
+    return cmd
+
+
+def run_name(task: str, label: str, seed: int) -> str:
+    """A run's folder name, the same in every call (a run stopped by a call's limit goes on under it)."""
+    return f"{task}-{label.replace(' ', '_').replace(',', 'x')}-seed{seed}"
 
 
 def score(run_dir: str, scoring: dict, device: str | None) -> dict:
@@ -79,16 +88,30 @@ def mean_return(runs: list[dict]) -> float | None:
     return sum(r["gymnasium_return"] for r in good) / len(good) if good else None
 
 
+def label_of(combo: dict) -> str:
+    return " ".join(f"{k}={v}" for k, v in combo.items()) or "preset"
+
+
+def earlier_rows(path: str, meta: dict) -> dict[str, dict]:
+    """The rows an earlier call of the same sweep (task, budget, seeds, scoring) wrote to ``path``, by label."""
+    if not os.path.exists(path):
+        return {}
+    with open(path) as f:
+        doc = json.load(f)
+    same = ("task", "seconds", "seeds", "scoring")
+    if any(doc["meta"].get(k) != meta[k] for k in same):
+        raise SystemExit(f"{path} holds a sweep with other {', '.join(same)}: give this one another --out")
+    return {r["label"]: r for r in doc["rows"]}
+
+
 def run_combo(task: str, combo: dict, seeds: list[int], seconds: float, out: str, device: str | None,
               scoring: dict) -> dict:
-    label = " ".join(f"{k}={v}" for k, v in combo.items()) or "preset"
+    label = label_of(combo)
     runs = []
     for seed in seeds:
-        run_dir = os.path.join(out, "runs", f"{task}-{len(os.listdir(os.path.join(out, 'runs')))}")
-        os.makedirs(run_dir)
-        with open(os.path.join(run_dir, "train.log"), "w") as log:
-            code = subprocess.run(command(task, combo, seed, seconds, run_dir, device), cwd=ROOT, stdout=log,
-                                  stderr=subprocess.STDOUT).returncode
+        run_dir = os.path.join(out, "runs", run_name(task, label, seed))
+        # stopped by a call's time limit, the run saves and this exits; the next call's sweep goes on with it
+        code = train_in_parts(command(task, combo, seed, seconds), run_dir, ["--time-limit", str(seconds)], device)
         if code != 0:
             runs.append({"seed": seed, "error": f"exit {code}: {run_dir}/train.log"})
             continue
@@ -180,7 +203,10 @@ def spread(args, grid: dict[str, list[str]], argv: list[str]) -> dict:
     jobs = [(dict(zip(names, values)), seed) for values in itertools.product(*(grid[n] for n in names))
             for seed in args.seeds]
     rest = without(argv, ("--gpus", "--grid", "--seeds", "--out"))
-    todo, lock = list(enumerate(jobs)), threading.Lock()
+    # a part an earlier call finished has its sweep; the others run (a stopped one goes on: train_in_parts)
+    todo = [(k, job) for k, job in enumerate(jobs)
+            if not os.path.exists(os.path.join(args.out, "parts", f"{k:03d}", f"sweep-{args.task}.json"))]
+    lock = threading.Lock()
 
     def command_of(k: int, combo: dict, seed: int) -> list[str]:
         cmd = [sys.executable, "-m", "benchmarks.learning.suite_sweep", *rest,
@@ -199,11 +225,11 @@ def spread(args, grid: dict[str, list[str]], argv: list[str]) -> dict:
                 k, (combo, seed) = todo.pop(0)
             part = os.path.join(args.out, "parts", f"{k:03d}")
             os.makedirs(part, exist_ok=True)
-            with open(os.path.join(part, "sweep.log"), "w") as log:
+            with open(os.path.join(part, "sweep.log"), "a") as log:
                 subprocess.run(command_of(k, combo, seed), cwd=ROOT, stdout=log, stderr=subprocess.STDOUT,
                                check=False, **slot)
 
-    threads = [threading.Thread(target=worker, args=(g,)) for g in range(min(args.gpus, len(jobs)))]
+    threads = [threading.Thread(target=worker, args=(g,)) for g in range(min(args.gpus, len(todo)))]
     for t in threads:
         t.start()
     for t in threads:
@@ -220,7 +246,7 @@ def join_parts(out: str, task: str, jobs: list[tuple[dict, int]]) -> dict:
         part = os.path.join(out, "parts", f"{k:03d}")
         path = os.path.join(part, f"sweep-{task}.json")
         if not os.path.exists(path):
-            label = " ".join(f"{n}={v}" for n, v in combo.items()) or "preset"
+            label = label_of(combo)
             error = {"seed": seed, "error": f"the process wrote no sweep: see {part}/sweep.log"}
             failed.append({"combo": combo, "label": label, "runs": [error]})
             continue
@@ -230,7 +256,8 @@ def join_parts(out: str, task: str, jobs: list[tuple[dict, int]]) -> dict:
             for run in row["runs"]:
                 if "run_dir" in run:
                     moved = os.path.join(out, "runs", f"{task}-{k}")
-                    shutil.move(os.path.join(part, "runs", os.path.basename(run["run_dir"])), moved)
+                    if not os.path.isdir(moved):  # an earlier join (a call that ended) moved it already
+                        shutil.move(os.path.join(part, "runs", os.path.basename(run["run_dir"])), moved)
                     run["run_dir"] = moved
         docs.append(doc)
     if not docs:
@@ -318,9 +345,13 @@ def main(argv=None) -> int:
                     "date": time.strftime("%Y-%m-%d"),
                     "command": " ".join(["python -m benchmarks.learning.suite_sweep"] + (argv or sys.argv[1:]))}, "rows": []}
     names = list(grid)
+    done = earlier_rows(path, doc["meta"])
     for values in itertools.product(*(grid[n] for n in names)):
-        doc["rows"].append(run_combo(args.task, dict(zip(names, values)), args.seeds, args.seconds, args.out,
-                                     args.device, scoring))
+        combo = dict(zip(names, values))
+        if label_of(combo) in done:  # an earlier call with this --out swept it
+            doc["rows"].append(done[label_of(combo)])
+            continue
+        doc["rows"].append(run_combo(args.task, combo, args.seeds, args.seconds, args.out, args.device, scoring))
         print(json.dumps(doc["rows"][-1])[:300], flush=True)
         write_json(path, doc)
     print(table(doc))

@@ -16,7 +16,8 @@ iteration with the evaluations left out; the goal's ratio is G GPUs' median lear
 
 Writes, as the runs end, OUT/scaling_<task>.json (every run: its times, samples/s, phases, last evaluation)
 and at the end OUT/scaling_<task>.md (the table), OUT/<task>_gpus_<key>_vs_time.png and _vs_samples.png, and
-OUT/runs_<task>.tar.gz (each run's metrics.jsonl, summary, config and log; no checkpoints). Stopped early (SIGTERM:
+OUT/runs_<task>.tar.gz (each run's metrics.jsonl, summary, config and log; no checkpoints: --keep-checkpoints
+keeps each run's last as OUT/checkpoints/<run>.pt). Stopped early (SIGTERM:
 a device call's time limit), it stops its jobs and still writes all of these, with the stopped runs' rows as far as
 they went (a miss counts as a seed cut short); `--report` reads an output left unpacked (runs_<task>/) the same way.
 """
@@ -428,6 +429,18 @@ def pack_runs(runs_dir: str, out: str, task: str) -> None:
     os.replace(path + ".tmp", path)
 
 
+def keep_checkpoints(runs_dir: str, to: str) -> list[str]:
+    """Each run's last checkpoint (``<run>/checkpoint.pt``) copied to ``to/<run>.pt``; the names kept."""
+    kept = []
+    for name in sorted(os.listdir(runs_dir)):
+        src = os.path.join(runs_dir, name, "checkpoint.pt")
+        if os.path.isfile(src):
+            os.makedirs(to, exist_ok=True)
+            shutil.copyfile(src, os.path.join(to, f"{name}.pt"))
+            kept.append(name)
+    return kept
+
+
 def main(argv=None) -> int:
     from agents.data_parallel import DEFAULT, MODES  # noqa: PLC0415
 
@@ -454,6 +467,9 @@ def main(argv=None) -> int:
     ap.add_argument("--repeat", type=int, default=1, metavar="N",
                     help="these runs are the Nth of their seeds: names end in -rN, so --report keeps them beside "
                          "the first (where a name repeats, it keeps the first output's run)")
+    ap.add_argument("--keep-checkpoints", action="store_true",
+                    help="keep each run's last checkpoint as OUT/checkpoints/<run>.pt (the archive has none), for "
+                         "`warpgym eval` to score in Gymnasium's env")
     ap.add_argument("--device", choices=("cuda", "cpu"), default="cuda",
                     help="cpu: a rehearsal of the whole benchmark on the CPU, each 'GPU' a share of the cores (to "
                          "check a grid before a GPU machine runs it; its times mean nothing)")
@@ -529,6 +545,8 @@ def main(argv=None) -> int:
         if doc["runs"]:
             print(write_report(doc, runs, out), flush=True)
             pack_runs(runs, out, args.task)
+            if args.keep_checkpoints:
+                keep_checkpoints(runs, os.path.join(out, "checkpoints"))
             shutil.rmtree(runs)
     return 0
 

@@ -222,6 +222,7 @@ def run_summary(args, history: list[dict], device_name: str, cfg: Config, runner
     summary = summarize(history, device_name, cfg)
     summary["solver_load"] = env.sim.solver_load()  # this process's envs, over the whole run
     summary["kept_checkpoints"] = runner.kept
+    summary["resumes"] = runner.resumes  # where later processes took the run over (warpgym train --resume)
     if cfg.target:
         summary["target"] = {"target": cfg.target, "reached": runner.target_reached}
     # the capture the rollouts had: "off" where the device cannot capture or a capture failed and fell back
@@ -287,7 +288,12 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
         watch.stop(finished=True)
     if rank > 0:
         return 0
+    if args.resume:  # the summary speaks of the whole run (its rows on disk), not of this process's part of it
+        from agents.logger import read_metrics  # noqa: PLC0415
+
+        history = read_metrics(run_dir)
     summary = run_summary(args, history, device_name, cfg, runner, env, startup)
+    summary["stopped_on_request"] = stopped  # a signal ended it before its budget: `--resume` goes on
     write_json(os.path.join(run_dir, "summary.json"), summary)
     if not args.no_plots:
         try:
