@@ -580,3 +580,30 @@ def test_suite_sweep_called_again_sweeps_only_the_settings_not_done(monkeypatch,
         "gamma=0.99", "gamma=0.999"]
     with pytest.raises(SystemExit, match="holds a sweep with other task, seconds, seeds, scoring"):
         sw.main([*argv[:-5], "--seconds", "90", "--device", "cpu", "--no-warm-up"])
+
+
+def test_suite_sweep_stopped_by_a_call_limit_waits_for_its_parts_and_starts_no_more(monkeypatch, tmp_path):
+    """SIGTERM (a call's `timeout`, to the process group) during a ``--gpus`` sweep: the part running saves and ends,
+    the sweep waits for it, starts no other part, joins nothing, and exits 143; the next call goes on from there."""
+    import argparse
+    import signal
+    import subprocess
+    import time
+
+    from benchmarks.learning import suite_sweep as sw
+
+    started, before = [], signal.getsignal(signal.SIGTERM)
+
+    def fake_child(cmd, **kw):
+        started.append(cmd[cmd.index("--out") + 1])
+        os.kill(os.getpid(), signal.SIGTERM)  # arrives while this part runs; the part saves (a moment) and ends
+        time.sleep(0.5)
+        return subprocess.CompletedProcess(cmd, 143)
+
+    monkeypatch.setattr(sw.subprocess, "run", fake_child)
+    monkeypatch.delenv("CUDA_VISIBLE_DEVICES", raising=False)
+    args = argparse.Namespace(gpus=1, seeds=[0], out=str(tmp_path), task="Hopper-v5")
+    with pytest.raises(SystemExit) as stop:
+        sw.spread(args, {"gamma": ["0.99", "0.999"]}, ["--task", "Hopper-v5", "--grid", "gamma=0.99,0.999"])
+    assert stop.value.code == 143 and len(started) == 1 and started[0].endswith("000")
+    assert signal.getsignal(signal.SIGTERM) is before and not (tmp_path / "sweep-Hopper-v5.json").exists()

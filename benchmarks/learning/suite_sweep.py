@@ -38,6 +38,7 @@ import itertools
 import json
 import os
 import shutil
+import signal
 import subprocess
 import sys
 import threading
@@ -220,7 +221,7 @@ def spread(args, grid: dict[str, list[str]], argv: list[str]) -> dict:
         slot = gpu_slot(gpu, args.gpus)
         while True:
             with lock:
-                if not todo:
+                if not todo or stopping:
                     return
                 k, (combo, seed) = todo.pop(0)
             part = os.path.join(args.out, "parts", f"{k:03d}")
@@ -229,11 +230,20 @@ def spread(args, grid: dict[str, list[str]], argv: list[str]) -> dict:
                 subprocess.run(command_of(k, combo, seed), cwd=ROOT, stdout=log, stderr=subprocess.STDOUT,
                                check=False, **slot)
 
+    # A call's `timeout` signals the whole process group: the parts save their runs and end (train_in_parts), and
+    # this waits for them, so that the next call never finds a part still writing; then it exits, joining nothing.
+    stopping: list[int] = []
+    previous = signal.signal(signal.SIGTERM, lambda signum, frame: stopping.append(signum))
     threads = [threading.Thread(target=worker, args=(g,)) for g in range(min(args.gpus, len(todo)))]
-    for t in threads:
-        t.start()
-    for t in threads:
-        t.join()
+    try:
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+    if stopping:
+        raise SystemExit(128 + signal.SIGTERM)
     return join_parts(args.out, args.task, jobs)
 
 
