@@ -459,7 +459,10 @@ def main(argv=None) -> int:
                     help="what to time, e.g. eval/speed=8,9.5 (default: the task's, TARGETS above)")
     ap.add_argument("--num-envs", type=int, default=None,
                     help="train's --num-envs (default: train's; under split the total, else per GPU)")
-    ap.add_argument("--seconds", type=float, default=180.0, help="the longest a run may train (default 180)")
+    ap.add_argument("--seconds", type=float, default=180.0,
+                    help="the longest a run may train, wall-clock from its start with its evaluations (default 180; "
+                         "the suite's evaluations take 40-47 %% of a run at --eval-gap 20: give the learning time "
+                         "a target needs about twice)")
     ap.add_argument("--eval-gap", type=float, default=5.0, help="seconds between evaluations (default 5)")
     ap.add_argument("--train-flags", default="", help="more `warpgym train` flags for every run, quoted")
     ap.add_argument("--label", default="", help="a name for runs made with other flags (--num-envs, --train-flags), "
