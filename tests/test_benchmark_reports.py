@@ -608,3 +608,21 @@ def test_suite_sweep_stopped_by_a_call_limit_waits_for_its_parts_and_starts_no_m
         sw.spread(args, {"gamma": ["0.99", "0.999"]}, ["--task", "Hopper-v5", "--grid", "gamma=0.99,0.999"])
     assert stop.value.code == 143 and len(started) == 1 and started[0].endswith("000")
     assert signal.getsignal(signal.SIGTERM) is before and not (tmp_path / "sweep-Hopper-v5.json").exists()
+
+
+def test_suite_learning_report_of_runs_not_scored_yet_says_so(tmp_path, capsys):
+    """``--no-score`` keeps the GPU for training and leaves the scoring to ``--score OUT``: the report at the end of
+    such a call (and any before the scoring) shows the runs unscored, not a traceback."""
+    from benchmarks.learning import suite_learning as sl
+
+    marks = list(sl.marks_of("Hopper-v5", 1.0))
+    run = {"task": "Hopper-v5", "seed": 0, "budget_s": marks[-1], "marks_s": marks, "samples": 2.4e8, "num_envs": 4096,
+           "samples_per_s": 4.0e5, "reference": sl.REFERENCE["Hopper-v5"], "device": "cuda:0", "scored": [],
+           "curve": [[30.0, 131072, 10.0]], "first_eval_reaching": {"target": None, "half": {"time_s": 180.0}},
+           "evals": [{"time_s": 180.0, "samples": 7e7, "eval/return": 1800.0}], "rollout_graph": "step"}
+    (tmp_path / "Hopper-v5-seed0.json").write_text(json.dumps({"meta": {"gpu": "H100", "scale": 1.0, "date": "d",
+                                                                        "command": "x"}, "run": run}))
+    assert sl.report([str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "| Hopper-v5 | 1 | 1 min: -; 2 min: -; 5 min: -; 10 min: - |" in out and "| not scored |" in out
+    assert "| Hopper-v5 | not scored yet (`--score OUT`) | 3542.2 (Tianshou SAC, v3) | not reached (0/1) |" in out

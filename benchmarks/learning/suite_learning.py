@@ -112,11 +112,12 @@ def finished(out: str, task: str, seed: int) -> bool:
 def warm_up(task: str, out: str, device: str | None) -> None:
     """A short training of ``task`` that fills Warp's kernel cache, so that each timed run starts as a
     user's second run does (the first compiles the task's kernels: 10-50 s on an H100)."""
-    run_dir = os.path.join(out, "runs", f"{task}-warm-up")
-    shutil.rmtree(run_dir, ignore_errors=True)  # each call's warm-up is a new short run
+    # a folder of this process's own: under --gpus the seeds' processes warm up at once, and each call anew
+    run_dir = os.path.join(out, "runs", f"{task}-warm-up-{os.getpid()}")
     code = train_in_parts(["--task", task, "--time-limit", "1"], run_dir, [], device)
     if code != 0:
         raise SystemExit(f"the warm-up of {task} failed (exit {code}): see {run_dir}/train.log")
+    shutil.rmtree(run_dir, ignore_errors=True)  # it only filled the cache
 
 
 def settled(score: dict) -> bool:
@@ -206,10 +207,12 @@ def readme_table(runs: list[dict]) -> str:
     for task, rs in by_task_of(runs).items():
         last = rs[0]["marks_s"][-1]
         each = [s["gymnasium_return"] for r in rs for s in r["scored"] if abs(s["mark_s"] - last) < 1e-6]
-        digits = 0 if abs(_mean(each)) >= 100 else 1
+        digits = 0 if each and abs(_mean(each)) >= 100 else 1
         ref = REFERENCE[task]
-        lines.append(f"| {task} | **{_mean(each):.{digits}f}** ({', '.join(f'{v:.{digits}f}' for v in each)}) | "
-                     f"{ref} ({REFERENCE_SOURCE[task]}, {REFERENCE_VERSION[task]}) | {minutes_to(rs, ref)} |")
+        score = (f"**{_mean(each):.{digits}f}** ({', '.join(f'{v:.{digits}f}' for v in each)})" if each
+                 else "not scored yet (`--score OUT`)")  # a --no-score run, scored later on any machine
+        lines.append(f"| {task} | {score} | {ref} ({REFERENCE_SOURCE[task]}, {REFERENCE_VERSION[task]}) | "
+                     f"{minutes_to(rs, ref)} |")
     return "\n".join(lines)
 
 
