@@ -159,6 +159,9 @@ def test_the_table_takes_medians_over_seeds_and_ratios_to_one_gpu(tmp_path):
     assert "| 4 | split | 64 |" in table and "3.0 s (0.27x; <= 0.5: met), 2 of 2" in table
     assert "5.0 s, > 19 s | > 12.0 s (> 1.09x; <= 0.7: not met), 1 of 2" in table
     assert "4.0 s (< 0.36x; <= 0.5: met), 2 of 2" in table and "> 10 s, 12.0 s | > 11.0 s, 1 of 2" in table
+    # what an iteration learns, beside the seconds: each seed's iterations to the last target, a miss as "> all it had"
+    assert ("Iterations to eval/speed 9, each seed (\"> N\": a seed that missed it in its N): 1 GPU -: > 11, 13; "
+            "2 GPUs split: > 6, > 20; 4 GPUs split: 5, 5.") in table
 
 
 def test_every_line_is_measured_against_the_plain_one_gpu_runs_not_a_labelled_control(tmp_path):

@@ -15,7 +15,8 @@ from the process start (wall-clock, start-up and evaluations included) and the l
 iteration with the evaluations left out; the goal's ratio is G GPUs' median learning time over one GPU's.
 
 Writes, as the runs end, OUT/scaling_<task>.json (every run: its times, samples/s, phases, last evaluation)
-and at the end OUT/scaling_<task>.md (the table), OUT/<task>_gpus_<key>_vs_time.png and _vs_samples.png, and
+and at the end OUT/scaling_<task>.md (the table, and each seed's iterations to the last target: what one iteration
+learns), OUT/<task>_gpus_<key>_vs_time.png and _vs_samples.png, and
 OUT/runs_<task>.tar.gz (each run's metrics.jsonl, summary, config and log; no checkpoints: --keep-checkpoints
 keeps each run's last as OUT/checkpoints/<run>.pt). Stopped early (SIGTERM:
 a device call's time limit), it stops its jobs and still writes all of these, with the stopped runs' rows as far as
@@ -255,6 +256,19 @@ def target_cells(t: dict, gpus: int) -> str:
     return f"{each} | {median}{ratio}, {t['reached']} of {t['runs']}"
 
 
+def iterations_line(doc: dict, lines: list[dict], value: float) -> str:
+    """Each seed's iterations to ``value``: how much one iteration learns, which decides what G GPUs give when their
+    iterations take as long as one GPU's (grow-kl: G times the samples an iteration)."""
+    def cell(r: dict) -> str:
+        hit = r["to_target"].get(f"{value:g}")
+        return str(hit["iteration"]) if hit else f"> {r.get('iterations') or 0}"
+
+    groups_ = groups(doc)
+    return (f"Iterations to {doc['targets']['key']} {value:g}, each seed (\"> N\": a seed that missed it in its N): "
+            + "; ".join(f"{ln['gpus']} GPU{'s' if ln['gpus'] > 1 else ''} {ln['mode']}: "
+                        + ", ".join(cell(r) for r in groups_[(ln["gpus"], ln["mode"])]) for ln in lines) + ".")
+
+
 def markdown(doc: dict, lines: list[dict]) -> str:
     key, values = doc["targets"]["key"], doc["targets"]["values"]
     devices = sorted({r.get("device") for r in doc["runs"] if r.get("device")})
@@ -284,6 +298,7 @@ def markdown(doc: dict, lines: list[dict]) -> str:
             + "; ".join(f"{ln['gpus']} GPU{'s' if ln['gpus'] > 1 else ''} {ln['mode']}: "
                         + ", ".join(seconds(ln['targets'][f'{v:g}']['median_time_s']) for v in values)
                         for ln in lines) + "."]
+    out.append(iterations_line(doc, lines, values[-1]))
     out += [f"{mode}: --num-envs {n or 'default'} {f}".rstrip() + "." for mode, n, f in flags]
     out += [f"{n}." for n in notes]
     return "\n".join(out) + "\n"
