@@ -3,9 +3,14 @@ JSON written whole, and a GPU with its share of the host's cores for a child pro
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
+import shutil
+import signal
+import subprocess
 import sys
+import threading
 
 from warpgym.cli import write_json
 
@@ -28,6 +33,30 @@ def read_summary(run_dir: str) -> dict:
         return json.load(f)
 
 
+@contextlib.contextmanager
+def waits_out_sigterm(forward=None):
+    """While the block waits for child processes, a SIGTERM (a device call's `timeout`) does not end this one:
+    ``forward()`` runs at the first (to pass it on once: a training stopped twice stops unsaved), the block goes on
+    until its children have saved and ended, and leaving it exits 143. Yields the signals heard, for loops that
+    should start nothing more. Off the main thread, where no handler can be set, it changes nothing."""
+    heard: list[int] = []
+    main = threading.current_thread() is threading.main_thread()
+
+    def on_term(signum, frame):
+        if not heard and forward is not None:
+            forward()
+        heard.append(signum)
+
+    previous = signal.signal(signal.SIGTERM, on_term) if main else None
+    try:
+        yield heard
+    finally:
+        if main:
+            signal.signal(signal.SIGTERM, previous)
+    if heard:
+        raise SystemExit(128 + signal.SIGTERM)
+
+
 def train_in_parts(args: list[str], run_dir: str, resume_args: list[str], device: str | None = None) -> int:
     """``warpgym train ARGS --run-dir RUN_DIR --no-plots``, its output appended to RUN_DIR/train.log; its exit code.
 
@@ -36,11 +65,6 @@ def train_in_parts(args: list[str], run_dir: str, resume_args: list[str], device
     with the same ``run_dir`` it goes on with ``warpgym train --resume RUN_DIR RESUME_ARGS`` (its clock, marks and
     rows carry on), and a run that had ended on its own is not trained again (0 at once). A folder without a
     checkpoint (stopped before its first save) starts afresh."""
-    import shutil  # noqa: PLC0415
-    import signal  # noqa: PLC0415
-    import subprocess  # noqa: PLC0415
-    import threading  # noqa: PLC0415
-
     has = lambda name: os.path.isfile(os.path.join(run_dir, name))  # noqa: E731
     if has("checkpoint.pt") and has("config.json"):
         if has("summary.json") and not read_summary(run_dir).get("stopped_on_request", False):
@@ -50,28 +74,14 @@ def train_in_parts(args: list[str], run_dir: str, resume_args: list[str], device
         shutil.rmtree(run_dir, ignore_errors=True)
         cmd = [*TRAIN, *args, "--run-dir", run_dir, "--no-plots"]
     os.makedirs(run_dir, exist_ok=True)
-    stopped = []
     with open(os.path.join(run_dir, "train.log"), "a") as log:
-        main = threading.current_thread() is threading.main_thread()  # only the main thread may set handlers
         # In its own session, a SIGTERM to this process group (`timeout`'s) reaches the training once, from here: a
         # second one would stop it at once, unsaved. Off the main thread it stays in the group and gets it directly.
+        main = threading.current_thread() is threading.main_thread()
         child = subprocess.Popen(cmd + (["--device", device] if device else []), cwd=ROOT, stdout=log,
                                  stderr=subprocess.STDOUT, start_new_session=main)
-
-        def forward(signum, frame):  # the training saves its iteration; this waits for it below
-            if not stopped:  # once: a second SIGTERM would stop it unsaved
-                child.send_signal(signal.SIGTERM)
-            stopped.append(signum)
-
-        previous = signal.signal(signal.SIGTERM, forward) if main else None
-        try:
-            code = child.wait()
-        finally:
-            if main:
-                signal.signal(signal.SIGTERM, previous)
-    if stopped:
-        raise SystemExit(128 + signal.SIGTERM)
-    return code
+        with waits_out_sigterm(lambda: child.send_signal(signal.SIGTERM)):  # it saves its iteration; this waits
+            return child.wait()
 
 
 def visible_gpus(count: int) -> list[str]:
@@ -124,4 +134,4 @@ def reported(ap, args, report, what: str) -> bool:
 
 
 __all__ = ["NO_MULTICAST", "ROOT", "TRAIN", "child_env", "core_shares", "gpu_slot", "read_report", "read_summary", "reported", "train_in_parts", "visible_gpus",
-           "write_json"]
+           "waits_out_sigterm", "write_json"]

@@ -197,3 +197,23 @@ def test_a_learning_benchmark_called_again_trains_only_the_runs_not_done(tmp_pat
     assert suite_learning.main(["--out", str(tmp_path), "--tasks", "Hopper-v5", "--seeds", "0", "1", "2",
                                 "--device", "cpu", "--no-warm-up", "--no-score"]) == 0
     assert trained == [1, 2]
+
+
+def test_a_sigterm_while_children_save_is_passed_on_once_and_ends_the_caller_after_them():
+    """benchmarks.harness.waits_out_sigterm, around a wait for child processes: two SIGTERMs (the group's and a
+    second) reach ``forward`` once, the block runs to its end, and leaving it exits 143 with the handler restored."""
+    import signal
+
+    from benchmarks.harness import waits_out_sigterm
+
+    before, forwarded, finished = signal.getsignal(signal.SIGTERM), [], []
+    with pytest.raises(SystemExit) as stop:
+        with waits_out_sigterm(lambda: forwarded.append(1)) as heard:
+            os.kill(os.getpid(), signal.SIGTERM)
+            os.kill(os.getpid(), signal.SIGTERM)
+            finished.append(len(heard))  # the block goes on: its children are still saving
+    assert stop.value.code == 143 and forwarded == [1] and finished == [2]
+    assert signal.getsignal(signal.SIGTERM) is before
+    with waits_out_sigterm() as heard:  # no signal: nothing happens
+        pass
+    assert heard == [] and signal.getsignal(signal.SIGTERM) is before

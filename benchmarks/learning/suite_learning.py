@@ -36,7 +36,7 @@ import subprocess
 import sys
 import time
 
-from benchmarks.harness import gpu_slot, read_summary, train_in_parts
+from benchmarks.harness import gpu_slot, read_summary, train_in_parts, waits_out_sigterm
 from benchmarks.targets import REFERENCE, REFERENCE_SOURCE, REFERENCE_VERSION
 
 # as the sources print them (Tianshou's to one decimal: IDP's 9359.5 lies within 0.5 of the best return there is)
@@ -415,22 +415,12 @@ def spread_seeds(args, argv: list[str]) -> int:
                                            "--seeds", str(seed), "--runs-at-once", str(len(wave))],
                                           stdout=logs[-1], stderr=subprocess.STDOUT,
                                           **gpu_slot(gpu, args.gpus)))
-        stopped = []
-
-        def forward(signum, frame, procs=procs):  # each seed's process saves its run's iteration (train_in_parts)
-            stopped.append(signum)
-            for p in procs:
-                p.send_signal(signal.SIGTERM)
-
-        previous = signal.signal(signal.SIGTERM, forward)
-        try:
-            failed += sum(p.wait() != 0 for p in procs)
+        try:  # stopped, each seed's process saves its run's iteration (train_in_parts) before this exits
+            with waits_out_sigterm(lambda procs=procs: [p.send_signal(signal.SIGTERM) for p in procs]):
+                failed += sum(p.wait() != 0 for p in procs)
         finally:
-            signal.signal(signal.SIGTERM, previous)
             for log in logs:
                 log.close()
-        if stopped:
-            raise SystemExit(128 + signal.SIGTERM)
     if failed:
         print(f"{failed} seed process(es) failed: see {args.out}/seed<k>.log", file=sys.stderr)
     return report([args.out]) if glob.glob(os.path.join(args.out, "*-seed*.json")) else 1

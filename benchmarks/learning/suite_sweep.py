@@ -38,13 +38,12 @@ import itertools
 import json
 import os
 import shutil
-import signal
 import subprocess
 import sys
 import threading
 import time
 
-from benchmarks.harness import ROOT, read_summary, train_in_parts  # noqa: E402
+from benchmarks.harness import ROOT, read_summary, train_in_parts, waits_out_sigterm  # noqa: E402
 
 
 def parse_grid(texts: list[str]) -> dict[str, list[str]]:
@@ -232,18 +231,12 @@ def spread(args, grid: dict[str, list[str]], argv: list[str]) -> dict:
 
     # A call's `timeout` signals the whole process group: the parts save their runs and end (train_in_parts), and
     # this waits for them, so that the next call never finds a part still writing; then it exits, joining nothing.
-    stopping: list[int] = []
-    previous = signal.signal(signal.SIGTERM, lambda signum, frame: stopping.append(signum))
     threads = [threading.Thread(target=worker, args=(g,)) for g in range(min(args.gpus, len(todo)))]
-    try:
+    with waits_out_sigterm() as stopping:
         for t in threads:
             t.start()
         for t in threads:
             t.join()
-    finally:
-        signal.signal(signal.SIGTERM, previous)
-    if stopping:
-        raise SystemExit(128 + signal.SIGTERM)
     return join_parts(args.out, args.task, jobs)
 
 

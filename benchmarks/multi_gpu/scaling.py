@@ -256,17 +256,16 @@ def target_cells(t: dict, gpus: int) -> str:
     return f"{each} | {median}{ratio}, {t['reached']} of {t['runs']}"
 
 
-def iterations_line(doc: dict, lines: list[dict], value: float) -> str:
+def iterations_line(doc: dict, lines: list[dict], value: float, grouped: dict) -> str:
     """Each seed's iterations to ``value``: how much one iteration learns, which decides what G GPUs give when their
     iterations take as long as one GPU's (grow-kl: G times the samples an iteration)."""
     def cell(r: dict) -> str:
         hit = r["to_target"].get(f"{value:g}")
         return str(hit["iteration"]) if hit else f"> {r.get('iterations') or 0}"
 
-    groups_ = groups(doc)
     return (f"Iterations to {doc['targets']['key']} {value:g}, each seed (\"> N\": a seed that missed it in its N): "
             + "; ".join(f"{ln['gpus']} GPU{'s' if ln['gpus'] > 1 else ''} {ln['mode']}: "
-                        + ", ".join(cell(r) for r in groups_[(ln["gpus"], ln["mode"])]) for ln in lines) + ".")
+                        + ", ".join(cell(r) for r in grouped[(ln["gpus"], ln["mode"])]) for ln in lines) + ".")
 
 
 def markdown(doc: dict, lines: list[dict]) -> str:
@@ -280,8 +279,9 @@ def markdown(doc: dict, lines: list[dict]) -> str:
            "| GPUs | mode | envs per GPU | samples/s | x 1 GPU | iteration ms | first iteration | "
            + " | ".join(f"{key} {v:g}: learning time, each seed | median (ratio; goal)" for v in values) + " |",
            "|---:|---|---:|---:|---:|---:|---:|" + "---|---|" * len(values)]
+    grouped = groups(doc)
     for line in lines:
-        runs = groups(doc)[(line["gpus"], line["mode"])]
+        runs = grouped[(line["gpus"], line["mode"])]
         envs = "/".join(sorted({str(r["num_envs_per_gpu"]) for r in runs}))
         speedup = "-" if math.isnan(line["samples_speedup"]) else f"{line['samples_speedup']:.2f}x"
         out.append(f"| {line['gpus']} | {line['mode']} | {envs} | {line['samples_per_s'] / 1e6:.3f} M | {speedup} | "
@@ -298,7 +298,7 @@ def markdown(doc: dict, lines: list[dict]) -> str:
             + "; ".join(f"{ln['gpus']} GPU{'s' if ln['gpus'] > 1 else ''} {ln['mode']}: "
                         + ", ".join(seconds(ln['targets'][f'{v:g}']['median_time_s']) for v in values)
                         for ln in lines) + "."]
-    out.append(iterations_line(doc, lines, values[-1]))
+    out.append(iterations_line(doc, lines, values[-1], grouped))
     out += [f"{mode}: --num-envs {n or 'default'} {f}".rstrip() + "." for mode, n, f in flags]
     out += [f"{n}." for n in notes]
     return "\n".join(out) + "\n"
