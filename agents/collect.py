@@ -94,7 +94,7 @@ class Collector:
         return obs
 
     def rollout(self, timer: PhaseTimer) -> None:
-        """One rollout of ``horizon_len`` steps: replayed, captured (the second) or eager."""
+        """One rollout of the storage's horizon (this process's steps): replayed, captured (the second) or eager."""
         if self.graph is not None:
             self.graph.replay()
             timer.lap("collect: rollout graph (policy, env step, storage, GAE)")
@@ -113,7 +113,7 @@ class Collector:
         timer = PhaseTimer(self.device)  # never synchronises: a synchronisation would break the capture
         try:
             return capture_rollout(self.capture, lambda: self.step(timer), lambda: self.finish(timer),
-                                   self.cfg.horizon_len, self.device)
+                                   self.storage.horizon, self.device)
         except RuntimeError as e:
             # Nothing ran during the failed capture; the rollouts go on eagerly, a little slower.
             self.capture = "off"
@@ -121,7 +121,7 @@ class Collector:
             return None
 
     def run_eagerly(self, timer: PhaseTimer) -> None:
-        for _ in range(self.cfg.horizon_len):
+        for _ in range(self.storage.horizon):
             self.step(timer)
         self.finish(timer)
 

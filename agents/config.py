@@ -177,6 +177,11 @@ class Config:
         raises if they do not divide evenly."""
         return data_parallel.minibatches(self.multi_gpu, num_envs, self.horizon_len, self.minibatch_size, processes)
 
+    def process_horizon(self, processes: int = 1) -> int:
+        """Steps one process collects per iteration among ``processes`` (``horizon_len`` but under
+        ``multi_gpu='split-horizon'``, where it is the run's total: agents.data_parallel)."""
+        return data_parallel.horizon_per_process(self.multi_gpu, self.horizon_len, processes)
+
     def target_pair(self) -> tuple[str, float] | None:
         """``target`` as (key, value), or None without one; raises on a malformed one."""
         if not self.target:

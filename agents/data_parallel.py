@@ -8,6 +8,12 @@ Every mode trains one policy, its gradients averaged over the processes at each 
                 iteration is the one-GPU algorithm step for step (the same samples, mini-batches and
                 optimiser steps), on envs that step faster because each GPU holds fewer: more iterations
                 per second, the same learning per iteration.
+``split-horizon`` strong scaling in time: each process steps num_envs envs for horizon_len / G steps, and a
+                mini-batch is minibatch_size samples across the processes, as under ``split``. An iteration is the
+                one-GPU run's batch (as many samples, mini-batches and optimiser steps, from G times the envs over
+                a G times shorter horizon), collected in about 1/G of the time where an env step costs its
+                launches rather than its envs: MuJoCo Warp's at a few thousand worlds (Gymnasium's suite), where
+                ``split``'s fewer envs per GPU step barely faster.
 ``grow-batch``  weak scaling, the mini-batch grows: each process steps num_envs envs and mini-batches of
                 minibatch_size, so an optimiser step averages G times the samples of a one-GPU step; an
                 iteration takes about as long as on one GPU.
@@ -30,7 +36,7 @@ With one process every mode is the same run.
 
 from __future__ import annotations
 
-MODES = ("split", "grow-batch", "grow-steps", "grow-kl")
+MODES = ("split", "split-horizon", "grow-batch", "grow-steps", "grow-kl")
 DEFAULT = "grow-kl"
 
 
@@ -52,6 +58,20 @@ def envs_per_process(mode: str, num_envs: int, processes: int) -> int:
     return num_envs // processes
 
 
+def horizon_per_process(mode: str, horizon_len: int, processes: int) -> int:
+    """The steps one process collects per iteration when the run asks for ``horizon_len`` (the total under
+    ``split-horizon``)."""
+    check_mode(mode)
+    if mode != "split-horizon" or processes == 1:
+        return horizon_len
+    if horizon_len % processes:
+        multiple = max(processes, horizon_len // processes * processes)
+        raise ValueError(f"horizon_len={horizon_len} does not split over {processes} processes (multi_gpu="
+                         f"'split-horizon': horizon_len is the run's total): pick a multiple of {processes}, e.g. "
+                         f"horizon_len={multiple}")
+    return horizon_len // processes
+
+
 def kl_target(mode: str, desired_kl: float, processes: int) -> float:
     """The KL target the learning-rate rule steers each mini-batch to among ``processes``; 0 (the rule off) stays 0."""
     check_mode(mode)
@@ -60,16 +80,18 @@ def kl_target(mode: str, desired_kl: float, processes: int) -> float:
 
 def minibatches(mode: str, local_envs: int, horizon_len: int, minibatch_size: int, processes: int = 1) -> int:
     """Mini-batch steps per pass over a rollout, the same on every process; raises where the samples do not
-    divide. ``local_envs`` is this process's envs; ``minibatch_size`` is a mini-batch's samples across all
-    processes under ``split`` and ``grow-steps``, and on each process under ``grow-batch``."""
+    divide. ``local_envs`` is this process's envs and ``horizon_len`` the run's (``horizon_per_process``);
+    ``minibatch_size`` is a mini-batch's samples across all processes, except under ``grow-batch``, where it is
+    each process's."""
     check_mode(mode)
     shared = mode != "grow-batch" and processes > 1
     if shared and minibatch_size % processes:
         raise ValueError(f"minibatch_size={minibatch_size} does not split over {processes} processes "
                          f"(multi_gpu={mode!r}: a mini-batch is {minibatch_size} samples across them): "
                          f"pick a multiple of {processes}")
-    samples = local_envs * horizon_len * (processes if shared else 1)  # the rollout a mini-batch is drawn from
-    rollout = (f"{processes} processes x " if shared else "") + f"{local_envs} envs x horizon_len {horizon_len}"
+    steps = horizon_per_process(mode, horizon_len, processes)
+    samples = local_envs * steps * (processes if shared else 1)  # the rollout a mini-batch is drawn from
+    rollout = (f"{processes} processes x " if shared else "") + f"{local_envs} envs x {steps} steps"
     if minibatch_size > samples:
         raise ValueError(f"minibatch_size={minibatch_size} exceeds the {samples} samples of one rollout ({rollout}): "
                          "lower minibatch_size or raise num_envs")

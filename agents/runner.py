@@ -43,6 +43,7 @@ class OnPolicyRunner:
         self.workers = Workers()
         # this process's part of every mini-batch, as Config.multi_gpu divides the work (agents.data_parallel)
         self.num_minibatches = cfg.check_batch(spec.num_envs, self.workers.size)
+        self.horizon = cfg.process_horizon(self.workers.size)  # this process's steps per iteration
         self.target = cfg.target_pair()
         self.target_reached: dict | None = None  # the first row that reached Config.target
         torch.manual_seed(cfg.seed)
@@ -56,8 +57,8 @@ class OnPolicyRunner:
         self.workers.broadcast_(list(self.policy.parameters()) + list(self.normalizer.buffers()))
         torch.manual_seed(self.rank_seed(0))
         self.ppo = PPO(self.policy, cfg, self.device, cuda_graph=cuda_graph, workers=self.workers)
-        self.storage = RolloutStorage(cfg.horizon_len, spec.num_envs, spec.num_obs, spec.num_actions, self.device)
-        self.episodes = EpisodeTracker(cfg.horizon_len, spec.num_envs, self.device)
+        self.storage = RolloutStorage(self.horizon, spec.num_envs, spec.num_obs, spec.num_actions, self.device)
+        self.episodes = EpisodeTracker(self.horizon, spec.num_envs, self.device)
         self.pipeline = RolloutPipeline(self.policy, self.storage, self.device) if cfg.overlap else None
         main = self.workers.is_main
         self.run_dir = run_dir if main else None
@@ -114,7 +115,7 @@ class OnPolicyRunner:
 
     @torch.no_grad()
     def collect(self) -> None:
-        """One rollout of ``horizon_len`` steps (agents.collect), then the observation normaliser learns from it."""
+        """One rollout of this process's ``horizon`` steps (agents.collect), then the observation normaliser learns from it."""
         if self.collector.last_raw_obs is None:
             self.normalizer.update(self.collector.start(), self.workers)
         self.timer.start()
@@ -174,7 +175,7 @@ class OnPolicyRunner:
         process stops after the same iteration without a host synchronisation of its own."""
         if max_iterations is None and total_steps is None and time_limit is None:
             raise ValueError("give at least one of max_iterations, total_steps, time_limit, or training never stops")
-        self._per_iter = per_iter = self.spec.num_envs * self.cfg.horizon_len * self.workers.size  # all processes
+        self._per_iter = per_iter = self.spec.num_envs * self.horizon * self.workers.size  # all processes
         goal = [max_iterations, None if total_steps is None else math.ceil(total_steps / per_iter)]
         last_iter = min([g for g in goal if g is not None], default=None)
         self.last_eval_time = self.elapsed()

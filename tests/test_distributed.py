@@ -86,15 +86,19 @@ def test_a_suite_task_trained_by_torchrun_is_scored_in_gymnasiums_env(tmp_path):
     """torchrun -m warpgym train on one of Gymnasium's tasks, its checkpoint played by warpgym eval in
     gymnasium.make's env from the same starts as in warpgym's: the returns agree."""
     run = tmp_path / "hopper"
-    torchrun("-m", "warpgym", "train", "--task", "Hopper-v5", "--device", "cpu", "--num-envs", "8",
-             "--max-iterations", "3", "--horizon-len", "8", "--no-plots", "--run-dir", str(run))
+    # --multi-gpu split-horizon: each process steps its 8 envs for 4 of the 8 steps, the one-process batch
+    done = torchrun("-m", "warpgym", "train", "--task", "Hopper-v5", "--device", "cpu", "--num-envs", "8",
+                    "--max-iterations", "3", "--horizon-len", "8", "--multi-gpu", "split-horizon", "--no-plots",
+                    "--run-dir", str(run))
+    assert "(--multi-gpu split-horizon: 16 in all, 4 of horizon_len 8 steps each)" in done.stdout
+    assert json.loads((run / "summary.json").read_text())["horizon_per_process"] == 4
     done = subprocess.run([sys.executable, "-m", "warpgym", "eval", str(run), "--episodes", "2", "--seeds", "0",
                            "--json", str(tmp_path / "eval.json")], cwd=ROOT, capture_output=True, text=True,
                           timeout=300, env=ENV)
     assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
     scored = json.loads((tmp_path / "eval.json").read_text())
-    # 3 iterations of 2 processes x 8 envs x 8 steps
-    assert scored["task"] == "Hopper-v5" and scored["samples"] == 3 * 2 * 8 * 8 and scored["episodes"] == 2
+    # 3 iterations of 2 processes x 8 envs x 4 steps
+    assert scored["task"] == "Hopper-v5" and scored["samples"] == 3 * 2 * 8 * 4 and scored["episodes"] == 2
     assert scored["same_starts"] and abs(scored["gymnasium_over_warpgym"] - 1.0) < 1e-3
 
 

@@ -10,7 +10,7 @@ import sys
 import pytest
 
 from agents import Config, OnPolicyRunner
-from agents.data_parallel import envs_per_process, kl_target, minibatches
+from agents.data_parallel import MODES, envs_per_process, horizon_per_process, kl_target, minibatches
 from agents.logger import time_to_target
 from point_mass import PointMassVecEnv
 
@@ -23,6 +23,7 @@ from benchmarks.multi_gpu import scaling
 @pytest.mark.parametrize(("mode", "envs", "steps", "samples_per_step"), [
     # 8192 Ants, horizon 16, mini-batch 32768 (the Ant's preset), on 4 GPUs
     ("split", 2048, 4, 32768),        # the one-GPU run: 4 steps of 32768 samples, each GPU a quarter of them
+    ("split-horizon", 8192, 4, 32768),  # the one-GPU run again, each GPU all 8192 envs for 4 of the 16 steps
     ("grow-batch", 8192, 4, 131072),  # 4x the envs, each step 4x the samples
     ("grow-steps", 8192, 16, 32768),  # 4x the envs, 4x the steps of the one-GPU size
     ("grow-kl", 8192, 16, 32768),     # grow-steps' division; only the KL target differs
@@ -31,7 +32,10 @@ def test_each_mode_divides_the_envs_and_the_mini_batches_as_documented(mode, env
     local = envs_per_process(mode, 8192, 4)
     assert local == envs
     assert minibatches(mode, local, 16, 32768, 4) == steps
-    assert steps * samples_per_step == 4 * local * 16  # every sample of the iteration, once per pass
+    horizon = horizon_per_process(mode, 16, 4)
+    assert horizon == (4 if mode == "split-horizon" else 16)
+    assert steps * samples_per_step == 4 * local * horizon  # every sample of the iteration, once per pass
+    assert horizon_per_process(mode, 16, 1) == 16
     # one process: every mode is the one-GPU run
     assert envs_per_process(mode, 8192, 1) == 8192 and minibatches(mode, 8192, 16, 32768, 1) == 4
 
@@ -39,8 +43,8 @@ def test_each_mode_divides_the_envs_and_the_mini_batches_as_documented(mode, env
 def test_grow_kl_widens_the_kl_target_with_the_processes_and_the_rate_rule_follows_it():
     assert kl_target("grow-kl", 0.008, 2) == pytest.approx(0.016) and kl_target("grow-kl", 0.008, 4) == pytest.approx(0.032)
     assert kl_target("grow-kl", 0.0, 4) == 0.0  # the rule off stays off
-    assert all(kl_target(m, 0.008, 4) == 0.008 for m in ("split", "grow-batch", "grow-steps"))
-    assert all(kl_target(m, 0.008, 1) == 0.008 for m in ("split", "grow-batch", "grow-steps", "grow-kl"))
+    assert all(kl_target(m, 0.008, 4) == 0.008 for m in MODES if m != "grow-kl")
+    assert all(kl_target(m, 0.008, 1) == 0.008 for m in MODES)
     # a PPO among 2 processes steers to the widened target: a mini-batch KL of 0.02 keeps its rate under grow-kl
     # (within 2 x 0.016) and lowers it under grow-steps (past 2 x 0.008)
     import torch
@@ -66,7 +70,10 @@ def test_a_split_that_does_not_divide_names_the_value_and_the_fix():
         minibatches("split", 64, 16, 100, 3)
     with pytest.raises(ValueError, match=r"minibatch_size=4096 exceeds the 2048 samples of one rollout \(2 processes x 64"):
         minibatches("grow-steps", 64, 16, 4096, 2)
-    with pytest.raises(ValueError, match="multi_gpu='pairs': choose one of split, grow-batch, grow-steps, grow-kl"):
+    with pytest.raises(ValueError, match=r"horizon_len=30 does not split over 4 processes .* e.g. horizon_len=28"):
+        minibatches("split-horizon", 64, 30, 64, 4)
+    with pytest.raises(ValueError, match="multi_gpu='pairs': choose one of split, split-horizon, grow-batch, grow-steps, "
+                                         "grow-kl"):
         Config(multi_gpu="pairs").validated()
 
 

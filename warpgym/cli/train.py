@@ -37,6 +37,7 @@ def summarize(history: list[dict], device_name: str, cfg: Config) -> dict:
     out = {"device": device_name, "num_envs": cfg.env_args["num_envs"], "iterations": len(history),
            "workers": workers, "num_envs_total": cfg.env_args["num_envs"] * workers, "multi_gpu": cfg.multi_gpu,
            "kl_target": kl_target(cfg.multi_gpu, cfg.desired_kl, workers),
+           "horizon_per_process": cfg.process_horizon(workers),
            "steady_samples_per_s_median": steady_median(history) or 0.0}
     phases = sorted({k for r in rows for k in r if k.startswith("phase/")} | {"iteration_s"})
     out["steady_phase_s_median"] = {k: steady_median(history, k) for k in phases if any(k in r for r in rows)}
@@ -262,9 +263,11 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
     say = print if rank == 0 else (lambda *a, **k: None)
     local_envs = cfg.env_args["num_envs"]
     widened = kl_target(cfg.multi_gpu, cfg.desired_kl, processes)
+    steps = cfg.process_horizon(processes)
     shares = (f" x {processes} processes, {local_envs} envs each (--multi-gpu {cfg.multi_gpu}: "
-              f"{local_envs * processes} in all" + (f", KL target {widened:g}" if widened != cfg.desired_kl else "")
-              + ")") if processes > 1 else ""
+              f"{local_envs * processes} in all" + (f", {steps} of horizon_len {cfg.horizon_len} steps each"
+                                                    if steps != cfg.horizon_len else "")
+              + (f", KL target {widened:g}" if widened != cfg.desired_kl else "") + ")") if processes > 1 else ""
     say(f"warpgym PPO | {plan.task} | {plan.num_envs} envs on {plan.device} ({device_name}){shares} | run dir "
         f"{run_dir}", flush=True)
     startup = Startup(say)
