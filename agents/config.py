@@ -24,8 +24,9 @@ PRESETS: dict[str, dict[str, Any]] = {
                      learning_rate=5e-4, reward_scale=0.01, value_coef=2.0),
 }
 # Gymnasium's MuJoCo suite (v5): why each setting, and what it scored: docs/benchmarks.md, "Presets"
+# On several GPUs each steps the preset's envs for 32 / G of the steps (split-horizon: agents/data_parallel.py)
 _SUITE = dict(net_dims=(256, 128, 64), horizon_len=32, minibatch_size=32768, repeat_times=5, learning_rate=3e-4,
-              reward_scale=0.1, eval_gap=60.0)
+              reward_scale=0.1, eval_gap=60.0, multi_gpu="split-horizon")
 PRESETS.update({
     # no observation normaliser: the cart's position is an input whose running mean follows the cart ("Presets")
     "InvertedPendulum-v5": dict(_SUITE, net_dims=(64, 64), horizon_len=32, minibatch_size=4096, anneal_lr=True,

@@ -10,10 +10,12 @@ Every mode trains one policy, its gradients averaged over the processes at each 
                 per second, the same learning per iteration.
 ``split-horizon`` strong scaling in time: each process steps num_envs envs for horizon_len / G steps, and a
                 mini-batch is minibatch_size samples across the processes, as under ``split``. An iteration is the
-                one-GPU run's batch (as many samples, mini-batches and optimiser steps, from G times the envs over
-                a G times shorter horizon), collected in about 1/G of the time where an env step costs its
-                launches rather than its envs: MuJoCo Warp's at a few thousand worlds (Gymnasium's suite), where
-                ``split``'s fewer envs per GPU step barely faster.
+                one-GPU run's batch (as many samples, mini-batches and optimiser steps) from G times the envs over
+                a G times shorter horizon. Each GPU steps as many envs as one GPU alone, for 1/G of the steps, so
+                the rollout takes about 1/G of the time whatever a step costs; ``split``'s fewer envs per GPU gain
+                only where a step's time grows with its envs, which MuJoCo Warp's does not at a few thousand
+                worlds (bound by its launches). What changes is the horizon: GAE bootstraps from the value
+                G times as often.
 ``grow-batch``  weak scaling, the mini-batch grows: each process steps num_envs envs and mini-batches of
                 minibatch_size, so an optimiser step averages G times the samples of a one-GPU step; an
                 iteration takes about as long as on one GPU.
@@ -27,10 +29,12 @@ Every mode trains one policy, its gradients averaged over the processes at each 
                 iterations to 6 m/s, at a lower learning rate). Widened with the data, the iteration moves as
                 far as its samples support.
 
-``grow-kl`` is the default (DEFAULT): on 2 GPUs it brought the Humanoid to 6 m/s in at most 0.53x of one GPU's
-learning time, where grow-steps took 1.08x and split 1.50x; the same wider target on one GPU was no sooner. On 4
-H200s it took the Ant to 9.5 m/s in 0.30x and the Humanoid to 6 m/s in 0.33x (docs/benchmarks.md, "Several GPUs:
-time to target", has what each mode gave on each task and how many GPUs).
+``grow-kl`` is the default (DEFAULT) and the preset of warpgym's Ant and Humanoid: on 2 GPUs it brought the
+Humanoid to 6 m/s in at most 0.53x of one GPU's learning time, where grow-steps took 1.08x and split 1.50x; the same
+wider target on one GPU was no sooner. On 4 H200s it took the Ant to 9.5 m/s in 0.30x and the Humanoid to 6 m/s in
+0.33x. Gymnasium's tasks preset ``split-horizon`` (agents.config): there an iteration under grow-kl learnt only
+1.1-2.1x what one GPU's did, while split-horizon's 4 H200s took Ant-v5 to 5850 in 0.26x and Humanoid-v5 to 10000 in
+under 0.45x. docs/benchmarks.md, "Several GPUs: time to target", has what each mode gave on each task.
 With one process every mode is the same run.
 """
 

@@ -483,14 +483,14 @@ def test_the_published_suite_tables_are_what_their_scripts_print_from_the_commit
 @pytest.mark.parametrize("folder, task, settings", [("multi_gpu", "Ant", 9), ("multi_gpu", "Humanoid", 3),
                                                     ("multi_gpu/kl_target", "Humanoid", 4),
                                                     ("multi_gpu/grow_kl", "Ant", 3), ("multi_gpu/grow_kl", "Humanoid", 3),
-                                                    ("multi_gpu/suite", "Humanoid-v5", 2), ("multi_gpu/suite", "Ant-v5", 2)])
+                                                    ("multi_gpu/suite", "Humanoid-v5", 4), ("multi_gpu/suite", "Ant-v5", 4)])
 def test_the_published_multi_gpu_table_is_what_scaling_prints_from_the_committed_runs(tmp_path, capsys, folder, task,
                                                                                     settings):
     """docs/benchmarks.md's time-to-target tables for several GPUs, row for row, as ``benchmarks/multi_gpu/scaling.py
     --report`` prints them from the runs' metrics committed in docs/bench/multi_gpu (read again, not from the JSON's
     numbers): a number changed on the page or in the reading of the runs fails here. The first folder holds both
     tasks; kl_target the Humanoid's KL-target runs of another lease; grow_kl both tasks under the default on 1, 2 and 4
-    GPUs, a third lease; suite Gymnasium's Humanoid-v5 and Ant-v5 on 1 and 4 GPUs, a fourth."""
+    GPUs, a third lease; suite Gymnasium's Humanoid-v5 and Ant-v5 on 1, 2 and 4 GPUs, a fourth and a fifth."""
     root = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
     from benchmarks.multi_gpu import scaling
 
@@ -626,3 +626,21 @@ def test_suite_learning_report_of_runs_not_scored_yet_says_so(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "| Hopper-v5 | 1 | 1 min: -; 2 min: -; 5 min: -; 10 min: - |" in out and "| not scored |" in out
     assert "| Hopper-v5 | not scored yet (`--score OUT`) | 3542.2 (Tianshou SAC, v3) | not reached (0/1) |" in out
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_the_published_scores_of_the_4_gpu_humanoid_v5_checkpoints_are_their_eval_json(seed):
+    """docs/benchmarks.md's `warpgym eval` line for each torchrun checkpoint (split-horizon, 4 H200s) holds the numbers
+    of the JSON that `warpgym eval --json` wrote: a changed number on either side fails here."""
+    root = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
+    path = os.path.join(root, "docs", "bench", "multi_gpu", "suite", f"eval_humanoid-v5_gpu4-split-horizon-seed{seed}.json")
+    with open(path) as f:
+        scored = json.load(f)
+    with open(os.path.join(root, "docs", "benchmarks.md")) as f:
+        page = " ".join(f.read().split())  # the page's lines wrap
+    assert scored["task"] == "Humanoid-v5" and scored["episodes"] == 30 and scored["same_starts"]
+    said = (f"Seed {seed}'s" if seed == 1 else f"seed {seed}'s") + f" (iteration {scored['iteration']})"
+    assert said in page
+    assert f"{scored['gymnasium_return']:.1f} ± {scored['gymnasium_return_std']:.1f}" in page
+    assert f"{scored['gymnasium_over_warpgym']:.3f}" in page and f"{scored['warpgym_return']:.1f}" in page
+    assert min(scored["gymnasium_lengths"]) == 1000  # "every Gymnasium episode lasted its 1000 steps"

@@ -86,10 +86,9 @@ def test_a_suite_task_trained_by_torchrun_is_scored_in_gymnasiums_env(tmp_path):
     """torchrun -m warpgym train on one of Gymnasium's tasks, its checkpoint played by warpgym eval in
     gymnasium.make's env from the same starts as in warpgym's: the returns agree."""
     run = tmp_path / "hopper"
-    # --multi-gpu split-horizon: each process steps its 8 envs for 4 of the 8 steps, the one-process batch
+    # split-horizon, the suite's preset: each process steps its 8 envs for 4 of the 8 steps, the one-process batch
     done = torchrun("-m", "warpgym", "train", "--task", "Hopper-v5", "--device", "cpu", "--num-envs", "8",
-                    "--max-iterations", "3", "--horizon-len", "8", "--multi-gpu", "split-horizon", "--no-plots",
-                    "--run-dir", str(run))
+                    "--max-iterations", "3", "--horizon-len", "8", "--no-plots", "--run-dir", str(run))
     assert "(--multi-gpu split-horizon: 16 in all, 4 of horizon_len 8 steps each)" in done.stdout
     assert json.loads((run / "summary.json").read_text())["horizon_per_process"] == 4
     done = subprocess.run([sys.executable, "-m", "warpgym", "eval", str(run), "--episodes", "2", "--seeds", "0",

@@ -63,6 +63,20 @@ def test_grow_kl_widens_the_kl_target_with_the_processes_and_the_rate_rule_follo
     assert rates == {"grow-steps": (0.008, pytest.approx(1e-3 / 1.5)), "grow-kl": (0.016, pytest.approx(1e-3))}
 
 
+def test_gymnasiums_tasks_preset_split_horizon_and_warpgyms_robots_grow_kl_as_the_benchmark_defaults_to():
+    from agents.config import PRESETS
+    from agents.data_parallel import DEFAULT
+
+    suite = [t for t in PRESETS if t.endswith("-v5")]
+    assert len(suite) == 11 and {Config.for_task(t).multi_gpu for t in suite} == {"split-horizon"}
+    assert Config.for_task("Ant").multi_gpu == Config.for_task("Humanoid").multi_gpu == DEFAULT == "grow-kl"
+    assert [scaling.preset_mode(t) for t in ("Ant", "Humanoid-v5")] == ["grow-kl", "split-horizon"]
+    # each preset's horizon splits over 2, 4 and 8 GPUs, its mini-batches too
+    for t in suite:
+        cfg = Config.for_task(t)
+        assert all(cfg.check_batch(4096, g) == cfg.check_batch(4096, 1) for g in (2, 4, 8)), t
+
+
 def test_a_split_that_does_not_divide_names_the_value_and_the_fix():
     with pytest.raises(ValueError, match=r"num_envs=8193 does not split over 4 processes .* e.g. 8192"):
         envs_per_process("split", 8193, 4)
@@ -214,12 +228,12 @@ def test_runs_of_several_lengths_give_the_interval_the_median_lies_in(tmp_path):
     assert scaling.verdict(four["ratio"], 0.3) == "; <= 0.3: open"
 
 
-def scaling_output(folder, runs, seconds=60, packed=True, host_gpus=4):
+def scaling_output(folder, runs, seconds=60, packed=True, host_gpus=4, date="2026-11-26"):
     """An output of scaling.py as it leaves it: the JSON with ``runs``'s rows, their folders packed or (a benchmark
     stopped before it packed) loose."""
     folder.mkdir()
     doc = {"task": "Ant", "targets": {"key": "eval/speed", "values": [9.0]}, "seconds": seconds, "eval_gap": 1,
-           "num_envs": None, "train_flags": "", "host_gpus": host_gpus, "date": "2026-11-26", "runs": []}
+           "num_envs": None, "train_flags": "", "host_gpus": host_gpus, "date": date, "runs": []}
     for name, (speeds, in_json) in runs.items():
         row = scaling.run_row(fake_run(folder / "runs_Ant", name, speeds), "eval/speed", (9.0,))
         if in_json:
@@ -239,7 +253,7 @@ def test_a_report_reads_the_runs_a_stopped_benchmark_left_unpacked_and_keeps_one
     a = scaling_output(tmp_path / "A", {"gpu1-seed0": ([1] * 10 + [9], True), "gpu1-seed1": ([1] * 7, False),
                                         "gpu1-seed2": ([1] * 12 + [9], False)}, packed=False, host_gpus=2)
     b = scaling_output(tmp_path / "B", {"gpu4-split-seed0": ([1] * 3 + [9], True)})
-    c = scaling_output(tmp_path / "C", {"gpu4-split-seed0": ([1] * 8 + [9], True)})
+    c = scaling_output(tmp_path / "C", {"gpu4-split-seed0": ([1] * 8 + [9], True)}, date="2026-11-27")
     assert scaling.main(["--report", str(a), str(b), str(c)]) == 0
     out = capsys.readouterr().out
     assert "gpu1-seed1: not in" in out and "gpu1-seed2: not in" in out
@@ -251,12 +265,15 @@ def test_a_report_reads_the_runs_a_stopped_benchmark_left_unpacked_and_keeps_one
     assert (one["median_learning_s"], one["median_upper_s"]) == (10.0, 12.0) and four["learning_s"] == [3.0]
     table = (a / "scaling_Ant.md").read_text()
     assert "(4 GPUs of one host)" in table.splitlines()[0]  # A saw 2 of the host's GPUs, B and C all 4
+    assert table.splitlines()[0].endswith(", 2026-11-26 to 2026-11-27")  # C was made a day later
     assert "10.0 s, > 6 s, 12.0 s | 10.0-12.0 s, 2 of 3" in table
     assert "gpu1-seed1: still running when the benchmark was stopped (a call's time limit), short of the target after " \
            "6 s of learning" in table
     assert "gpu1-seed2: still" not in table  # it had reached its last target: nothing was cut
     assert (a / "runs_Ant.tar.gz").exists() and not (a / "runs_Ant").exists()  # packed now, and drawn again alone
-    assert scaling.main(["--report", str(a)]) == 0 and "> 6 s" in capsys.readouterr().out
+    assert scaling.main(["--report", str(a)]) == 0
+    again = capsys.readouterr().out
+    assert "> 6 s" in again and "2026-11-26 to 2026-11-27" in again.splitlines()[0]
 
 
 def test_a_benchmark_stopped_by_sigterm_keeps_the_rows_of_the_runs_it_stopped(tmp_path, monkeypatch):

@@ -68,6 +68,14 @@ def parse_targets(text: str) -> tuple[str, tuple[float, ...]]:
     return key, numbers
 
 
+def preset_mode(task: str) -> str:
+    """The --multi-gpu mode `warpgym train` gives the task when none is named: its preset's (agents.config)."""
+    from agents.config import PRESETS  # noqa: PLC0415
+    from agents.data_parallel import DEFAULT  # noqa: PLC0415
+
+    return PRESETS[task].get("multi_gpu", DEFAULT)
+
+
 def run_name(gpus: int, mode: str, seed: int, label: str = "", repeat: int = 1) -> str:
     """gpu1-seed0, gpu4-split-seed0; with a label (runs made with other flags) gpu1-+16k-seed0, gpu4-split+16k-seed0;
     a seed's second run (--repeat 2: a seed's runs on a GPU are not repeatable bit for bit) gpu1-seed0-r2."""
@@ -268,6 +276,12 @@ def iterations_line(doc: dict, lines: list[dict], value: float, grouped: dict) -
                         + ", ".join(cell(r) for r in grouped[(ln["gpus"], ln["mode"])]) for ln in lines) + ".")
 
 
+def days(doc: dict) -> str:
+    """The day the runs were made, or the first and last of the days of joined outputs."""
+    dates = doc.get("dates", [doc["date"]])
+    return dates[0] if len(dates) == 1 else f"{dates[0]} to {dates[-1]}"
+
+
 def markdown(doc: dict, lines: list[dict]) -> str:
     key, values = doc["targets"]["key"], doc["targets"]["values"]
     devices = sorted({r.get("device") for r in doc["runs"] if r.get("device")})
@@ -275,7 +289,7 @@ def markdown(doc: dict, lines: list[dict]) -> str:
     limits = (min(lengths), max(lengths)) if lengths else ()
     out = [f"{doc['task']}: time to {key} " + " and ".join(f"{v:g}" for v in values)
            + f"; runs of at most {interval(*limits, ' s', 0) if limits else ''}, evaluated every {doc['eval_gap']:g} s; "
-           f"{', '.join(devices)} ({doc['host_gpus']} GPUs of one host), {doc['date']}", "",
+           f"{', '.join(devices)} ({doc['host_gpus']} GPUs of one host), {days(doc)}", "",
            "| GPUs | mode | envs per GPU | samples/s | x 1 GPU | iteration ms | first iteration | "
            + " | ".join(f"{key} {v:g}: learning time, each seed | median (ratio; goal)" for v in values) + " |",
            "|---:|---|---:|---:|---:|---:|---:|" + "---|---|" * len(values)]
@@ -397,6 +411,7 @@ def report(folders: list[str], task: str = "Ant", targets: str | None = None) ->
                 names.add(r["name"])
     # outputs made under CUDA_VISIBLE_DEVICES see part of the host (1-GPU baselines on GPUs 0,1 beside a job on 2,3)
     first["host_gpus"] = max(doc.get("host_gpus", 0) for _, doc in docs)
+    first["dates"] = sorted({d for _, doc in docs for d in doc.get("dates", [doc["date"]])})
     if targets:
         key, values = parse_targets(targets)
         first["targets"] = {"key": key, "values": list(values)}
@@ -466,8 +481,9 @@ def main(argv=None) -> int:
     ap.add_argument("--gpus", type=int, nargs="+", default=[1, 2, 4],
                     help="GPU counts (default: 1 2 4); without 1 there is no baseline here, and the ratios come when "
                          "--report joins this output with one that has it")
-    ap.add_argument("--modes", nargs="+", default=[DEFAULT], choices=MODES,
-                    help=f"--multi-gpu modes to compare (default: train's, {DEFAULT})")
+    ap.add_argument("--modes", nargs="+", default=None, choices=MODES,
+                    help=f"--multi-gpu modes to compare (default: the task's preset, as train picks it: {DEFAULT}, "
+                         "split-horizon for Gymnasium's tasks)")
     ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1], help="seeds of each multi-GPU setting")
     ap.add_argument("--baseline-seeds", type=int, nargs="+", default=None, help="seeds of the 1-GPU runs (default: --seeds)")
     ap.add_argument("--targets", default=None, metavar="KEY=V1,V2",
@@ -512,6 +528,7 @@ def main(argv=None) -> int:
     except ValueError as e:
         ap.error(str(e))
     args.baseline_seeds = args.baseline_seeds or args.seeds
+    args.modes = args.modes or [preset_mode(args.task)]
     if args.repeat < 1:
         ap.error(f"--repeat {args.repeat}: the run's number among runs of the same seeds, 1 or more")
     if any(c in args.label for c in "-/ ") or "seed" in args.label:

@@ -54,7 +54,8 @@ def parser(description: str | None = None) -> CommandParser:
                     help="stop once a logged value reaches VALUE, e.g. --target eval/speed=9.5 (an evaluation's "
                          "forward speed) or --target eval/return=5850; summary.json records the row that did")
     ap.add_argument("--multi-gpu", default=None, choices=MULTI_GPU_MODES,
-                    help="under torchrun, how the GPUs divide the work (agents/data_parallel.py): grow-kl (default: "
+                    help="under torchrun, how the GPUs divide the work (agents/data_parallel.py; the default is the "
+                         "task's preset: split-horizon for Gymnasium's tasks, grow-kl for the others): grow-kl ("
                          "each GPU --num-envs envs, a mini-batch of --minibatch-size samples across them, G times the "
                          "mini-batch steps under a KL target G times desired_kl), grow-steps (the same under "
                          "desired_kl), split (--num-envs and --minibatch-size are the run's totals, the one-GPU "
