@@ -115,7 +115,8 @@ class OnPolicyRunner:
 
     @torch.no_grad()
     def collect(self) -> None:
-        """One rollout of this process's ``horizon`` steps (agents.collect), then the observation normaliser learns from it."""
+        """One rollout of this process's ``horizon`` steps (agents.collect), then the observation normaliser
+        learns from it."""
         if self.collector.last_raw_obs is None:
             self.normalizer.update(self.collector.start(), self.workers)
         self.timer.start()

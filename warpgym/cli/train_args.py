@@ -59,9 +59,9 @@ def parser(description: str | None = None) -> CommandParser:
                          "each GPU --num-envs envs, a mini-batch of --minibatch-size samples across them, G times the "
                          "mini-batch steps under a KL target G times desired_kl), grow-steps (the same under "
                          "desired_kl), split (--num-envs and --minibatch-size are the run's totals, the one-GPU "
-                         "algorithm in shorter iterations), split-horizon (each GPU --num-envs envs for --horizon-len / G steps: "
-                         "the one-GPU batch, collected G times sooner where a step costs its launches) or grow-batch (each GPU --num-envs envs, mini-batches G "
-                         "times larger)")
+                         "algorithm in shorter iterations), split-horizon (each GPU --num-envs envs for "
+                         "--horizon-len / G steps: the one-GPU batch, collected in about 1/G of the time) or "
+                         "grow-batch (each GPU --num-envs envs, mini-batches G times larger)")
     ap.add_argument("--keep-checkpoints", action="store_true",
                     help="keep checkpoint-<iteration>.pt at every save, not only the latest checkpoint.pt")
     ap.add_argument("--video", action="store_true",
