@@ -70,10 +70,9 @@ def parse_targets(text: str) -> tuple[str, tuple[float, ...]]:
 
 def preset_mode(task: str) -> str:
     """The --multi-gpu mode `warpgym train` gives the task when none is named: its preset's (agents.config)."""
-    from agents.config import PRESETS  # noqa: PLC0415
-    from agents.data_parallel import DEFAULT  # noqa: PLC0415
+    from agents.config import Config  # noqa: PLC0415
 
-    return PRESETS[task].get("multi_gpu", DEFAULT)
+    return Config.for_task(task).multi_gpu
 
 
 def run_name(gpus: int, mode: str, seed: int, label: str = "", repeat: int = 1) -> str:

@@ -33,7 +33,9 @@ def parser(description: str | None = None) -> CommandParser:
                     help="envs per evaluation (the ElegantRL tutorial's eval env: 1)")
     ap.add_argument("--no-eval", action="store_true")
     ap.add_argument("--save-gap", type=positive_int(50), default=None, help="iterations between checkpoints")
-    ap.add_argument("--horizon-len", type=positive_int(16), default=None)
+    ap.add_argument("--horizon-len", type=positive_int(16), default=None,
+                    help="env steps per env per iteration (Config.horizon_len; default: the task's preset); under "
+                         "--multi-gpu split-horizon the run's total, each of G GPUs stepping --horizon-len / G")
     ap.add_argument("--minibatch-size", "--batch-size", dest="minibatch_size", type=positive_int(32768), default=None,
                     help="samples per mini-batch step (Config.minibatch_size; --batch-size: its earlier name)")
     ap.add_argument("--repeat-times", type=positive_int(4), default=None)
