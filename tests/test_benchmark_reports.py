@@ -38,6 +38,47 @@ def test_rows_of_two_runs_made_alike_are_reported_together(tmp_path):
     assert "| Ant | RLlib PPO, 1 GPU, 8 env runners | 0.023 M |" in text
 
 
+def test_a_comparison_on_named_gpus_runs_and_samples_those_gpus(tmp_path, monkeypatch):
+    """Under CUDA_VISIBLE_DEVICES=2,3 a 2-GPU comparison gives its child GPUs 2 and 3 (in nvidia-smi's order)
+    and reads the use of those two only, so that two comparisons can share a 4-GPU host; the row records which."""
+    import time
+
+    import torch
+
+    children, smi = [], []
+
+    class Done:
+        returncode, stdout = 0, "40\n60\n"
+
+    def fake_run(cmd, **kw):
+        if cmd[0] == "nvidia-smi":
+            smi.append(cmd[cmd.index("-i") + 1])
+        else:
+            children.append((kw["env"]["CUDA_VISIBLE_DEVICES"], kw["env"]["CUDA_DEVICE_ORDER"]))
+        return Done()
+
+    monkeypatch.setattr(cmp.subprocess, "run", fake_run)
+    with cmp.Usage(["2", "3"], every=0.01) as usage:
+        time.sleep(0.2)
+    assert smi and set(smi) == {"2,3"} and usage.summary()["gpu_util_pct"] == 50.0
+
+    monkeypatch.setenv("CUDA_VISIBLE_DEVICES", "2,3")
+    monkeypatch.setattr(torch.cuda, "is_available", lambda: True)
+    monkeypatch.setattr(torch.cuda, "get_device_name", lambda i=0: "NVIDIA H200")
+    monkeypatch.setattr(cmp, "figures", lambda doc, out: [])
+    monkeypatch.setattr(cmp, "row_of", lambda task, learner, gpus, run_dir, wall, rc, use: {
+        "task": task, "learner": learner, "gpus": gpus, "run_dir": run_dir, "rc": rc})
+    out = str(tmp_path / "cmp")
+    args = ["--out", out, "--tasks", "Ant", "--gpus", "2", "--learners", "rllib", "--seconds", "1"]
+    assert cmp.main(args) == 0
+    assert children == [("2,3", "PCI_BUS_ID")]
+    with open(os.path.join(out, "comparison.json")) as f:
+        assert json.load(f)["rows"][0]["gpu_ids"] == ["2", "3"]
+    monkeypatch.setenv("CUDA_VISIBLE_DEVICES", "2")
+    with pytest.raises(SystemExit, match="CUDA_VISIBLE_DEVICES=2 gives this process 1"):
+        cmp.main(args)
+
+
 def test_runs_made_differently_are_refused_by_name(tmp_path):
     first = write(tmp_path / "a", "2026-11-24", [row("warpgym", "/x/Ant-warpgym-1gpu", 1.1e6)])
     other = write(tmp_path / "b", "2026-11-24", [row("rllib", "/x/Ant-rllib-1gpu", 2e4)], num_envs=1024, seconds=60.0)
@@ -540,6 +581,22 @@ def test_the_published_nodes_exits_and_planner_tables_are_what_their_scripts_pri
         verdict = {"nodes-1.json": "1.003 (median of 3: 1.002, 1.003, 1.006)",
                    "nodes-4.json": "0.999 (median of 2: 0.998, 1.000)"}[os.path.basename(args[0])]
         assert f"2 nodes / 1 node: {verdict}; target within 5%: met" in out
+
+
+def test_exits_report_joins_runs_numbering_rows_in_turn_and_counting_all(capsys):
+    """Two exits.json (two GPU pairs of one host, or two days) in one table: rows numbered on, every machine and
+    date in the heading, and the counts over both files."""
+    from benchmarks.reliability import exits
+
+    root = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
+    files = [os.path.join(root, "docs", "bench", "gpu_exits.json"),
+             os.path.join(root, "docs", "bench", "reliability", "gpu_exits_h200.json")]
+    assert exits.main(["--report", *files]) == 0
+    out = capsys.readouterr().out
+    assert out.splitlines()[0] == ("2 processes on NVIDIA H100 80GB HBM3, 2026-11-26; 2 processes on NVIDIA H200, "
+                                   "2026-11-26 (2 runs of the script)")
+    assert "| 10 | killed-rank | Ant |" in out and "| 11 |" not in out
+    assert "killed-rank: 2 of 2 stopped every process" in out and "4 of 4 finished runs" in out
 
 
 def test_the_comparison_gives_warpgym_as_many_robots_per_gpu_as_rllibs_runners_in_every_mode():

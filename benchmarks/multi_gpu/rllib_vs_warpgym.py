@@ -40,7 +40,7 @@ import threading
 import time
 
 from agents.data_parallel import MODES  # noqa: E402
-from benchmarks.harness import ROOT, child_env  # noqa: E402
+from benchmarks.harness import ROOT, child_env, visible_gpus  # noqa: E402
 
 from benchmarks.targets import WALKING, walking_row  # noqa: E402
 PRESET = {"Ant": {"horizon_len": 16, "batch_size": 32768, "repeat_times": 4, "learning_rate": 3e-4},
@@ -75,10 +75,11 @@ def command(learner: str, task: str, gpus: int, args, run_dir: str) -> list[str]
 
 
 class Usage:
-    """GPU utilisation and CPU use, sampled every ``every`` seconds in a thread while a run lasts."""
+    """GPU utilisation of the GPUs ``ids`` (nvidia-smi's indices) and the host's CPU use, sampled every ``every``
+    seconds in a thread while a run lasts."""
 
-    def __init__(self, gpus: int, every: float = 2.0):
-        self.gpus, self.every = gpus, every
+    def __init__(self, ids: list[str], every: float = 2.0):
+        self.ids, self.every = ids, every
         self.gpu: list[float] = []
         self.cpu: list[float] = []
         self._stop = threading.Event()
@@ -98,9 +99,9 @@ class Usage:
                 self.cpu.append(100.0 * (1 - (i - idle) / (t - total)))
             total, idle = t, i
             try:
-                out = subprocess.run(["nvidia-smi", "--query-gpu=utilization.gpu", "--format=csv,noheader,nounits"],
-                                     capture_output=True, text=True, timeout=10).stdout.split()
-                self.gpu.append(statistics.mean(float(v) for v in out[: self.gpus]))
+                out = subprocess.run(["nvidia-smi", "-i", ",".join(self.ids), "--query-gpu=utilization.gpu",
+                                      "--format=csv,noheader,nounits"], capture_output=True, text=True, timeout=10).stdout
+                self.gpu.append(statistics.mean(float(v) for v in out.split()))
             except (OSError, ValueError, subprocess.TimeoutExpired, statistics.StatisticsError):
                 pass
 
@@ -213,13 +214,15 @@ def run(args) -> int:
             for learner in args.learners:
                 run_dir = os.path.join(args.out, f"{task}-{learner}-{gpus}gpu")
                 env = child_env(PYTHONPATH=os.pathsep.join([ROOT, os.environ.get("PYTHONPATH", "")]))
+                ids = visible_gpus(gpus)  # the first G of CUDA_VISIBLE_DEVICES: two such runs can share a host
                 if device != "cpu":
-                    env["CUDA_VISIBLE_DEVICES"] = ",".join(str(i) for i in range(gpus))
+                    env.update(CUDA_VISIBLE_DEVICES=",".join(ids), CUDA_DEVICE_ORDER="PCI_BUS_ID")  # nvidia-smi's ids
                 t0 = time.time()
-                with open(run_dir + ".log", "w") as log, Usage(gpus) as usage:
+                with open(run_dir + ".log", "w") as log, Usage(ids) as usage:
                     rc = subprocess.run(command(learner, task, gpus, args, run_dir), stdout=log, stderr=subprocess.STDOUT,
                                         env=env, timeout=args.seconds + 900, check=False).returncode
                 doc["rows"].append(row_of(task, learner, gpus, run_dir, time.time() - t0, rc, usage.summary()))
+                doc["rows"][-1]["gpu_ids"] = ids
                 if learner == "rllib" and args.rllib_env_runners:
                     doc["rows"][-1]["env_runners"] = args.rllib_env_runners
                 print(json.dumps(doc["rows"][-1]), flush=True)

@@ -4,6 +4,7 @@
     python -m benchmarks.reliability.exits --out OUT --runs 10 --failures 3   # 10 runs, each failure 3 times
     python -m benchmarks.reliability.exits --out OUT --runs 4 --device cpu --num-envs 4 --seconds 8
     python -m benchmarks.reliability.exits --report OUT/exits.json
+    python -m benchmarks.reliability.exits --report A/exits.json B/exits.json   # two runs' rows in one table
 
 Finished runs: each is ``torchrun --standalone --nproc_per_node=G scripts/train.py --time-limit S``;
 the table gives its exit code and the seconds from its last metrics row (metrics.jsonl's last write)
@@ -155,9 +156,15 @@ def holds(row: dict) -> bool:
         row["names_resume"]
 
 
-def report(path: str) -> str:
-    data = read_report(path, "the exits.json a run of this script wrote")
-    lines = [f"{data['gpus']} processes on {data['device_name']}, {data['date']}", "",
+def report(paths: str | list[str]) -> str:
+    """The table of one exits.json, or of several (runs of this script on the same kind of job, e.g. two GPU pairs
+    of one host side by side), their rows numbered in turn and each file's machine and date in the heading."""
+    paths = [paths] if isinstance(paths, str) else paths
+    parts = [read_report(p, "the exits.json a run of this script wrote") for p in paths]
+    heads = list(dict.fromkeys(f"{d['gpus']} processes on {d['device_name']}, {d['date']}" for d in parts))
+    runs = f" ({len(parts)} runs of the script)" if len(parts) > 1 else ""
+    data = {"rows": [r for d in parts for r in d["rows"]]}
+    lines = ["; ".join(heads) + runs, "",
              "| # | kind | task | exit code | last row to exit | all processes stopped | names --resume | holds |",
              "|---:|---|---|---:|---:|---:|---|---|"]
     for k, r in enumerate(data["rows"], 1):
@@ -191,7 +198,8 @@ def main(argv=None) -> int:
     ap.add_argument("--num-envs", type=int, default=None, help="default: train.py's")
     ap.add_argument("--failures", type=int, default=1, help="times each failure is made (default 1)")
     ap.add_argument("--no-failures", action="store_true", help="skip the failures")
-    ap.add_argument("--report", metavar="EXITS_JSON", help="print the table of an earlier run and stop")
+    ap.add_argument("--report", metavar="EXITS_JSON", nargs="+",
+                    help="print the table of an earlier run (or of several, their rows together) and stop")
     args = ap.parse_args(argv)
     if reported(ap, args, report, "EXITS_JSON"):
         return 0
