@@ -32,6 +32,11 @@ def rllib_config(args, num_envs: int, horizon: int, gpu: bool, env_name: str, en
     # the learners take half of every GPU where runner actors share it, all of it where the runner is local
     learner_share = (0.5 if runners else 1.0) if gpu else 0
     runner_share = 0.5 * args.gpus / runners if gpu and runners else 0
+    if gpu and learners > 1 and runners == learners:
+        # Ray packs halves two to a GPU, and NCCL refuses two learners on one ("Duplicate GPU detected"): the
+        # runners, placed first (Algorithm.setup), take just over half, so one lands on each GPU, and each
+        # learner then fits only into a runner's GPU's remainder, one learner per GPU
+        runner_share, learner_share = 0.51, 0.49
     cpus = 1.0
     if runners or learners:  # the actors' CPU requests must fit the cluster, or Ray waits for CPUs forever
         import ray
