@@ -108,6 +108,20 @@ def test_two_env_runners_and_two_learners_train_one_policy(tmp_path):
     assert args.learner_object.learner_group.is_remote  # the learners are actors, not this process
 
 
+@pytest.mark.parametrize("gpus", [2, 4, 8])
+def test_each_gpu_gets_one_runner_and_one_learner_however_ray_places_them(gpus):
+    """Ray places the runners first, then the learners, each wherever its share fits. The shares leave it one
+    choice: a runner per GPU (two do not fit in one) and a learner beside each (it fits beside one runner, two
+    do not). Halves, as before, let two DDP learners share a GPU, which NCCL refuses; runners set apart from the
+    GPUs share half of them."""
+    from warpgym.cli.rllib_run import gpu_shares
+
+    runner, learner = gpu_shares(gpus, runners=gpus, learners=gpus)
+    assert 2 * runner > 1 and runner + learner <= 1 and runner + 2 * learner > 1
+    assert gpu_shares(1, runners=8, learners=0) == (0.0625, 0.5)  # 8 runners share half of one GPU
+    assert gpu_shares(1, runners=0, learners=0) == (0.0, 1.0)  # one learner in this process, its whole GPU
+
+
 def test_env_runners_apart_from_gpus_sample_for_one_learner_in_this_process(tmp_path):
     """--env-runners 2 on one GPU's worth (the CPU here): two runner actors, each stepping its own robots,
     and the learner in this process learning from both rollouts."""

@@ -3,8 +3,8 @@
 One GPU: one env runner in this process (``num_env_runners=0``) steps the adapter built here, and one
 learner on the same GPU; warpgym's ``EpisodeLog`` reads the episodes as for the other learners.
 
-Several GPUs (``--gpus G``): G env runners and G learners, each a Ray actor with half a GPU, so that
-runner i and learner i share GPU i. ``--env-runners R`` sets the runners apart from the GPUs (on one GPU
+Several GPUs (``--gpus G``): G env runners and G learners, each a Ray actor, runner i and learner i on GPU i
+(``gpu_shares``). ``--env-runners R`` sets the runners apart from the GPUs (on one GPU
 too): R runner actors share half of the G GPUs, as RLlib users spread sampling over CPU cores, since each
 runner's loop over its episodes runs on one core (benchmarks/multi_gpu/rllib_overhead.py). Every runner steps its
 own ``--num-envs`` robots in one warpgym vector env; the learners train one policy with torch DDP,
@@ -21,6 +21,17 @@ import time
 from ray.rllib.callbacks.callbacks import RLlibCallback
 
 
+def gpu_shares(gpus: int, runners: int, learners: int) -> tuple[float, float]:
+    """The share of a GPU each env runner and each learner asks Ray for. One runner per GPU with its learner:
+    just over half for the runners, which Algorithm.setup places first, so no two runners share a GPU, and the
+    rest for the learners, so each fits only beside a runner, one per GPU. Halves let Ray pack two learners on
+    one GPU, which NCCL refuses ("Duplicate GPU detected", seen on a 4-H200 host). Runners set apart from the
+    GPUs share half of them; a learner in this process (``learners`` 0) has its GPU."""
+    if learners > 1 and runners == learners:
+        return 0.51, 0.49
+    return (0.5 * gpus / runners if runners else 0.0), (0.5 if runners else 1.0)
+
+
 def rllib_config(args, num_envs: int, horizon: int, gpu: bool, env_name: str, env_config: dict | None = None):
     """RLlib's PPO (new API stack) with rl_games' published Ant/Humanoid numbers, or the flags' numbers."""
     from ray.rllib.algorithms.ppo import PPOConfig
@@ -29,14 +40,7 @@ def rllib_config(args, num_envs: int, horizon: int, gpu: bool, env_name: str, en
     humanoid = args.task == "Humanoid"
     runners, learners = args.env_runners, (args.gpus if args.gpus > 1 else 0)  # 0: in this process
     batch = max(runners, 1) * num_envs * horizon // max(learners, 1)  # every runner's rollout, split over the learners
-    # the learners take half of every GPU where runner actors share it, all of it where the runner is local
-    learner_share = (0.5 if runners else 1.0) if gpu else 0
-    runner_share = 0.5 * args.gpus / runners if gpu and runners else 0
-    if gpu and learners > 1 and runners == learners:
-        # Ray packs halves two to a GPU, and NCCL refuses two learners on one ("Duplicate GPU detected"): the
-        # runners, placed first (Algorithm.setup), take just over half, so one lands on each GPU, and each
-        # learner then fits only into a runner's GPU's remainder, one learner per GPU
-        runner_share, learner_share = 0.51, 0.49
+    runner_share, learner_share = gpu_shares(args.gpus, runners, learners) if gpu else (0, 0)
     cpus = 1.0
     if runners or learners:  # the actors' CPU requests must fit the cluster, or Ray waits for CPUs forever
         import ray
