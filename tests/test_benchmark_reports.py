@@ -562,11 +562,18 @@ def test_a_folder_of_several_tasks_asks_which(tmp_path):
     ("benchmarks.multi_gpu.nodes", ["docs/bench/multi_gpu/nodes/nodes-4.json"], 5),
     ("benchmarks.reliability.exits", ["docs/bench/gpu_exits.json"], 8),
     ("benchmarks.reliability.exits", ["docs/bench/reliability/gpu_exits_h200.json"], 4),
+    ("benchmarks.reliability.exits", ["docs/bench/reliability/gpu_exits_h200x4_a.json",
+                                      "docs/bench/reliability/gpu_exits_h200x4_b.json"], 29),
+    ("benchmarks.multi_gpu.rllib_vs_warpgym", ["docs/bench/rllib/h200_rllib_vs_warpgym_1gpu.json",
+                                               "docs/bench/rllib/h200_rllib_8runners_1gpu.json",
+                                               "docs/bench/rllib/h200_rllib_vs_warpgym_2gpu_warpgym.json",
+                                               "docs/bench/rllib/h200_rllib_vs_warpgym_2gpu_rllib.json"], 10),
     ("benchmarks.learning.reacher_planner", ["docs/bench/reacher_planner.json"], 4),
     ("benchmarks.learning.reacher_planner", ["docs/bench/reacher_planner_25knots.json"], 3)])
 def test_the_published_nodes_exits_and_planner_tables_are_what_their_scripts_print(capsys, module, args, count):
-    """The two-node, GPU exits and Reacher planner tables in docs/benchmarks.md, row for row, from the
-    committed JSON (the planner's table sits in a list item, indented)."""
+    """The two-node, GPU exits, RLlib comparison and Reacher planner tables in docs/benchmarks.md, row for row, from
+    the committed JSON (the planner's table sits in a list item, indented); the exits' totals over every GPU lease
+    as the page states them."""
     import importlib
 
     root = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
@@ -577,6 +584,12 @@ def test_the_published_nodes_exits_and_planner_tables_are_what_their_scripts_pri
     with open(os.path.join(root, "docs", "benchmarks.md")) as f:
         page = [line.strip() for line in f]
     assert len(rows) == count and [r for r in rows if r not in page] == []
+    if module.endswith("exits") and len(args) == 2:  # the page's totals: these two and the two earlier leases' files
+        assert script.main(["--report", *[os.path.join(root, a) for a in ("docs/bench/gpu_exits.json",
+                                                                          "docs/bench/reliability/gpu_exits_h200.json",
+                                                                          *args)]]) == 0
+        totals = capsys.readouterr().out.strip().splitlines()[-4:]
+        assert len(totals) == 4 and [t for t in totals if t not in page] == []
     if module.endswith("nodes"):  # the verdict the page states (2 nodes of 1 H100; 2 nodes of 2 H200s)
         verdict = {"nodes-1.json": "1.003 (median of 3: 1.002, 1.003, 1.006)",
                    "nodes-4.json": "0.999 (median of 2: 0.998, 1.000)"}[os.path.basename(args[0])]

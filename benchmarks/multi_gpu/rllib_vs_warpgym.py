@@ -4,6 +4,7 @@
     python -m benchmarks.multi_gpu.rllib_vs_warpgym --out OUT --tasks Ant --gpus 1 --seconds 60
     python -m benchmarks.multi_gpu.rllib_vs_warpgym --report OUT --figures docs/figures         # table and figures again
     python -m benchmarks.multi_gpu.rllib_vs_warpgym --report OUT OUT2                           # two runs' rows together
+    python -m benchmarks.multi_gpu.rllib_vs_warpgym --report docs/bench/rllib/h200_rllib_vs_warpgym_1gpu.json  # a kept JSON
 
 For each task and GPU count G, one run of each learner, one after another:
 - warpgym: ``warpgym train`` (G = 1) or ``torchrun --nproc_per_node=G -m warpgym train``: G processes, each
@@ -153,7 +154,8 @@ def figures(doc: dict, out_dir: str) -> list[str]:
 
     written = []
     for task in dict.fromkeys(r["task"] for r in doc["rows"]):
-        runs = [r for r in doc["rows"] if r["task"] == task and r.get("iterations")]
+        runs = [r for r in doc["rows"] if r["task"] == task and r.get("iterations")
+                and os.path.isfile(os.path.join(r["run_dir"], "metrics.jsonl"))]  # a kept JSON may have no runs
         if not runs:
             continue
         paths = plot_runs([r["run_dir"] for r in runs], out_dir, labels=[label(r) for r in runs],
@@ -165,28 +167,33 @@ def figures(doc: dict, out_dir: str) -> list[str]:
     return written
 
 
-ALIKE = ("device", "num_envs", "seconds", "hparams", "settings")  # what makes rows of two runs comparable
+ALIKE = ("device", "num_envs", "seconds", "hparams")  # what makes rows of two runs comparable, with each task's settings
 
 
 def merged_reports(outs: list[str]) -> dict:
-    """The comparison.json of each earlier OUT, rows in order, each row's run directory found beside its
-    JSON wherever OUT was copied to; a ValueError names an OUT that is missing or was run differently."""
+    """The comparison.json of each earlier OUT (or a comparison JSON kept under another name), rows in order, each
+    row's run directory found beside its JSON wherever it was copied to; a ValueError names an OUT that is missing
+    or was run differently (a task both ran with other settings)."""
     doc = None
     for out in outs:
-        path = os.path.join(out, "comparison.json")
+        path = out if os.path.isfile(out) else os.path.join(out, "comparison.json")
         if not os.path.isfile(path):
-            raise ValueError(f"--report {out}: no comparison.json there; pass an --out directory of an earlier run")
+            raise ValueError(f"--report {out}: no comparison.json there; pass an --out directory of an earlier run "
+                             "or its comparison JSON")
         with open(path) as f:
             part = json.load(f)
         for r in part["rows"]:
-            r["run_dir"] = os.path.join(out, os.path.basename(r["run_dir"]))
+            r["run_dir"] = os.path.join(os.path.dirname(path), os.path.basename(r["run_dir"]))
         if doc is None:
             doc = part
             continue
         differ = [k for k in ALIKE if part.get(k) != doc.get(k)]
+        differ += [f"{t}'s settings" for t in part["settings"] if doc["settings"].get(t, part["settings"][t]) !=
+                   part["settings"][t]]
         if differ:
             raise ValueError(f"--report {out}: its runs differ from {outs[0]}'s in {', '.join(differ)}; "
                              "report runs made alike together, the others apart")
+        doc["settings"] = {**doc["settings"], **part["settings"]}
         doc["rows"] += part["rows"]
         doc["script_runs"] = doc.get("script_runs", 1) + 1
         doc["dates"] = sorted(set(doc.get("dates", [doc["date"]])) | {part["date"]})
@@ -250,8 +257,8 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--device", default=None, help="cpu to run on the CPU (a check of the script, not a figure)")
     ap.add_argument("--report", metavar="OUT", nargs="+",
-                    help="print the table of earlier OUTs (one, or several run alike, their rows together) and draw "
-                         "the figures again")
+                    help="print the table of earlier OUTs or their comparison JSONs (one, or several run alike, their "
+                         "rows together) and draw the figures again where the runs' metrics are beside them")
     ap.add_argument("--figures", default=None, help="with --report: where the figures go (default: the first OUT)")
     args = ap.parse_args(argv)
     if args.report:
@@ -260,7 +267,8 @@ def main(argv=None) -> int:
         except ValueError as e:
             ap.error(str(e))
         print(table(doc))
-        figures(doc, args.figures or args.report[0])
+        first = args.report[0]
+        figures(doc, args.figures or (first if os.path.isdir(first) else os.path.dirname(first)))
         return 0
     if not args.out:
         ap.error("--out is required (or --report)")
