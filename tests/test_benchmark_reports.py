@@ -84,6 +84,14 @@ def test_runs_made_differently_are_refused_by_name(tmp_path):
     other = write(tmp_path / "b", "2026-11-24", [row("rllib", "/x/Ant-rllib-1gpu", 2e4)], num_envs=1024, seconds=60.0)
     with pytest.raises(ValueError, match=r"differ from .* in num_envs, seconds"):
         cmp.merged_reports([first, other])
+    # one task's run beside a two-task run joins where the shared task ran alike, and is refused where it did not
+    both = write(tmp_path / "c", "2026-11-27", [row("rllib", "/x/Ant-rllib-2gpu", 1e4)],
+                 settings={"Ant": {}, "Humanoid": {"horizon_len": 32}})
+    assert set(cmp.merged_reports([first, both])["settings"]) == {"Ant", "Humanoid"}
+    longer = write(tmp_path / "d", "2026-11-27", [row("rllib", "/x/Ant-rllib-2gpu", 1e4)],
+                   settings={"Ant": {"horizon_len": 32}})
+    with pytest.raises(ValueError, match="in Ant's settings"):
+        cmp.merged_reports([first, longer])
 
 
 def test_suite_learning_report_merges_runs_made_alike_and_refuses_others(tmp_path, capsys):

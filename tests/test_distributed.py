@@ -279,9 +279,11 @@ def test_exits_finds_the_worker_of_a_rank_by_its_environment():
     """benchmarks/reliability/exits.py kills rank 1, not whichever child /proc lists second."""
     from benchmarks.reliability.exits import rank_pid
 
-    kids = [subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"], env=dict(ENV, RANK=str(r)))
-            for r in (1, 0)]
+    kids = [subprocess.Popen([sys.executable, "-c", "import time; print('up', flush=True); time.sleep(60)"],
+                             env=dict(ENV, RANK=str(r)), stdout=subprocess.PIPE, text=True) for r in (1, 0)]
     try:
+        for k in kids:  # a child read between fork and exec still shows this process's environment
+            assert k.stdout.readline().strip() == "up"
         pids = [k.pid for k in kids]
         assert rank_pid(pids, 1) == kids[0].pid and rank_pid(pids, 0) == kids[1].pid
         assert rank_pid(pids, 2) is None
@@ -289,6 +291,7 @@ def test_exits_finds_the_worker_of_a_rank_by_its_environment():
         for k in kids:
             k.kill()
             k.wait()
+            k.stdout.close()
 
 
 def test_a_failure_that_was_not_made_does_not_hold():

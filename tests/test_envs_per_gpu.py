@@ -1,6 +1,5 @@
 """benchmarks/speed/envs_per_gpu.py: its mini-batch shaping and how it reads time to target over seeds."""
 
-import os
 import sys
 
 import pytest

@@ -140,9 +140,6 @@ def test_env_runners_apart_from_gpus_sample_for_one_learner_in_this_process(tmp_
 
 def test_rllibs_runner_overhead_is_timed_around_an_env_that_does_nothing():
     """benchmarks/multi_gpu/rllib_overhead.py: RLlib's sampling loop, not the env, is what it times."""
-    import os
-    import sys
-
     from benchmarks.multi_gpu import rllib_overhead
 
     env = rllib_overhead.null_vector_env(4, 3, 2, episode=5)

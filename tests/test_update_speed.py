@@ -4,8 +4,6 @@ does, and the benchmark times the learner at the sizes of the real envs."""
 from __future__ import annotations
 
 import json
-import os
-import sys
 
 import pytest
 import torch
