@@ -553,6 +553,9 @@ def test_the_published_multi_gpu_table_is_what_scaling_prints_from_the_committed
         page = set(f.read().splitlines())
     assert len(rows) == 1 + settings  # the header, one GPU and the multi-GPU settings
     assert [r for r in rows if r not in page] == []
+    if folder in ("multi_gpu/grow_kl", "multi_gpu/suite"):  # the KL rule's ranges the page quotes, as printed
+        rule = [line for line in out.splitlines() if line.startswith("The KL rule, each run's median")]
+        assert len(rule) == 1 and rule[0] in {line.strip() for line in page}
 
 
 def test_a_folder_of_several_tasks_asks_which(tmp_path):

@@ -135,8 +135,20 @@ def run_row(run_dir: str, key: str, values: tuple[float, ...]) -> dict:
         "learned_s": learning_clock(rows)[-1] if rows else 0.0,
         "last": {k: evals[-1].get(k) for k in ("time_s", "samples", key)} if evals else None,
         "evaluations": len(evals), "evaluation_s": round(sum(r.get("eval_s", 0.0) for r in rows), 2),
+        "update": update_medians(rows),
     })
     return row
+
+
+def update_medians(rows: list[dict]) -> dict:
+    """What the KL rule did in a run: the median, over its last four fifths of iterations (the rule has settled),
+    of the updates' mean KL and mean learning rate (``policy/kl``, ``policy/lr_mean``; None where not logged)."""
+    late = rows[len(rows) // 5:]
+    out = {}
+    for name, key in (("kl", "policy/kl"), ("lr", "policy/lr_mean")):
+        values = [r[key] for r in late if r.get(key) is not None]
+        out[name] = statistics.median(values) if values else None
+    return out
 
 
 def stopped_rows(doc: dict, runs_dir: str) -> list[str]:
@@ -275,6 +287,27 @@ def iterations_line(doc: dict, lines: list[dict], value: float, grouped: dict) -
                         + ", ".join(cell(r) for r in grouped[(ln["gpus"], ln["mode"])]) for ln in lines) + ".")
 
 
+def spread(values: list[float], digits: int, scientific: bool = False) -> str:
+    """'0.010-0.011'; with ``scientific``, one power of ten for both ends, '1.7-2.1e-4'; one value alone."""
+    low, high = min(values), max(values)
+    power = math.floor(math.log10(high)) if scientific and high > 0 else 0
+    low, high = f"{low / 10 ** power:.{digits}f}", f"{high / 10 ** power:.{digits}f}"
+    return (low if low == high else f"{low}-{high}") + (f"e{power}" if scientific else "")
+
+
+def update_line(lines: list[dict], grouped: dict) -> str:
+    """The KL rule's settled state per setting, over its seeds: the ranges the docs quote beside the iterations."""
+    cells = []
+    for ln in lines:
+        done = [r["update"] for r in grouped[(ln["gpus"], ln["mode"])] if (r.get("update") or {}).get("kl") is not None]
+        if done:
+            rates = [u["lr"] for u in done if u["lr"] is not None]
+            cells.append(f"{ln['gpus']} GPU{'s' if ln['gpus'] > 1 else ''} {ln['mode']}: KL "
+                         f"{spread([u['kl'] for u in done], 4)}, learning rate {spread(rates, 1, True) if rates else '-'}")
+    return ("The KL rule, each run's median over its last four fifths of iterations (the updates' mean KL; the mean "
+            "learning rate), over the seeds: " + "; ".join(cells) + ".") if cells else ""
+
+
 def days(doc: dict) -> str:
     """The day the runs were made, or the first and last of the days of joined outputs."""
     dates = doc.get("dates", [doc["date"]])
@@ -312,6 +345,7 @@ def markdown(doc: dict, lines: list[dict]) -> str:
                         + ", ".join(seconds(ln['targets'][f'{v:g}']['median_time_s']) for v in values)
                         for ln in lines) + "."]
     out.append(iterations_line(doc, lines, values[-1], grouped))
+    out += [u for u in [update_line(lines, grouped)] if u]
     out += [f"{mode}: --num-envs {n or 'default'} {f}".rstrip() + "." for mode, n, f in flags]
     out += [f"{n}." for n in notes]
     return "\n".join(out) + "\n"
