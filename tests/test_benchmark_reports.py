@@ -36,6 +36,8 @@ def test_rows_of_two_runs_made_alike_are_reported_together(tmp_path):
     text = cmp.table(doc)
     assert "| Ant | RLlib PPO, 1 GPU | 0.007 M |" in text
     assert "| Ant | RLlib PPO, 1 GPU, 8 env runners | 0.023 M |" in text
+    doc["rows"][0].update(cpu_use_pct=4.3, cpu_cores=64, gpu_util_pct=100.0)  # rows made since know their host's cores
+    assert cmp.table(doc).splitlines()[4].endswith("| 100 % | 4 % of 64 |")
 
 
 def test_a_comparison_on_named_gpus_runs_and_samples_those_gpus(tmp_path, monkeypatch):

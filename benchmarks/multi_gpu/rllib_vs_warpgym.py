@@ -116,7 +116,7 @@ class Usage:
 
     def summary(self) -> dict:
         med = (lambda v: round(statistics.median(v), 1) if v else None)  # noqa: E731
-        return {"gpu_util_pct": med(self.gpu), "cpu_use_pct": med(self.cpu)}
+        return {"gpu_util_pct": med(self.gpu), "cpu_use_pct": med(self.cpu), "cpu_cores": os.cpu_count()}
 
 
 def row_of(task: str, learner: str, gpus: int, run_dir: str, wall_s: float, rc: int, usage: dict) -> dict:
@@ -128,6 +128,11 @@ def label(r: dict) -> str:
     """"warpgym PPO, 1 GPU", "RLlib PPO, 2 GPUs", "RLlib PPO, 1 GPU, 8 env runners"."""
     runners = f", {r['env_runners']} env runners" if r.get("env_runners") else ""
     return f"{'warpgym' if r['learner'] == 'warpgym' else 'RLlib'} PPO, {r['gpus']} GPU{'s' if r['gpus'] > 1 else ''}{runners}"
+
+
+def of_cores(r: dict) -> str:
+    """' of 64' where the row records its host's cores (older rows do not): a share of 16 cores and of 64 differ."""
+    return f" of {r['cpu_cores']}" if r.get("cpu_cores") and r.get("cpu_use_pct") is not None else ""
 
 
 def table(doc: dict) -> str:
@@ -145,7 +150,7 @@ def table(doc: dict) -> str:
         lines.append(f"| {r['task']} | {label(r)} | "
                      f"{fmt(None if sps is None else sps / 1e6, '.3f', ' M')} | {hit} | {fmt(r.get('final_return'), '.0f')} | "
                      f"{fmt(r.get('final_speed'), '.2f', ' m/s')} | {fmt(r.get('gpu_util_pct'), '.0f', ' %')} | "
-                     f"{fmt(r.get('cpu_use_pct'), '.0f', ' %')} |")
+                     f"{fmt(r.get('cpu_use_pct'), '.0f', ' %')}{of_cores(r)} |")
     return "\n".join(lines)
 
 
