@@ -282,6 +282,10 @@ def main(argv=None) -> int:
     if args.num_envs < 1 or not args.seconds > 0:
         ap.error(f"--num-envs {args.num_envs} and --seconds {args.seconds:g}: both must be positive")
     runners = args.rllib_env_runners
+    if runners is not None and any(g > 1 for g in args.gpus):
+        ap.error(f"--rllib-env-runners {runners} with --gpus {' '.join(map(str, args.gpus))}: on several GPUs RLlib "
+                 "takes one env runner per GPU (warpgym train-with rllib --gpus G); give --rllib-env-runners with "
+                 "--gpus 1 only")
     if runners is not None and (runners < 1 or any(args.num_envs * g % runners for g in args.gpus)):
         ap.error(f"--rllib-env-runners {runners}: must be 1 or more and divide the robots of every run "
                  f"(--num-envs {args.num_envs} x --gpus {' '.join(map(str, args.gpus))})")

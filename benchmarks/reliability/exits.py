@@ -163,23 +163,23 @@ def report(paths: str | list[str]) -> str:
     parts = [read_report(p, "the exits.json a run of this script wrote") for p in paths]
     heads = list(dict.fromkeys(f"{d['gpus']} processes on {d['device_name']}, {d['date']}" for d in parts))
     runs = f" ({len(parts)} runs of the script)" if len(parts) > 1 else ""
-    data = {"rows": [r for d in parts for r in d["rows"]]}
+    rows = [r for d in parts for r in d["rows"]]
     lines = ["; ".join(heads) + runs, "",
              "| # | kind | task | exit code | last row to exit | all processes stopped | names --resume | holds |",
              "|---:|---|---|---:|---:|---:|---|---|"]
-    for k, r in enumerate(data["rows"], 1):
+    for k, r in enumerate(rows, 1):
         last = "-" if r.get("last_row_to_exit_s") is None else f"{r['last_row_to_exit_s']:.1f} s"
         stopped = "-" if r["kind"] == "finished" else (
             "over 60 s" if r["all_stopped_s"] is None else f"{r['all_stopped_s']:.1f} s")
         resume = "-" if r["kind"] == "finished" else ("yes" if r["names_resume"] else "**no**")
         lines.append(f"| {k} | {r['kind']} | {r['task']} | {r['exit_code']} | {last} | {stopped} | {resume} | "
                      f"{'yes' if holds(r) else '**no**'} |")
-    finished = [r for r in data["rows"] if r["kind"] == "finished"]
+    finished = [r for r in rows if r["kind"] == "finished"]
     lines += ["", f"{sum(holds(r) for r in finished)} of {len(finished)} finished runs exited with code 0 within "
               f"{EXIT_WITHIN_S:.0f} s of their last row; slowest "
               f"{max((r['last_row_to_exit_s'] or 0) for r in finished):.1f} s." if finished else ""]
     for kind in FAILURES:
-        made = [r for r in data["rows"] if r["kind"] == kind]
+        made = [r for r in rows if r["kind"] == kind]
         if made:
             slowest = max((r["all_stopped_s"] or float("inf")) for r in made)
             lines.append(f"{kind}: {sum(holds(r) for r in made)} of {len(made)} stopped every process within "

@@ -26,7 +26,8 @@ def gpu_shares(gpus: int, runners: int, learners: int) -> tuple[float, float]:
     just over half for the runners, which Algorithm.setup places first, so no two runners share a GPU, and the
     rest for the learners, so each fits only beside a runner, one per GPU. Halves let Ray pack two learners on
     one GPU, which NCCL refuses ("Duplicate GPU detected", seen on a 4-H200 host). Runners set apart from the
-    GPUs share half of them; a learner in this process (``learners`` 0) has its GPU."""
+    GPUs share half of them, beside at most one learner (train_with refuses other runner counts on several GPUs,
+    whose learners Ray could pack together); a learner in this process (``learners`` 0) has its GPU."""
     if learners > 1 and runners == learners:
         return 0.51, 0.49
     return (0.5 * gpus / runners if runners else 0.0), (0.5 if runners else 1.0)

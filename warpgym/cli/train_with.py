@@ -85,6 +85,10 @@ def parse_args(argv=None):
     rllib_only += [f for f, default in (("gpus", 1), ("env_runners", None)) if getattr(args, f) != default]
     if rllib_only and args.learner != "rllib":
         ap.error(f"--{rllib_only[0].replace('_', '-')} is an rllib setting: the other learners run their published numbers")
+    if args.gpus > 1 and args.env_runners not in (None, 0, args.gpus):
+        # Ray packs fractional GPUs onto one: only a runner per GPU keeps the DDP learners apart (rllib_run.gpu_shares)
+        ap.error(f"--env-runners {args.env_runners} with --gpus {args.gpus}: on several GPUs each GPU takes one env "
+                 f"runner beside its learner; leave --env-runners out (or give {args.gpus}), or spread runners on one GPU")
     if args.env_runners is None:
         args.env_runners = args.gpus if args.gpus > 1 else 0
     try:
