@@ -580,7 +580,10 @@ def test_a_folder_of_several_tasks_asks_which(tmp_path):
     ("benchmarks.multi_gpu.rllib_vs_warpgym", ["docs/bench/rllib/h200_rllib_vs_warpgym_1gpu.json",
                                                "docs/bench/rllib/h200_rllib_8runners_1gpu.json",
                                                "docs/bench/rllib/h200_rllib_vs_warpgym_2gpu_warpgym.json",
-                                               "docs/bench/rllib/h200_rllib_vs_warpgym_2gpu_rllib.json"], 10),
+                                               "docs/bench/rllib/h200_rllib_vs_warpgym_2gpu_rllib.json",
+                                               "docs/bench/rllib/h200_rllib_vs_warpgym_2gpu_rllib_humanoid.json",
+                                               "docs/bench/rllib/h200_rllib_vs_warpgym_4gpu_ant.json",
+                                               "docs/bench/rllib/h200_rllib_vs_warpgym_4gpu_humanoid.json"], 15),
     ("benchmarks.learning.reacher_planner", ["docs/bench/reacher_planner.json"], 4),
     ("benchmarks.learning.reacher_planner", ["docs/bench/reacher_planner_25knots.json"], 3)])
 def test_the_published_nodes_exits_and_planner_tables_are_what_their_scripts_print(capsys, module, args, count):
