@@ -558,6 +558,9 @@ def test_the_published_multi_gpu_table_is_what_scaling_prints_from_the_committed
     if folder in ("multi_gpu/grow_kl", "multi_gpu/suite"):  # the KL rule's ranges the page quotes, as printed
         rule = [line for line in out.splitlines() if line.startswith("The KL rule, each run's median")]
         assert len(rule) == 1 and rule[0] in {line.strip() for line in page}
+    if folder == "multi_gpu/suite":  # and what each setting had learnt by one GPU's median iteration
+        by = [line for line in out.splitlines() if line.startswith("By iteration ")]
+        assert len(by) == 1 and by[0] in {line.strip() for line in page}
 
 
 def test_a_folder_of_several_tasks_asks_which(tmp_path):
@@ -732,3 +735,31 @@ def test_the_published_scores_of_the_4_gpu_humanoid_v5_checkpoints_are_their_eva
     assert f"{scored['gymnasium_return']:.1f} ± {scored['gymnasium_return_std']:.1f}" in page
     assert f"{scored['gymnasium_over_warpgym']:.3f}" in page and f"{scored['warpgym_return']:.1f}" in page
     assert min(scored["gymnasium_lengths"]) == 1000  # "every Gymnasium episode lasted its 1000 steps"
+
+
+def test_by_iteration_line_sets_the_settings_side_by_side_at_one_gpus_median_iteration():
+    """What each setting had learnt by one GPU's median iterations to the target: a run that reached it sooner counts
+    with its hit (not the closing evaluation after it), a run cut before that iteration is left out, and a setting
+    with none left says so."""
+    from benchmarks.multi_gpu import scaling
+
+    def run(gpus, mode, evals, hit=None, iterations=None):
+        return {"gpus": gpus, "mode": mode, "iterations": iterations or evals[-1][0], "by_iteration": evals,
+                "to_target": {"100": {"iteration": hit} if hit else None}}
+
+    doc = {"targets": {"key": "eval/return", "values": [100.0]}}
+    grouped = {(1, "-"): [run(1, "-", [[10, 50, 0.9], [20, 80, 0.8], [30, 100, 0.7]], hit=30),
+                          run(1, "-", [[10, 60, 0.9], [20, 100, 0.8], [21, 90, 0.8]], hit=20),
+                          run(1, "-", [[10, 40, 0.9], [20, 70, 0.8], [40, 100, 0.6]], hit=40)],
+               (2, "split"): [run(2, "split", [[12, 55, 0.5], [24, 95, 0.4]], iterations=40),
+                              run(2, "split", [[8, 30, 0.5]], iterations=9)],  # cut at 9: left out
+               (4, "grow"): [run(4, "grow", [[5, 20, 0.9]], iterations=6)]}
+    lines = [{"gpus": g, "mode": m} for g, m in grouped]
+    assert scaling.common_iteration(doc, 100.0, grouped) == 30
+    out = scaling.by_iteration_line(doc, lines, 100.0, grouped)
+    assert out.startswith("By iteration 30 (one GPU's median iterations to eval/return 100)")
+    # the 1-GPU runs: 100 at 30 (its hit), 100 at 20 (its hit, not the 90 after it), 70 at 20
+    assert "1 GPU -: 70-100 at iterations 20-30, noise std 0.70-0.80 (3 of 3 runs)" in out
+    assert "2 GPUs split: 95.00 at iterations 24, noise std 0.40 (1 of 2 runs)" in out
+    assert "4 GPUs grow: - (0 of 1 runs got that far)" in out
+    assert scaling.by_iteration_line(doc, lines, 100.0, {**grouped, (1, "-"): grouped[(2, "split")]}) == ""

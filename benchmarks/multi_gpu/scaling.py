@@ -136,6 +136,8 @@ def run_row(run_dir: str, key: str, values: tuple[float, ...]) -> dict:
         "last": {k: evals[-1].get(k) for k in ("time_s", "samples", key)} if evals else None,
         "evaluations": len(evals), "evaluation_s": round(sum(r.get("eval_s", 0.0) for r in rows), 2),
         "update": update_medians(rows),
+        # each evaluation's iteration, value and the policy's noise then: what a run had learnt by an iteration
+        "by_iteration": [[r["iteration"], r[key], r.get("policy/noise_std")] for r in evals],
     })
     return row
 
@@ -287,6 +289,46 @@ def iterations_line(doc: dict, lines: list[dict], value: float, grouped: dict) -
                         + ", ".join(cell(r) for r in grouped[(ln["gpus"], ln["mode"])]) for ln in lines) + ".")
 
 
+def common_iteration(doc: dict, value: float, grouped: dict) -> int | None:
+    """The iteration at which to set the settings side by side: the median, over the 1-GPU baseline's runs that
+    reached ``value``, of their iterations to it (None where none did)."""
+    base = grouped.get((1, "-"), [])
+    hits = [h["iteration"] for h in (r["to_target"].get(f"{value:g}") for r in base) if h]
+    return int(statistics.median(hits)) if hits else None
+
+
+def by_iteration_line(doc: dict, lines: list[dict], value: float, grouped: dict) -> str:
+    """What each setting had learnt by one iteration (common_iteration): each run's last evaluation at or before it,
+    with the iteration it came at and the policy's noise then, ranged over the runs that got that far. Runs that
+    stopped at the target sooner count with the evaluation that reached it (not the one they close with); runs cut
+    before it are left out."""
+    at = common_iteration(doc, value, grouped)
+    if at is None:
+        return ""
+    cells = []
+    for ln in lines:
+        runs = grouped[(ln["gpus"], ln["mode"])]
+        got = []
+        for r in runs:
+            hit = r["to_target"].get(f"{value:g}")
+            if (r.get("iterations") or 0) < at and not hit:
+                continue  # cut before the iteration: what it would have had is not known
+            last = min(at, hit["iteration"]) if hit else at  # not the closing evaluation a run makes after its hit
+            before = [e for e in r.get("by_iteration") or [] if e[0] <= last]
+            if before:
+                got.append(before[-1])
+        name = f"{ln['gpus']} GPU{'s' if ln['gpus'] > 1 else ''} {ln['mode']}"
+        if not got:
+            cells.append(f"{name}: - (0 of {len(runs)} runs got that far)")
+            continue
+        noise = [e[2] for e in got if e[2] is not None]
+        values = [e[1] for e in got]
+        cells.append(f"{name}: {spread(values, 0 if max(map(abs, values)) >= 100 else 2)} at iterations {spread([e[0] for e in got], 0)}"
+                     + (f", noise std {spread(noise, 2)}" if noise else "") + f" ({len(got)} of {len(runs)} runs)")
+    return (f"By iteration {at} (one GPU's median iterations to {doc['targets']['key']} {value:g}), each run's last "
+            "evaluation at or before it, over the runs that got that far: " + "; ".join(cells) + ".")
+
+
 def spread(values: list[float], digits: int, scientific: bool = False) -> str:
     """'0.010-0.011'; with ``scientific``, one power of ten for both ends, '1.7-2.1e-4'; one value alone."""
     low, high = min(values), max(values)
@@ -345,6 +387,7 @@ def markdown(doc: dict, lines: list[dict]) -> str:
                         + ", ".join(seconds(ln['targets'][f'{v:g}']['median_time_s']) for v in values)
                         for ln in lines) + "."]
     out.append(iterations_line(doc, lines, values[-1], grouped))
+    out += [b for b in [by_iteration_line(doc, lines, values[-1], grouped)] if b]
     out += [u for u in [update_line(lines, grouped)] if u]
     out += [f"{mode}: --num-envs {n or 'default'} {f}".rstrip() + "." for mode, n, f in flags]
     out += [f"{n}." for n in notes]
