@@ -755,7 +755,7 @@ def test_by_iteration_line_sets_the_settings_side_by_side_at_one_gpus_median_ite
                               run(2, "split", [[8, 30, 0.5]], iterations=9)],  # cut at 9: left out
                (4, "grow"): [run(4, "grow", [[5, 20, 0.9]], iterations=6)]}
     lines = [{"gpus": g, "mode": m} for g, m in grouped]
-    assert scaling.common_iteration(doc, 100.0, grouped) == 30
+    assert scaling.common_iteration(100.0, grouped) == 30
     out = scaling.by_iteration_line(doc, lines, 100.0, grouped)
     assert out.startswith("By iteration 30 (one GPU's median iterations to eval/return 100)")
     # the 1-GPU runs: 100 at 30 (its hit), 100 at 20 (its hit, not the 90 after it), 70 at 20

@@ -289,7 +289,7 @@ def iterations_line(doc: dict, lines: list[dict], value: float, grouped: dict) -
                         + ", ".join(cell(r) for r in grouped[(ln["gpus"], ln["mode"])]) for ln in lines) + ".")
 
 
-def common_iteration(doc: dict, value: float, grouped: dict) -> int | None:
+def common_iteration(value: float, grouped: dict) -> int | None:
     """The iteration at which to set the settings side by side: the median, over the 1-GPU baseline's runs that
     reached ``value``, of their iterations to it (None where none did)."""
     base = grouped.get((1, "-"), [])
@@ -302,7 +302,7 @@ def by_iteration_line(doc: dict, lines: list[dict], value: float, grouped: dict)
     with the iteration it came at and the policy's noise then, ranged over the runs that got that far. Runs that
     stopped at the target sooner count with the evaluation that reached it (not the one they close with); runs cut
     before it are left out."""
-    at = common_iteration(doc, value, grouped)
+    at = common_iteration(value, grouped)
     if at is None:
         return ""
     cells = []
@@ -323,7 +323,8 @@ def by_iteration_line(doc: dict, lines: list[dict], value: float, grouped: dict)
             continue
         noise = [e[2] for e in got if e[2] is not None]
         values = [e[1] for e in got]
-        cells.append(f"{name}: {spread(values, 0 if max(map(abs, values)) >= 100 else 2)} at iterations {spread([e[0] for e in got], 0)}"
+        digits = 0 if max(map(abs, values)) >= 100 else 2  # returns in whole points, speeds in cm/s
+        cells.append(f"{name}: {spread(values, digits)} at iterations {spread([e[0] for e in got], 0)}"
                      + (f", noise std {spread(noise, 2)}" if noise else "") + f" ({len(got)} of {len(runs)} runs)")
     return (f"By iteration {at} (one GPU's median iterations to {doc['targets']['key']} {value:g}), each run's last "
             "evaluation at or before it, over the runs that got that far: " + "; ".join(cells) + ".")
