@@ -269,6 +269,11 @@ def interval(low: float, high: float, unit: str, digits: int) -> str:
     return f"{low:.{digits}f}-{high:.{digits}f}{unit}"
 
 
+def setting(line: dict) -> str:
+    """A summary line's name in the report's sentences: '1 GPU -', '4 GPUs split-horizon'."""
+    return f"{line['gpus']} GPU{'s' if line['gpus'] > 1 else ''} {line['mode']}"
+
+
 def target_cells(t: dict, gpus: int) -> str:
     each = ", ".join(seconds(s) if s is not None else f"> {b:.0f} s" for s, b in zip(t["learning_s"], t["bounds_s"]))
     median = interval(t["median_learning_s"], t["median_upper_s"], " s", 1)
@@ -285,7 +290,7 @@ def iterations_line(doc: dict, lines: list[dict], value: float, grouped: dict) -
         return str(hit["iteration"]) if hit else f"> {r.get('iterations') or 0}"
 
     return (f"Iterations to {doc['targets']['key']} {value:g}, each seed (\"> N\": a seed that missed it in its N): "
-            + "; ".join(f"{ln['gpus']} GPU{'s' if ln['gpus'] > 1 else ''} {ln['mode']}: "
+            + "; ".join(f"{setting(ln)}: "
                         + ", ".join(cell(r) for r in grouped[(ln["gpus"], ln["mode"])]) for ln in lines) + ".")
 
 
@@ -317,7 +322,7 @@ def by_iteration_line(doc: dict, lines: list[dict], value: float, grouped: dict)
             before = [e for e in r.get("by_iteration") or [] if e[0] <= last]
             if before:
                 got.append(before[-1])
-        name = f"{ln['gpus']} GPU{'s' if ln['gpus'] > 1 else ''} {ln['mode']}"
+        name = setting(ln)
         if not got:
             cells.append(f"{name}: - (0 of {len(runs)} runs got that far)")
             continue
@@ -345,7 +350,7 @@ def update_line(lines: list[dict], grouped: dict) -> str:
         done = [r["update"] for r in grouped[(ln["gpus"], ln["mode"])] if (r.get("update") or {}).get("kl") is not None]
         if done:
             rates = [u["lr"] for u in done if u["lr"] is not None]
-            cells.append(f"{ln['gpus']} GPU{'s' if ln['gpus'] > 1 else ''} {ln['mode']}: KL "
+            cells.append(f"{setting(ln)}: KL "
                          f"{spread([u['kl'] for u in done], 4)}, learning rate {spread(rates, 1, True) if rates else '-'}")
     return ("The KL rule, each run's median over its last four fifths of iterations (the updates' mean KL; the mean "
             "learning rate), over the seeds: " + "; ".join(cells) + ".") if cells else ""
@@ -384,7 +389,7 @@ def markdown(doc: dict, lines: list[dict]) -> str:
             "that falls on such seeds, a lower bound (a ratio against it an upper bound, \"<\"); where runs of several "
             "lengths are joined, \"A-B s\": the median lies between. "
             "From the process start (wall-clock, start-up and evaluations included), medians: "
-            + "; ".join(f"{ln['gpus']} GPU{'s' if ln['gpus'] > 1 else ''} {ln['mode']}: "
+            + "; ".join(f"{setting(ln)}: "
                         + ", ".join(seconds(ln['targets'][f'{v:g}']['median_time_s']) for v in values)
                         for ln in lines) + "."]
     out.append(iterations_line(doc, lines, values[-1], grouped))

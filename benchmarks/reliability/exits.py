@@ -156,10 +156,9 @@ def holds(row: dict) -> bool:
         row["names_resume"]
 
 
-def report(paths: str | list[str]) -> str:
+def report(paths: list[str]) -> str:
     """The table of one exits.json, or of several (runs of this script on the same kind of job, e.g. two GPU pairs
     of one host side by side), their rows numbered in turn and each file's machine and date in the heading."""
-    paths = [paths] if isinstance(paths, str) else paths
     parts = [read_report(p, "the exits.json a run of this script wrote") for p in paths]
     heads = list(dict.fromkeys(f"{d['gpus']} processes on {d['device_name']}, {d['date']}" for d in parts))
     runs = f" ({len(parts)} runs of the script)" if len(parts) > 1 else ""
@@ -220,7 +219,7 @@ def main(argv=None) -> int:
         data["rows"].append(row)
         print(json.dumps(row), flush=True)
         write_json(os.path.join(args.out, "exits.json"), data)
-    print(report(os.path.join(args.out, "exits.json")))
+    print(report([os.path.join(args.out, "exits.json")]))
     return 0 if all(holds(r) for r in data["rows"]) else 1
 
 
