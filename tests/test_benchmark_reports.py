@@ -587,12 +587,13 @@ def test_a_folder_of_several_tasks_asks_which(tmp_path):
                                                "docs/bench/rllib/h200_rllib_vs_warpgym_2gpu_rllib_humanoid.json",
                                                "docs/bench/rllib/h200_rllib_vs_warpgym_4gpu_ant.json",
                                                "docs/bench/rllib/h200_rllib_vs_warpgym_4gpu_humanoid.json"], 15),
-    ("benchmarks.learning.suite_sweep", [f"docs/bench/suite_sweep/InvertedDoublePendulum-v5-180s-h200x4/idp-u0-s{i}.json"
-                                         for i in range(4)], 2),
+    ("benchmarks.learning.suite_sweep", [f"docs/bench/suite_sweep/InvertedDoublePendulum-v5-180s-h200x4/idp-{arm}.json"
+                                         for arm in ("u0-s0", "u0-s1", "u0-s2", "u0-s3", "u1e7", "nofalse")], 4),
+    ("benchmarks.learning.suite_sweep", ["docs/bench/suite_sweep/Hopper-v5-300s-h200x4/sweep-gamma.json"], 3),
     ("benchmarks.learning.reacher_planner", ["docs/bench/reacher_planner.json"], 4),
     ("benchmarks.learning.reacher_planner", ["docs/bench/reacher_planner_25knots.json"], 3)])
 def test_the_published_nodes_exits_and_planner_tables_are_what_their_scripts_print(capsys, module, args, count):
-    """The two-node, GPU exits, RLlib comparison, sweep and Reacher planner tables in docs/benchmarks.md, row for row, from
+    """The two-node, GPU exits, RLlib comparison, sweeps' and Reacher planner tables in docs/benchmarks.md, row for row, from
     the committed JSON (the planner's table sits in a list item, indented); the exits' totals over every GPU lease
     as the page states them."""
     import importlib
