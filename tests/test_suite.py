@@ -551,3 +551,27 @@ def test_a_termination_on_the_last_step_is_truncated_too_as_in_gymnasium():
     env.reset()
     assert not (env.terminated.any() or env.truncated.any() or env.info["time_outs"].any())
     assert env.info["episode"]["l"].tolist() == [1, 1]
+
+
+def test_inverted_double_pendulums_ceiling_is_half_a_point_over_the_published_figure(suite_envs):
+    """docs/benchmarks.md: a step pays at most 9.36 (10 for staying up, less the tip's distance penalty of 0.64 with
+    both poles straight over the cart at the origin), so 1000 steps return at most 9360.0, half a point over
+    Tianshou's 9359.5; in Gymnasium's env and in warpgym's, from that state, the first step pays exactly that."""
+    from benchmarks.targets import REFERENCE
+
+    name = "InvertedDoublePendulum-v5"
+    theirs = gymnasium_env(name)
+    theirs.reset(seed=0)
+    model = theirs.unwrapped.model
+    theirs.unwrapped.set_state(np.zeros(model.nq), np.zeros(model.nv))
+    _, their_reward, *_ = theirs.step(np.zeros(1))
+    theirs.close()
+    env = suite_envs(name)
+    env.reset(seed=0)
+    sim = env.sim
+    sim.set_state(torch.zeros_like(sim.dof_pos), torch.zeros_like(sim.dof_vel), torch.arange(env.num_envs))
+    _, reward, terminated, _, _ = env.step(torch.zeros(env.num_envs, 1, device=sim.dof_pos.device))
+    assert their_reward == pytest.approx(9.36, abs=1e-9)
+    np.testing.assert_allclose(np.asarray(torch.as_tensor(reward).cpu()), 9.36, atol=1e-5)
+    assert not bool(torch.as_tensor(terminated).any())
+    assert 1000 * 9.36 - REFERENCE[name] == pytest.approx(0.5)
