@@ -139,6 +139,49 @@ def test_suite_learning_report_merges_runs_made_alike_and_refuses_others(tmp_pat
     assert sl.half(-2.6) == -5.2 and sl.half(5850.0) == 2925.0
 
 
+def test_suite_learning_gives_a_candidate_presets_runs_a_row_of_their_own(tmp_path, capsys, monkeypatch):
+    """``--config gamma=0.999``: the setting reaches warpgym train, names the run's JSON and folder, and the table
+    and the README's table give those runs their own row beside the preset's; a wrong setting stops the command
+    before any run with one line naming it."""
+    from benchmarks.learning import suite_learning as sl
+
+    calls = []
+    monkeypatch.setattr(sl, "train_in_parts", lambda args, run_dir, budget, device: calls.append((args, run_dir)) or 1)
+    run = sl.train_one("Hopper-v5", 2, str(tmp_path), 1.0, "cpu", config=("gamma=0.999",))
+    assert calls[0][0][:6] == ["--task", "Hopper-v5", "--seed", "2", "--config", "gamma=0.999"]
+    assert os.path.basename(calls[0][1]) == "Hopper-v5-gamma=0.999-seed2" and run["config"] == ["gamma=0.999"]
+    assert sl.run_stem("Hopper-v5", 0) == "Hopper-v5-seed0" and sl.run_stem("Ant-v5", 1, ("net_dims=64,64",)) == \
+        "Ant-v5-net_dims=64x64-seed1"
+    marks = list(sl.marks_of("Hopper-v5", 1.0))
+
+    def doc(seed, config, value):
+        run = {"task": "Hopper-v5", "seed": seed, "config": config, "marks_s": marks, "samples": 1e8,
+               "samples_per_s": 4e5, "reference": 3542.2, "curve": [[10.0, 1e6, 1.0]], "first_iteration_s": 7.0,
+               "rollout_graph": "step", "evals": [{"time_s": 200.0, "samples": 1e7, "eval/return": value}],
+               "scored": [{"mark_s": m, "time_s": m, "samples": 1e6, "gymnasium_return": value,
+                           "warpgym_return": value, "gymnasium_over_warpgym": 1.0} for m in marks]}
+        path = tmp_path / f"{sl.run_stem('Hopper-v5', seed, tuple(config))}.json"
+        path.write_text(json.dumps({"meta": {"gpu": "NVIDIA H200", "scale": 1.0, "date": "2026-11-27"}, "run": run}))
+
+    doc(0, [], 2600.0)
+    doc(0, ["gamma=0.999"], 3600.0)
+    doc(1, ["gamma=0.999"], 3500.0)
+    assert sl.report([str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "| Hopper-v5 | 1 | 1 min: 2600; 2 min: 2600; 5 min: 2600; 10 min: 2600 | 3542.2 | not reached (0/1)" in out
+    assert "| Hopper-v5 (gamma=0.999) | 2 | 1 min: 3550; 2 min: 3550; 5 min: 3550; 10 min: 3550 | 3542.2 | " \
+           "3.3 (1/2)" in out
+    assert "| Hopper-v5 (gamma=0.999) | **3550** (3600, 3500) | 3542.2 (Tianshou SAC, v3) | 3.3 (1/2) |" in out
+    assert sl.finished(str(tmp_path), "Hopper-v5", 1, ("gamma=0.999",)) and not sl.finished(str(tmp_path), "Hopper-v5", 1)
+    with pytest.raises(SystemExit) as stop:
+        sl.main(["--out", str(tmp_path), "--tasks", "Hopper-v5", "--config", "gamma=abc", "--device", "cpu"])
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert stop.value.code == 2 and "--config" in err and "gamma" in err and "abc" in err
+    with pytest.raises(SystemExit) as stop:
+        sl.main(["--out", str(tmp_path), "--tasks", "Hopper-v5", "--config", "gama=0.9", "--device", "cpu"])
+    assert stop.value.code == 2 and "'gama' is not a PPO setting" in capsys.readouterr().err
+
+
 def test_suite_learning_reads_minutes_to_the_reference_from_the_runs_evaluations():
     """A run keeps its evaluations, so the table's minutes follow REFERENCE as it stands now, not the figure
     (here a rounded 9360 that no policy can reach) the run was made with."""

@@ -12,6 +12,11 @@ on different GPUs or with different budgets.
     python -m benchmarks.learning.suite_learning --out OUT --tasks Hopper-v5 Walker2d-v5 --seeds 0 1
     python -m benchmarks.learning.suite_learning --out OUT --seeds 0 1 --gpus 2    # one seed per GPU, at once
     python -m benchmarks.learning.suite_learning --report OUT OUT2 ...
+    python -m benchmarks.learning.suite_learning --out OUT --tasks Hopper-v5 --seeds 0 1 2 --config gamma=0.999
+
+``--config NAME=VALUE`` (``warpgym train --config``) makes a candidate preset's row: its runs and JSON carry the
+setting in their names (``Hopper-v5-gamma=0.999-seed0.json``), and the table gives them a row of their own
+("Hopper-v5 (gamma=0.999)") beside the preset's, so that a preset changes only after its row is measured.
 
 A machine call shorter than a run (10-minute runs, 10-minute calls) stops it with SIGTERM: the run saves its
 iteration, and the same command in the next call goes on with it (``warpgym train --resume``, its clock, marks and
@@ -66,19 +71,34 @@ def reaching(rows: list[dict], target: float | None) -> dict:
                                                                                 ("half", half(target)))}
 
 
-def train_one(task: str, seed: int, out: str, scale: float, device: str | None, rollout_graph: str | None = None
-              ) -> dict:
-    """Train, keeping the policies at the marks; the run's row for the JSON, not yet scored."""
+def run_stem(task: str, seed: int, config: tuple[str, ...] = ()) -> str:
+    """A run's JSON and folder name: ``Hopper-v5-seed0``, or with settings other than the preset's
+    ``Hopper-v5-gamma=0.999-seed0`` (the same in every call, so a stopped run goes on under it)."""
+    return "-".join([task, *[c.replace(",", "x") for c in config], f"seed{seed}"])
+
+
+def row_name(run: dict) -> str:
+    """The table's row for a run: its task, and the settings it changed, if any (``Hopper-v5 (gamma=0.999)``)."""
+    config = run.get("config") or []
+    return f"{run['task']} ({' '.join(config)})" if config else run["task"]
+
+
+def train_one(task: str, seed: int, out: str, scale: float, device: str | None, rollout_graph: str | None = None,
+              config: tuple[str, ...] = ()) -> dict:
+    """Train, keeping the policies at the marks; the run's row for the JSON, not yet scored. ``config``: settings
+    other than the preset's (``NAME=VALUE``, as ``warpgym train --config`` takes them)."""
     from agents.logger import read_metrics  # noqa: PLC0415
 
     marks = marks_of(task, scale)
-    run_dir = os.path.join(out, "runs", f"{task}-seed{seed}")
+    run_dir = os.path.join(out, "runs", run_stem(task, seed, config))
     capture = ["--rollout-graph", rollout_graph] if rollout_graph else []
     budget = ["--time-limit", str(marks[-1]), "--save-at", *[str(m) for m in marks], *capture]
+    settings = [a for c in config for a in ("--config", c)]  # a resumed run reads them from its saved config
     # a 10-minute run outlasts a 10-minute machine call: stopped, it goes on in the next call (train_in_parts)
-    code = train_in_parts(["--task", task, "--seed", str(seed), *budget], run_dir, budget, device)
+    code = train_in_parts(["--task", task, "--seed", str(seed), *settings, *budget], run_dir, budget, device)
     if code != 0:
-        return {"task": task, "seed": seed, "error": f"warpgym train exited {code}: see {run_dir}/train.log"}
+        return {"task": task, "seed": seed, "config": list(config),
+                "error": f"warpgym train exited {code}: see {run_dir}/train.log"}
     summary = read_summary(run_dir)
     rows = read_metrics(run_dir)
     target = REFERENCE.get(task)
@@ -86,7 +106,8 @@ def train_one(task: str, seed: int, out: str, scale: float, device: str | None, 
     # one iteration can pass several marks: its checkpoint stands for each
     kept = [{"mark_s": m, "time_s": k["time_s"], "samples": k["samples"], "checkpoint": os.path.basename(k["path"])}
             for k in summary.get("kept_checkpoints", []) for m in k.get("marks_s", [k["mark_s"]])]
-    return {"task": task, "seed": seed, "budget_s": marks[-1], "marks_s": list(marks), "kept": kept, "scored": [],
+    return {"task": task, "seed": seed, "config": list(config), "budget_s": marks[-1], "marks_s": list(marks),
+            "kept": kept, "scored": [],
             "samples": rows[-1]["samples"] if rows else 0, "num_envs": summary.get("num_envs"),
             "samples_per_s": summary.get("steady_samples_per_s_median"), "reference": target,
             "first_eval_reaching": reach, "device": summary.get("device"),
@@ -100,9 +121,9 @@ def train_one(task: str, seed: int, out: str, scale: float, device: str | None, 
                       for r in rows if r.get("eval/return") is not None]}
 
 
-def finished(out: str, task: str, seed: int) -> bool:
+def finished(out: str, task: str, seed: int, config: tuple[str, ...] = ()) -> bool:
     """Whether an earlier call wrote this run's JSON without an error (a run stopped part-way has none yet)."""
-    path = os.path.join(out, f"{task}-seed{seed}.json")
+    path = os.path.join(out, f"{run_stem(task, seed, config)}.json")
     if not os.path.isfile(path):
         return False
     with open(path) as f:
@@ -183,10 +204,11 @@ def _mean(values: list[float]) -> float:
 
 
 def by_task_of(runs: list[dict]) -> dict[str, list[dict]]:
+    """The runs of each row (a task, or a task with other settings: ``row_name``), rows sorted by name."""
     by_task: dict[str, list[dict]] = {}
     for r in runs:
         if "error" not in r:
-            by_task.setdefault(r["task"], []).append(r)
+            by_task.setdefault(row_name(r), []).append(r)
     return dict(sorted(by_task.items()))
 
 
@@ -208,10 +230,11 @@ def readme_table(runs: list[dict]) -> str:
         last = rs[0]["marks_s"][-1]
         each = [s["gymnasium_return"] for r in rs for s in r["scored"] if abs(s["mark_s"] - last) < 1e-6]
         digits = 0 if each and abs(_mean(each)) >= 100 else 1
-        ref = REFERENCE[task]
+        ref = REFERENCE[rs[0]["task"]]
         score = (f"**{_mean(each):.{digits}f}** ({', '.join(f'{v:.{digits}f}' for v in each)})" if each
                  else "not scored yet (`--score OUT`)")  # a --no-score run, scored later on any machine
-        lines.append(f"| {task} | {score} | {ref} ({REFERENCE_SOURCE[task]}, {REFERENCE_VERSION[task]}) | "
+        source, version = REFERENCE_SOURCE[rs[0]["task"]], REFERENCE_VERSION[rs[0]["task"]]
+        lines.append(f"| {task} | {score} | {ref} ({source}, {version}) | "
                      f"{minutes_to(rs, ref)} |")
     return "\n".join(lines)
 
@@ -232,7 +255,7 @@ def table(runs: list[dict], peer: bool = False) -> str:
             cells.append(f"{m / 60:g} min: {_mean(vals):.{0 if abs(_mean(vals)) >= 100 else 1}f}" if vals
                          else f"{m / 60:g} min: -")
 
-        ref = REFERENCE.get(task, rs[0]["reference"])
+        ref = REFERENCE.get(rs[0]["task"], rs[0]["reference"])
 
         scores = [] if peer else [s for r in rs for s in r["scored"]]
         ratio = "-" if peer else "not scored"
@@ -327,8 +350,8 @@ def _band(runs: list[dict], x: int, smooth: int):
 
 
 def figure_tasks(runs: list[dict], peers: list[dict]) -> list[str]:
-    """The panels: the tasks warpgym ran (a peer's other tasks would stand alone), or the peer's if none."""
-    return list(dict.fromkeys([r["task"] for r in (runs or peers) if "error" not in r]))
+    """The panels: the rows warpgym ran (a peer's other tasks would stand alone), or the peer's if none."""
+    return list(dict.fromkeys([row_name(r) for r in (runs or peers) if "error" not in r]))
 
 
 def draw(runs: list[dict], peers: list[dict], path: str) -> None:
@@ -352,7 +375,7 @@ def draw(runs: list[dict], peers: list[dict], path: str) -> None:
         for ax, task in zip(axes.flat, tasks):
             for label, group, color, smooth in (("warpgym PPO (GPU)", runs, "tab:blue", 1),
                                                 ("SB3 PPO (1 CPU core)", peers, "tab:orange", 20)):
-                mine = [r for r in group if r.get("task") == task and "error" not in r]
+                mine = [r for r in group if "error" not in r and row_name(r) == task]
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN columns past a seed's end
                     band = _band(mine, x, smooth)
@@ -365,7 +388,7 @@ def draw(runs: list[dict], peers: list[dict], path: str) -> None:
                         for r in mine for s in r["scored"]]
                 if dots:
                     ax.scatter(*zip(*dots), color=color, edgecolor="black", s=18, zorder=3)
-            ref = REFERENCE.get(task)
+            ref = REFERENCE.get(task.split(" ")[0])
             if ref is not None:
                 ax.axhline(ref, color="gray", linestyle="--", linewidth=1)
             if x == 1:
@@ -447,6 +470,9 @@ def main(argv=None) -> int:
                     help="time each task's first run from an empty kernel cache (default: a short run fills it first)")
     ap.add_argument("--rollout-graph", choices=("step", "rollout", "off"), default=None,
                     help="warpgym train's rollout capture (default: train's own, step); it shapes the first iteration")
+    ap.add_argument("--config", action="append", default=[], metavar="NAME=VALUE",
+                    help="a setting other than the preset's, as warpgym train --config takes it (repeat for more): "
+                         "its runs get a row of their own, e.g. 'Hopper-v5 (gamma=0.999)'")
     args = ap.parse_args(argv)
     if args.report:
         return report(args.report, args.figure)
@@ -473,6 +499,14 @@ def main(argv=None) -> int:
     unknown = [t for t in tasks if t not in task_names("suite")]
     if unknown:
         ap.error(f"--tasks {unknown}: choose from {task_names('suite')}")
+    from warpgym.cli.train_args import task_config  # noqa: PLC0415
+
+    for task in tasks:  # a wrong setting is said now, not in each run's train.log
+        try:
+            task_config(task, args.config)
+        except ValueError as e:
+            ap.error(f"--config: {e}")
+    config = tuple(args.config)
     os.makedirs(args.out, exist_ok=True)
     if args.gpus > 1:
         if torch.cuda.device_count() < args.gpus:
@@ -480,11 +514,11 @@ def main(argv=None) -> int:
         return spread_seeds(args, list(argv if argv is not None else sys.argv[1:]))
     gpu = torch.cuda.get_device_name(0) if torch.cuda.is_available() and args.device != "cpu" else "cpu"
     for task in tasks:
-        todo = [seed for seed in args.seeds if not finished(args.out, task, seed)]  # not done by an earlier call
+        todo = [seed for seed in args.seeds if not finished(args.out, task, seed, config)]  # not done by an earlier call
         if todo and not args.no_warm_up:
             warm_up(task, args.out, args.device)
         for seed in todo:
-            run = train_one(task, seed, args.out, args.scale, args.device, args.rollout_graph)
+            run = train_one(task, seed, args.out, args.scale, args.device, args.rollout_graph, config)
             if "error" not in run and not args.no_score:
                 run = score_run(run, args.out, args.eval_episodes, args.device)
             doc = {"meta": {"gpu": gpu, "scale": args.scale, "date": time.strftime("%Y-%m-%d"),
@@ -492,7 +526,7 @@ def main(argv=None) -> int:
                             "cores": len(os.sched_getaffinity(0)), "runs_at_once": args.runs_at_once,
                             "command": " ".join(["python -m benchmarks.learning.suite_learning"] + (argv or sys.argv[1:]))},
                    "run": run}
-            write_json(os.path.join(args.out, f"{task}-seed{seed}.json"), doc)
+            write_json(os.path.join(args.out, f"{run_stem(task, seed, config)}.json"), doc)
             print(json.dumps({k: v for k, v in run.items() if k not in ("curve", "evals")})[:400], flush=True)
     return report([args.out])
 

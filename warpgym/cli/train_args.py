@@ -106,11 +106,9 @@ def parse_args(argv=None, description: str | None = None):
     except ValueError as e:
         ap.error(f"--physics: {e}")
     try:
-        args.config = parse_config(args.config)
-        if args.resume is None:  # a resumed run's are checked against its own saved config
-            from agents.config import Config  # noqa: PLC0415
-
-            Config.for_task(TASK_NAMES[(args.task or "Ant").lower()]).replace(**args.config)
+        # a resumed run's are checked against its own saved config
+        args.config = parse_config(args.config) if args.resume is not None else task_config(args.task or "Ant",
+                                                                                              args.config)
     except ValueError as e:
         ap.error(f"--config: {e}")
     if args.video:
@@ -147,6 +145,15 @@ def parse_config(texts: list[str]) -> dict:
                 raise ValueError(f"{text!r}: write comma-separated numbers, e.g. {name}=256,128") from None
         out[name] = value
     return out
+
+
+def task_config(task: str, texts: list[str]) -> dict:
+    """``parse_config``'s settings, checked against ``task``'s preset: a ValueError names a wrong one."""
+    from agents.config import Config  # noqa: PLC0415
+
+    config = parse_config(texts)
+    Config.for_task(TASK_NAMES[task.lower()]).replace(**config)
+    return config
 
 
 # Config fields that have a flag of their own: a config error names the flag (with_flag_names)
