@@ -173,6 +173,13 @@ def test_suite_learning_gives_a_candidate_presets_runs_a_row_of_their_own(tmp_pa
            "3.3 (1/2)" in out
     assert "| Hopper-v5 (gamma=0.999) | **3550** (3600, 3500) | 3542.2 (Tianshou SAC, v3) | 3.3 (1/2) |" in out
     assert sl.finished(str(tmp_path), "Hopper-v5", 1, ("gamma=0.999",)) and not sl.finished(str(tmp_path), "Hopper-v5", 1)
+    played = []  # --score finds the kept policies in the run's own folder
+    monkeypatch.setattr(sl, "play", lambda path, *a, **k: played.append(path) or {
+        "gymnasium_return": 1.0, "warpgym_return": 1.0, "gymnasium_over_warpgym": 1.0, "episodes": 30, "seeds": [0]})
+    sl.score_run({"task": "Hopper-v5", "seed": 1, "config": ["gamma=0.999"], "scored": [],
+                  "kept": [{"mark_s": 60.0, "time_s": 61.0, "samples": 1, "checkpoint": "checkpoint-9.pt"}]},
+                 str(tmp_path), 10, "cpu")
+    assert played and played[0] == os.path.join(str(tmp_path), "runs", "Hopper-v5-gamma=0.999-seed1", "checkpoint-9.pt")
     with pytest.raises(SystemExit) as stop:
         sl.main(["--out", str(tmp_path), "--tasks", "Hopper-v5", "--config", "gamma=abc", "--device", "cpu"])
     err = capsys.readouterr().err.strip().splitlines()[-1]

@@ -165,7 +165,7 @@ def play(target: str, episodes: int, seeds, out_json: str, device: str | None, e
 def score_run(run: dict, out: str, episodes: int, device: str | None) -> dict:
     """Score each kept policy of ``run`` (trained under ``out``) by ``warpgym eval`` in Gymnasium's env;
     policies it already holds, scored as this function scores them, are kept as they are."""
-    run_dir = os.path.join(out, "runs", f"{run['task']}-seed{run['seed']}")
+    run_dir = os.path.join(out, "runs", run_stem(run["task"], run["seed"], tuple(run.get("config") or ())))
     earlier = {s["mark_s"]: s for s in run.get("scored", []) if settled(s)}
     below = {s["mark_s"] for s in run.get("scored", []) if not settled(s)}  # known below HOLDS on SEEDS
     scored, results = [], {}
