@@ -489,7 +489,8 @@ def test_rollout_capture_reports_medians_of_the_rounds_against_the_whole_rollout
 
 def test_suite_versions_plays_each_runs_last_policy_in_v4_and_names_the_term_that_moved(monkeypatch, tmp_path):
     """benchmarks/learning/suite_versions.py: the last kept policy of each run of a task that plays in v4 (Ant's runs
-    left out), by ``warpgym eval --env-version 4``; the table's means over seeds and the term that moved most."""
+    left out), by ``warpgym eval --env-version 4``; the table's means over seeds and the term that moved most; a
+    candidate preset's run (suite_learning --config) found in its own folder and given its own row."""
     from benchmarks.learning import suite_versions as sv
 
     from warpgym.cli import eval as eval_command
@@ -507,16 +508,21 @@ def test_suite_versions_plays_each_runs_last_policy_in_v4_and_names_the_term_tha
                        "v4_over_v5": 0.9 + 0.06 * seed}, f)
 
     monkeypatch.setattr(eval_command, "main", fake_eval)
-    for task, seed in (("Reacher-v5", 0), ("Reacher-v5", 1), ("Ant-v5", 0)):
+    for task, seed, config in (("Reacher-v5", 0, []), ("Reacher-v5", 1, []), ("Ant-v5", 0, []),
+                               ("Reacher-v5", 0, ["entropy_coef=0.01"])):
         kept = [{"mark_s": m, "checkpoint": f"checkpoint-{i}.pt"} for i, m in enumerate((60.0, 180.0))]
-        (tmp_path / f"{task}-seed{seed}.json").write_text(json.dumps({"run": {"task": task, "seed": seed,
-                                                                               "kept": kept}}))
-        os.makedirs(tmp_path / "runs" / f"{task}-seed{seed}")
-        (tmp_path / "runs" / f"{task}-seed{seed}" / "checkpoint-1.pt").write_bytes(b"")
+        stem = "-".join([task, *config, f"seed{seed}"])
+        (tmp_path / f"{stem}.json").write_text(json.dumps({"run": {"task": task, "seed": seed, "kept": kept,
+                                                                   "config": config}}))
+        os.makedirs(tmp_path / "runs" / stem)
+        (tmp_path / "runs" / stem / "checkpoint-1.pt").write_bytes(b"")
     rows = sv.score([str(tmp_path)], 10, "cpu")
-    assert calls == [(os.path.join("runs", f"Reacher-v5-seed{s}", "checkpoint-1.pt"), "4") for s in (0, 1)]
+    assert sorted(calls) == sorted((os.path.join("runs", stem, "checkpoint-1.pt"), "4") for stem in (
+        "Reacher-v5-seed0", "Reacher-v5-seed1", "Reacher-v5-entropy_coef=0.01-seed0"))
     text = sv.table(rows)
     assert "| Reacher-v5 | 2 | 3 min | -4.3 | -4.5 | 0.930 | reward_dist -3.5 -> -3.7 | 50 / 50 | -2.6 (v2) |" in text
+    assert "| Reacher-v5 (entropy_coef=0.01) | 1 | 3 min | -3.8 | -4.0 | 0.900 | reward_dist -3.0 -> -3.2 | 50 / 50 | " \
+           "-2.6 (v2) |" in text
     os.remove(tmp_path / "runs" / "Reacher-v5-seed1" / "checkpoint-1.pt")
     with pytest.raises(SystemExit, match="its last policy .*checkpoint-1.pt is not there"):
         sv.score([str(tmp_path)], 10, "cpu")

@@ -29,7 +29,7 @@ import time
 
 
 from benchmarks.harness import read_report  # noqa: E402
-from benchmarks.learning.suite_learning import SEEDS, play  # noqa: E402
+from benchmarks.learning.suite_learning import SEEDS, play, row_name, run_stem  # noqa: E402
 from benchmarks.targets import REFERENCE, REFERENCE_VERSION  # noqa: E402
 
 
@@ -57,13 +57,15 @@ def score(folders: list[str], episodes: int, device: str | None) -> list[dict]:
             if "error" in run or SUITE[run["task"]].v4_observation is None:
                 continue
             last = run["kept"][-1]
-            ckpt = os.path.join(folder, "runs", f"{run['task']}-seed{run['seed']}", last["checkpoint"])
+            stem = run_stem(run["task"], run["seed"], tuple(run.get("config") or ()))
+            ckpt = os.path.join(folder, "runs", stem, last["checkpoint"])
             if not os.path.exists(ckpt):
                 raise SystemExit(f"{path}: its last policy {ckpt} is not there; --runs takes the folder that "
                                  "suite_learning.py --out wrote, runs/ included")
             r = earlier(ckpt, episodes) or play(ckpt, episodes, SEEDS, ckpt + ".v4.json", device,
                                                  extra=("--env-version", "4"))
-            rows.append({"task": run["task"], "seed": run["seed"], "mark_s": last["mark_s"], "checkpoint": ckpt,
+            # a candidate preset's runs (suite_learning --config) are a row of their own, as in its table
+            rows.append({"task": row_name(run), "reference_task": run["task"], "seed": run["seed"], "mark_s": last["mark_s"], "checkpoint": ckpt,
                          "episodes": r["episodes"], "v5_return": r["gymnasium_return"],
                          "v5_length": r["gymnasium_length"],
                          "v4_return": r["v4_return"], "v4_length": r["v4_length"], "v4_over_v5": r["v4_over_v5"],
@@ -93,7 +95,8 @@ def table(rows: list[dict]) -> str:
         out.append(f"| {task} | {n} | {mark} | {mean('v5_return'):.1f} | {mean('v4_return'):.1f} | "
                    f"{mean('v4_over_v5'):.3f} | {moved} | "
                    f"{mean('v5_length'):.0f} / {mean('v4_length'):.0f} | "
-                   f"{REFERENCE[task]:g} ({REFERENCE_VERSION[task]}) |")
+                   f"{REFERENCE[mine[0].get('reference_task', task)]:g} "
+                   f"({REFERENCE_VERSION[mine[0].get('reference_task', task)]}) |")
     return "\n".join(out)
 
 
