@@ -172,7 +172,12 @@ def test_suite_learning_gives_a_candidate_presets_runs_a_row_of_their_own(tmp_pa
     assert "| Hopper-v5 (gamma=0.999) | 2 | 1 min: 3550; 2 min: 3550; 5 min: 3550; 10 min: 3550 | 3542.2 | " \
            "3.3 (1/2)" in out
     assert "| Hopper-v5 (gamma=0.999) | **3550** (3600, 3500) | 3542.2 (Tianshou SAC, v3) | 3.3 (1/2) |" in out
-    assert sl.finished(str(tmp_path), "Hopper-v5", 1, ("gamma=0.999",)) and not sl.finished(str(tmp_path), "Hopper-v5", 1)
+    assert sl.finished(str(tmp_path), "Hopper-v5", 1, ("gamma=0.999",))
+    assert not sl.finished(str(tmp_path), "Hopper-v5", 1)
+    runs, _ = sl.load_runs([str(tmp_path)], "")  # the curves: a panel each, not the two rows' seeds in one band
+    assert sorted(sl.figure_tasks(runs, [])) == ["Hopper-v5", "Hopper-v5 (gamma=0.999)"]
+    assert sl.report([str(tmp_path)], str(tmp_path / "curves.png")) == 0 and (tmp_path / "curves-samples.png").exists()
+    capsys.readouterr()
     played = []  # --score finds the kept policies in the run's own folder
     monkeypatch.setattr(sl, "play", lambda path, *a, **k: played.append(path) or {
         "gymnasium_return": 1.0, "warpgym_return": 1.0, "gymnasium_over_warpgym": 1.0, "episodes": 30, "seeds": [0]})

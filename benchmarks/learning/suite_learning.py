@@ -367,6 +367,7 @@ def draw(runs: list[dict], peers: list[dict], path: str) -> None:
     import matplotlib.pyplot as plt  # noqa: PLC0415
 
     tasks = figure_tasks(runs, peers)
+    task_of = {row_name(r): r["task"] for r in runs + peers if "error" not in r}  # a panel's row -> its task
     stem, ext = os.path.splitext(path)
     for x, name, out in ((0, "minutes of training", path), (1, "samples", f"{stem}-samples{ext or '.png'}")):
         cols = min(4, len(tasks))
@@ -388,7 +389,7 @@ def draw(runs: list[dict], peers: list[dict], path: str) -> None:
                         for r in mine for s in r["scored"]]
                 if dots:
                     ax.scatter(*zip(*dots), color=color, edgecolor="black", s=18, zorder=3)
-            ref = REFERENCE.get(task.split(" ")[0])
+            ref = REFERENCE.get(task_of.get(task, task))
             if ref is not None:
                 ax.axhline(ref, color="gray", linestyle="--", linewidth=1)
             if x == 1:
@@ -514,7 +515,8 @@ def main(argv=None) -> int:
         return spread_seeds(args, list(argv if argv is not None else sys.argv[1:]))
     gpu = torch.cuda.get_device_name(0) if torch.cuda.is_available() and args.device != "cpu" else "cpu"
     for task in tasks:
-        todo = [seed for seed in args.seeds if not finished(args.out, task, seed, config)]  # not done by an earlier call
+        # not done by an earlier call
+        todo = [seed for seed in args.seeds if not finished(args.out, task, seed, config)]
         if todo and not args.no_warm_up:
             warm_up(task, args.out, args.device)
         for seed in todo:

@@ -65,7 +65,8 @@ def score(folders: list[str], episodes: int, device: str | None) -> list[dict]:
             r = earlier(ckpt, episodes) or play(ckpt, episodes, SEEDS, ckpt + ".v4.json", device,
                                                  extra=("--env-version", "4"))
             # a candidate preset's runs (suite_learning --config) are a row of their own, as in its table
-            rows.append({"task": row_name(run), "reference_task": run["task"], "seed": run["seed"], "mark_s": last["mark_s"], "checkpoint": ckpt,
+            rows.append({"task": row_name(run), "reference_task": run["task"], "seed": run["seed"],
+                         "mark_s": last["mark_s"], "checkpoint": ckpt,
                          "episodes": r["episodes"], "v5_return": r["gymnasium_return"],
                          "v5_length": r["gymnasium_length"],
                          "v4_return": r["v4_return"], "v4_length": r["v4_length"], "v4_over_v5": r["v4_over_v5"],
@@ -92,11 +93,11 @@ def table(rows: list[dict]) -> str:
             v5_term = sum(r["v5_terms"][name] for r in mine) / n
             moved = f"{name} {v5_term:.1f} -> {v5_term + terms[name]:.1f}"
         mark = f"{mine[0]['mark_s'] / 60:g} min"
+        ref_task = mine[0].get("reference_task", task)  # rows saved before candidate rows existed lack it
         out.append(f"| {task} | {n} | {mark} | {mean('v5_return'):.1f} | {mean('v4_return'):.1f} | "
                    f"{mean('v4_over_v5'):.3f} | {moved} | "
                    f"{mean('v5_length'):.0f} / {mean('v4_length'):.0f} | "
-                   f"{REFERENCE[mine[0].get('reference_task', task)]:g} "
-                   f"({REFERENCE_VERSION[mine[0].get('reference_task', task)]}) |")
+                   f"{REFERENCE[ref_task]:g} ({REFERENCE_VERSION[ref_task]}) |")
     return "\n".join(out)
 
 
