@@ -73,8 +73,10 @@ def reaching(rows: list[dict], target: float | None) -> dict:
 
 def run_stem(task: str, seed: int, config: tuple[str, ...] = ()) -> str:
     """A run's JSON and folder name: ``Hopper-v5-seed0``, or with settings other than the preset's
-    ``Hopper-v5-gamma=0.999-seed0`` (the same in every call, so a stopped run goes on under it)."""
-    return "-".join([task, *[c.replace(",", "x") for c in config], f"seed{seed}"])
+    ``Hopper-v5-gamma=0.999-seed0`` (the same in every call, so a stopped run goes on under it); suite_sweep's
+    runs are named so too, their label the settings."""
+    label = " ".join(config)
+    return f"{task}-{label.replace(' ', '_').replace(',', 'x')}-seed{seed}" if label else f"{task}-seed{seed}"
 
 
 def row_name(run: dict) -> str:

@@ -69,8 +69,11 @@ def command(task: str, combo: dict, seed: int, seconds: float) -> list[str]:
 
 
 def run_name(task: str, label: str, seed: int) -> str:
-    """A run's folder name, the same in every call (a run stopped by a call's limit goes on under it)."""
-    return f"{task}-{label.replace(' ', '_').replace(',', 'x')}-seed{seed}"
+    """A run's folder name, the same in every call (a run stopped by a call's limit goes on under it): the
+    learning table's form (suite_learning.run_stem), with the setting's label ("preset" for none)."""
+    from benchmarks.learning.suite_learning import run_stem  # noqa: PLC0415
+
+    return run_stem(task, seed, (label,))
 
 
 def score(run_dir: str, scoring: dict, device: str | None) -> dict:
