@@ -651,6 +651,9 @@ def test_a_folder_of_several_tasks_asks_which(tmp_path):
     ("benchmarks.learning.suite_sweep", [f"docs/bench/suite_sweep/InvertedDoublePendulum-v5-180s-h200x4/idp-{arm}.json"
                                          for arm in ("u0-s0", "u0-s1", "u0-s2", "u0-s3", "u1e7", "nofalse")], 4),
     ("benchmarks.learning.suite_sweep", ["docs/bench/suite_sweep/Hopper-v5-300s-h200x4/sweep-gamma.json"], 3),
+    ("benchmarks.learning.suite_sweep", ["docs/bench/suite_sweep/HalfCheetah-v5-600s-h200x4/sweep-entropy-net.json"], 5),
+    ("benchmarks.learning.suite_sweep", ["docs/bench/suite_sweep/Swimmer-v5-300s-h200x4/sweep-gamma-horizon.json"], 5),
+    ("benchmarks.learning.suite_sweep", ["docs/bench/suite_sweep/InvertedPendulum-v5-180s-h200x4/sweep-kl.json"], 3),
     ("benchmarks.learning.reacher_planner", ["docs/bench/reacher_planner.json"], 4),
     ("benchmarks.learning.reacher_planner", ["docs/bench/reacher_planner_25knots.json"], 3)])
 def test_the_published_nodes_exits_and_planner_tables_are_what_their_scripts_print(capsys, module, args, count):
