@@ -137,6 +137,22 @@ def test_suite_learning_report_merges_runs_made_alike_and_refuses_others(tmp_pat
     with pytest.raises(SystemExit, match="made differently"):
         sl.report([str(tmp_path / "a"), str(tmp_path / "c")])
     assert sl.half(-2.6) == -5.2 and sl.half(5850.0) == 2925.0
+    # a row made on another card stands beside the others, marked in both tables and named in a note; the header
+    # names the card most rows ran on
+    for seed in (0, 1):
+        doc(tmp_path / "d", "Walker2d-v5", seed, rollout_graph="step")
+        doc(tmp_path / "e", "Swimmer-v5", seed, gpu="NVIDIA H200", rollout_graph="step")
+    assert sl.report([str(tmp_path / "a"), str(tmp_path / "b"), str(tmp_path / "d"), str(tmp_path / "e")]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("warpgym PPO, NVIDIA H100 80GB HBM3;")
+    assert [line.split(" | ")[0] for line in out.splitlines() if line.startswith("| Swimmer-v5")] == \
+        ["| Swimmer-v5 ‡"] * 2  # the table's row and the README's
+    assert not [line for line in out.splitlines() if line.startswith(("| Hopper-v5 ‡", "| Walker2d-v5 ‡"))]
+    assert "‡ made on another card than the other rows' NVIDIA H100 80GB HBM3: Swimmer-v5 on NVIDIA H200" in out
+    # one row's seeds on two cards: its minutes to the figure would be neither card's
+    doc(tmp_path / "e", "Walker2d-v5", 2, gpu="NVIDIA H200", rollout_graph="step")
+    with pytest.raises(SystemExit, match=r"the seeds of Walker2d-v5 ran on different cards"):
+        sl.report([str(tmp_path / "d"), str(tmp_path / "e")])
 
 
 def test_suite_learning_gives_a_candidate_presets_runs_a_row_of_their_own(tmp_path, capsys, monkeypatch):

@@ -6,8 +6,9 @@ then scored by ``warpgym eval`` (30 episodes in ``gymnasium.make``'s env, 10 fro
 same episodes in warpgym's, started from Gymnasium's states; a policy that holds less than 0.95 there is
 scored again on 100 episodes, 10 from each of 10 seeds, the first 30 among them, and also played from
 those starts moved by 1e-9, Gymnasium against itself). One JSON per run
-(``OUT/<task>-seed<k>.json``); ``--report`` builds one table from several outputs, refusing runs made
-on different GPUs or with different budgets.
+(``OUT/<task>-seed<k>.json``); ``--report`` builds one table from several outputs, refusing runs made with
+different budgets or kernel caches, and a row whose seeds ran on different cards (a row made on another card
+than the others is marked ‡ and named in a note).
 
     python -m benchmarks.learning.suite_learning --out OUT --tasks Hopper-v5 Walker2d-v5 --seeds 0 1
     python -m benchmarks.learning.suite_learning --out OUT --seeds 0 1 --gpus 2    # one seed per GPU, at once
@@ -223,9 +224,9 @@ def minutes_to(rs: list[dict], ref: float, key: str = "target") -> str:
     return f"{_mean(done):.1f} ({len(done)}/{len(rs)})" if done else f"not reached (0/{len(rs)})"
 
 
-def readme_table(runs: list[dict]) -> str:
+def readme_table(runs: list[dict], marked: set[str] = frozenset()) -> str:
     """The README's table: each task's return in Gymnasium's env at its last mark (each seed's and their mean),
-    the published figure, and the minutes to it."""
+    the published figure, and the minutes to it; the ``marked`` rows (made on another card) get a ‡."""
     lines = ["| task | return in `gymnasium.make`'s env after 10 min (3 for the four small tasks), mean (each seed) | "
              "published figure | minutes to it (seeds) |", "|---|---|---|---|"]
     for task, rs in by_task_of(runs).items():
@@ -236,14 +237,15 @@ def readme_table(runs: list[dict]) -> str:
         score = (f"**{_mean(each):.{digits}f}** ({', '.join(f'{v:.{digits}f}' for v in each)})" if each
                  else "not scored yet (`--score OUT`)")  # a --no-score run, scored later on any machine
         source, version = REFERENCE_SOURCE[rs[0]["task"]], REFERENCE_VERSION[rs[0]["task"]]
-        lines.append(f"| {task} | {score} | {ref} ({source}, {version}) | "
+        lines.append(f"| {task}{' ‡' if task in marked else ''} | {score} | {ref} ({source}, {version}) | "
                      f"{minutes_to(rs, ref)} |")
     return "\n".join(lines)
 
 
-def table(runs: list[dict], peer: bool = False) -> str:
+def table(runs: list[dict], peer: bool = False, marked: set[str] = frozenset()) -> str:
     """One row per task: the marks' returns in Gymnasium's env (mean of seeds) and the rest of the issue's
-    columns. ``peer``: runs of a learner that trains in Gymnasium's env itself (no ratio to show)."""
+    columns. ``peer``: runs of a learner that trains in Gymnasium's env itself (no ratio to show); the
+    ``marked`` rows (made on another card) get a ‡."""
     by_task = by_task_of(runs)
     lines = ["| task | seeds | Gymnasium's env: return at each mark (mean of seeds) | reference | minutes to it "
              "(to half) | first iteration | samples | samples/s | Gymnasium / warpgym, lowest |",
@@ -279,7 +281,7 @@ def table(runs: list[dict], peer: bool = False) -> str:
         if not peer and starts and any(r.get("rollout_graph", "rollout") == "rollout" for r in rs):
             start += " †"
             whole = True
-        lines.append(f"| {task} | {len(rs)} | {'; '.join(cells)} | {ref if ref is not None else '-'} | {reach} | "
+        lines.append(f"| {task}{' ‡' if task in marked else ''} | {len(rs)} | {'; '.join(cells)} | {ref if ref is not None else '-'} | {reach} | "
                      f"{start} | {speed} | {ratio} |")
     if whole:
         lines += ["", "† the whole rollout captured as one graph (`--rollout-graph rollout`, the default before "
@@ -288,7 +290,8 @@ def table(runs: list[dict], peer: bool = False) -> str:
 
 
 def load_runs(folders: list[str], prefix: str) -> tuple[list[dict], set]:
-    """The runs of ``<prefix><task>-seed<k>.json`` files under ``folders`` and how each was made."""
+    """The runs of ``<prefix><task>-seed<k>.json`` files under ``folders``, each with the card it ran on
+    (``machine``), and how they were made (budget scale, kernel cache)."""
     runs, made = [], set()
     for folder in folders:
         for path in sorted(glob.glob(os.path.join(folder, f"{prefix}*-seed*.json"))):
@@ -296,9 +299,30 @@ def load_runs(folders: list[str], prefix: str) -> tuple[list[dict], set]:
                 continue
             doc = json.load(open(path))
             meta = doc["meta"]
-            made.add((meta.get("gpu") or meta.get("cpu"), meta["scale"], meta.get("kernel_cache")))
-            runs.append(doc["run"])
+            made.add((meta["scale"], meta.get("kernel_cache")))
+            runs.append(doc["run"] | {"machine": meta.get("gpu") or meta.get("cpu")})
     return runs, made
+
+
+def row_cards(runs: list[dict]) -> tuple[str, dict[str, str]]:
+    """The card most rows ran on, and each row made on another (row -> card). A time-to-figure is a property of
+    the card, so a row's seeds must share one: a row of several is refused, naming it."""
+    cards = {}
+    for row, rs in by_task_of(runs).items():
+        seen = sorted({r["machine"] for r in rs}, key=str)
+        if len(seen) > 1:
+            raise SystemExit(f"--report: the seeds of {row} ran on different cards ({seen}); a row's minutes to its "
+                             "figure are one card's: report each card's seeds apart")
+        cards[row] = seen[0]
+    counts = {c: list(cards.values()).count(c) for c in cards.values()}
+    main = max(sorted(counts, key=str), key=counts.get) if counts else None
+    return main, {row: card for row, card in cards.items() if card != main}
+
+
+def card_note(main: str, other: dict[str, str]) -> str:
+    """The note under a table whose rows ran on more than one card."""
+    return "‡ made on another card than the other rows' " + f"{main}: " + "; ".join(
+        f"{row} on {card}" for row, card in sorted(other.items()))
 
 
 def report(folders: list[str], figure: str | None = None) -> int:
@@ -306,24 +330,30 @@ def report(folders: list[str], figure: str | None = None) -> int:
     peers, peers_made = load_runs(folders, "sb3-")
     for kind, m in (("warpgym's", made), ("SB3's", peers_made)):
         if len(m) > 1:
-            raise SystemExit(f"--report: {kind} runs were made differently ({sorted(m, key=str)}: machine, budget "
+            raise SystemExit(f"--report: {kind} runs were made differently ({sorted(m, key=str)}: budget "
                              "scale, kernel cache); "
                              "report runs of one kind together")
     if not runs and not peers:
         raise SystemExit(f"--report: no <task>-seed<k>.json or sb3-<task>-seed<k>.json under {folders}")
     if runs:
-        gpu, scale, cache = next(iter(made))
+        scale, cache = next(iter(made))
+        gpu, other = row_cards(runs)
         print(f"warpgym PPO, {gpu}; budgets x{scale:g}; kernel cache {cache or 'not recorded'}; returns of the "
               "deterministic policy in gymnasium.make's env")
-        print(table(runs))
+        print(table(runs, marked=set(other)))
         print("References: SAC's best within 1 M steps, Tianshou's (SLM-Lab's on v5 for Pusher and HumanoidStandup).")
+        if other:
+            print(card_note(gpu, other))
         print("\nThe README's table:\n")
-        print(readme_table(runs))
+        print(readme_table(runs, marked=set(other)))
     if peers:
-        cpu, scale, _ = next(iter(peers_made))
+        scale, _ = next(iter(peers_made))
+        cpu, other = row_cards(peers)
         print(f"\nStable-Baselines3 PPO (RL Zoo hyperparameters), one core per run on {cpu}; budgets x{scale:g}; "
               "returns of the deterministic policy in gymnasium.make's env")
-        print(table(peers, peer=True))
+        print(table(peers, peer=True, marked=set(other)))
+        if other:
+            print(card_note(cpu, other))
     if figure:
         draw(runs, peers, figure)
     return 0
