@@ -41,6 +41,7 @@ import signal
 import subprocess
 import sys
 import time
+from collections import Counter
 
 from benchmarks.harness import gpu_slot, read_summary, train_in_parts, waits_out_sigterm
 from benchmarks.targets import REFERENCE, REFERENCE_SOURCE, REFERENCE_VERSION
@@ -224,6 +225,11 @@ def minutes_to(rs: list[dict], ref: float, key: str = "target") -> str:
     return f"{_mean(done):.1f} ({len(done)}/{len(rs)})" if done else f"not reached (0/{len(rs)})"
 
 
+def shown(row: str, marked: set[str]) -> str:
+    """A row's name in a table: with a ‡ where it was made on another card than the other rows (``card_note``)."""
+    return f"{row} ‡" if row in marked else row
+
+
 def readme_table(runs: list[dict], marked: set[str] = frozenset()) -> str:
     """The README's table: each task's return in Gymnasium's env at its last mark (each seed's and their mean),
     the published figure, and the minutes to it; the ``marked`` rows (made on another card) get a ‡."""
@@ -237,7 +243,7 @@ def readme_table(runs: list[dict], marked: set[str] = frozenset()) -> str:
         score = (f"**{_mean(each):.{digits}f}** ({', '.join(f'{v:.{digits}f}' for v in each)})" if each
                  else "not scored yet (`--score OUT`)")  # a --no-score run, scored later on any machine
         source, version = REFERENCE_SOURCE[rs[0]["task"]], REFERENCE_VERSION[rs[0]["task"]]
-        lines.append(f"| {task}{' ‡' if task in marked else ''} | {score} | {ref} ({source}, {version}) | "
+        lines.append(f"| {shown(task, marked)} | {score} | {ref} ({source}, {version}) | "
                      f"{minutes_to(rs, ref)} |")
     return "\n".join(lines)
 
@@ -281,7 +287,8 @@ def table(runs: list[dict], peer: bool = False, marked: set[str] = frozenset()) 
         if not peer and starts and any(r.get("rollout_graph", "rollout") == "rollout" for r in rs):
             start += " †"
             whole = True
-        lines.append(f"| {task}{' ‡' if task in marked else ''} | {len(rs)} | {'; '.join(cells)} | {ref if ref is not None else '-'} | {reach} | "
+        lines.append(f"| {shown(task, marked)} | {len(rs)} | {'; '.join(cells)} | {ref if ref is not None else '-'} | "
+                     f"{reach} | "
                      f"{start} | {speed} | {ratio} |")
     if whole:
         lines += ["", "† the whole rollout captured as one graph (`--rollout-graph rollout`, the default before "
@@ -314,14 +321,14 @@ def row_cards(runs: list[dict]) -> tuple[str, dict[str, str]]:
             raise SystemExit(f"--report: the seeds of {row} ran on different cards ({seen}); a row's minutes to its "
                              "figure are one card's: report each card's seeds apart")
         cards[row] = seen[0]
-    counts = {c: list(cards.values()).count(c) for c in cards.values()}
-    main = max(sorted(counts, key=str), key=counts.get) if counts else None
+    counts = Counter(cards.values())
+    main = max(sorted(counts, key=str), key=counts.get) if counts else None  # ties: the first name
     return main, {row: card for row, card in cards.items() if card != main}
 
 
 def card_note(main: str, other: dict[str, str]) -> str:
     """The note under a table whose rows ran on more than one card."""
-    return "‡ made on another card than the other rows' " + f"{main}: " + "; ".join(
+    return f"‡ made on another card than the other rows' {main}: " + "; ".join(
         f"{row} on {card}" for row, card in sorted(other.items()))
 
 
