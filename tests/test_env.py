@@ -232,3 +232,16 @@ def test_replayed_cpu_graph_steps_exactly_like_launches_from_python():
         assert (env._graph is not None) == replay
         runs.append(torch.stack(out))
     assert torch.equal(runs[0], runs[1])
+
+
+@pytest.mark.parametrize("module, name", [("warpgym.envs.locomotion", "LocomotionVecEnv"),
+                                          ("warpgym.envs.suite", "SuiteVecEnv")])
+def test_an_env_whose_constructor_raised_still_closes(module, name):
+    """A wrong kwarg raises in the constructor, before the renderer is set; Gymnasium's ``VectorEnv.__del__`` then
+    closes the half-built object (gymnasium 1.2.2), which once raised AttributeError on ``_view``."""
+    import importlib
+
+    cls = getattr(importlib.import_module(module), name)
+    env = cls.__new__(cls)  # what a constructor that raised at its first line leaves
+    env.close()
+    assert env.closed

@@ -25,6 +25,9 @@ class GraphVecEnv(VectorEnv):
     FAULTS = ("nan_actions", "diverged_resets", "solver_overflows")  # fault_counters' names, in _fault_totals' order
     # what each fault means and its fix, for agents.protocol's messages; the subclasses add the other two
     FAULT_HELP = {"nan_actions": "the policy sent NaN/inf actions; they were applied as 0"}
+    # until the subclass sets it: a constructor that raised (a wrong kwarg) leaves an object that Gymnasium's
+    # VectorEnv.__del__ still closes
+    _view = None
 
     @staticmethod
     def configured(task, max_episode_steps: int | None, overrides: dict):
