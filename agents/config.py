@@ -35,9 +35,11 @@ PRESETS.update({
     "Reacher-v5": dict(_SUITE, reward_scale=1.0),
     "Pusher-v5": dict(_SUITE, reward_scale=1.0),
     "Swimmer-v5": dict(_SUITE, reward_scale=1.0, gamma=0.9999),
-    "HalfCheetah-v5": _SUITE,
-    # annealed: under the KL-adapted rate the noise collapsed and the return fell back ("Presets")
-    "Hopper-v5": dict(_SUITE, anneal_lr=True),
+    # a larger network: the preset's noise collapsed and its return levelled at 0.91 of the figure ("Presets")
+    "HalfCheetah-v5": dict(_SUITE, net_dims=(512, 256, 128)),
+    # annealed: under the KL-adapted rate the noise collapsed and the return fell back; 0.999: at 0.99 seeds
+    # traded staying up for speed ("Presets")
+    "Hopper-v5": dict(_SUITE, anneal_lr=True, gamma=0.999),
     "Walker2d-v5": _SUITE,
     "Ant-v5": _SUITE,
     "Humanoid-v5": dict(_SUITE, net_dims=(400, 200, 100), reward_scale=0.05),

@@ -156,16 +156,16 @@ def test_suite_learning_report_merges_runs_made_alike_and_refuses_others(tmp_pat
 
 
 def test_suite_learning_gives_a_candidate_presets_runs_a_row_of_their_own(tmp_path, capsys, monkeypatch):
-    """``--config gamma=0.999``: the setting reaches warpgym train, names the run's JSON and folder, and the table
+    """``--config gamma=0.995``: the setting reaches warpgym train, names the run's JSON and folder, and the table
     and the README's table give those runs their own row beside the preset's; a wrong setting stops the command
     before any run with one line naming it."""
     from benchmarks.learning import suite_learning as sl
 
     calls = []
     monkeypatch.setattr(sl, "train_in_parts", lambda args, run_dir, budget, device: calls.append((args, run_dir)) or 1)
-    run = sl.train_one("Hopper-v5", 2, str(tmp_path), 1.0, "cpu", config=("gamma=0.999",))
-    assert calls[0][0][:6] == ["--task", "Hopper-v5", "--seed", "2", "--config", "gamma=0.999"]
-    assert os.path.basename(calls[0][1]) == "Hopper-v5-gamma=0.999-seed2" and run["config"] == ["gamma=0.999"]
+    run = sl.train_one("Hopper-v5", 2, str(tmp_path), 1.0, "cpu", config=("gamma=0.995",))
+    assert calls[0][0][:6] == ["--task", "Hopper-v5", "--seed", "2", "--config", "gamma=0.995"]
+    assert os.path.basename(calls[0][1]) == "Hopper-v5-gamma=0.995-seed2" and run["config"] == ["gamma=0.995"]
     assert sl.run_stem("Hopper-v5", 0) == "Hopper-v5-seed0" and sl.run_stem("Ant-v5", 1, ("net_dims=64,64",)) == \
         "Ant-v5-net_dims=64x64-seed1"
     marks = list(sl.marks_of("Hopper-v5", 1.0))
@@ -180,27 +180,27 @@ def test_suite_learning_gives_a_candidate_presets_runs_a_row_of_their_own(tmp_pa
         path.write_text(json.dumps({"meta": {"gpu": "NVIDIA H200", "scale": 1.0, "date": "2026-11-27"}, "run": run}))
 
     doc(0, [], 2600.0)
-    doc(0, ["gamma=0.999"], 3600.0)
-    doc(1, ["gamma=0.999"], 3500.0)
+    doc(0, ["gamma=0.995"], 3600.0)
+    doc(1, ["gamma=0.995"], 3500.0)
     assert sl.report([str(tmp_path)]) == 0
     out = capsys.readouterr().out
     assert "| Hopper-v5 | 1 | 1 min: 2600; 2 min: 2600; 5 min: 2600; 10 min: 2600 | 3542.2 | not reached (0/1)" in out
-    assert "| Hopper-v5 (gamma=0.999) | 2 | 1 min: 3550; 2 min: 3550; 5 min: 3550; 10 min: 3550 | 3542.2 | " \
+    assert "| Hopper-v5 (gamma=0.995) | 2 | 1 min: 3550; 2 min: 3550; 5 min: 3550; 10 min: 3550 | 3542.2 | " \
            "3.3 (1/2)" in out
-    assert "| Hopper-v5 (gamma=0.999) | **3550** (3600, 3500) | 3542.2 (Tianshou SAC, v3) | 3.3 (1/2) |" in out
-    assert sl.finished(str(tmp_path), "Hopper-v5", 1, ("gamma=0.999",))
+    assert "| Hopper-v5 (gamma=0.995) | **3550** (3600, 3500) | 3542.2 (Tianshou SAC, v3) | 3.3 (1/2) |" in out
+    assert sl.finished(str(tmp_path), "Hopper-v5", 1, ("gamma=0.995",))
     assert not sl.finished(str(tmp_path), "Hopper-v5", 1)
     runs, _ = sl.load_runs([str(tmp_path)], "")  # the curves: a panel each, not the two rows' seeds in one band
-    assert sorted(sl.figure_tasks(runs, [])) == ["Hopper-v5", "Hopper-v5 (gamma=0.999)"]
+    assert sorted(sl.figure_tasks(runs, [])) == ["Hopper-v5", "Hopper-v5 (gamma=0.995)"]
     assert sl.report([str(tmp_path)], str(tmp_path / "curves.png")) == 0 and (tmp_path / "curves-samples.png").exists()
     capsys.readouterr()
     played = []  # --score finds the kept policies in the run's own folder
     monkeypatch.setattr(sl, "play", lambda path, *a, **k: played.append(path) or {
         "gymnasium_return": 1.0, "warpgym_return": 1.0, "gymnasium_over_warpgym": 1.0, "episodes": 30, "seeds": [0]})
-    sl.score_run({"task": "Hopper-v5", "seed": 1, "config": ["gamma=0.999"], "scored": [],
+    sl.score_run({"task": "Hopper-v5", "seed": 1, "config": ["gamma=0.995"], "scored": [],
                   "kept": [{"mark_s": 60.0, "time_s": 61.0, "samples": 1, "checkpoint": "checkpoint-9.pt"}]},
                  str(tmp_path), 10, "cpu")
-    assert played and played[0] == os.path.join(str(tmp_path), "runs", "Hopper-v5-gamma=0.999-seed1", "checkpoint-9.pt")
+    assert played and played[0] == os.path.join(str(tmp_path), "runs", "Hopper-v5-gamma=0.995-seed1", "checkpoint-9.pt")
     with pytest.raises(SystemExit) as stop:
         sl.main(["--out", str(tmp_path), "--tasks", "Hopper-v5", "--config", "gamma=abc", "--device", "cpu"])
     err = capsys.readouterr().err.strip().splitlines()[-1]
@@ -208,6 +208,118 @@ def test_suite_learning_gives_a_candidate_presets_runs_a_row_of_their_own(tmp_pa
     with pytest.raises(SystemExit) as stop:
         sl.main(["--out", str(tmp_path), "--tasks", "Hopper-v5", "--config", "gama=0.9", "--device", "cpu"])
     assert stop.value.code == 2 and "'gama' is not a PPO setting" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as stop:  # the preset's own value is no candidate
+        sl.main(["--out", str(tmp_path), "--tasks", "Hopper-v5", "--config", "gamma=0.999", "--device", "cpu"])
+    assert stop.value.code == 2 and "--config gamma=0.999: Hopper-v5's preset holds it already; leave it out" in \
+        capsys.readouterr().err
+
+
+def test_suite_learning_promotes_a_candidates_rows_once_the_preset_holds_its_settings(tmp_path, capsys, monkeypatch):
+    """``--promote OUT --into DIR``: refused while agents/config.py's preset lacks the candidate's settings, while a run
+    is not scored, and while DIR holds the rows they replace; then written as the preset's rows (``config`` empty, the
+    settings kept as ``made_with``), which the table names as the task alone and --score and suite_versions still
+    find in the run's own folder."""
+    from agents import config as agents_config
+
+    from benchmarks.learning import suite_learning as sl
+    from benchmarks.learning import suite_versions as sv
+
+    src, dest = tmp_path / "out", tmp_path / "table"
+    os.makedirs(src)
+    os.makedirs(dest)
+    marks = list(sl.marks_of("Swimmer-v5", 1.0))
+
+    def doc(folder, seed, config, scored=True):
+        run = {"task": "Swimmer-v5", "seed": seed, "config": config, "marks_s": marks, "samples": 1e8,
+               "samples_per_s": 5e5, "reference": 44.4, "curve": [[10.0, 1e6, 1.0]], "first_iteration_s": 7.0,
+               "rollout_graph": "step", "evals": [{"time_s": 130.0, "samples": 1e7, "eval/return": 60.0}],
+               "kept": [{"mark_s": 600.0, "checkpoint": "checkpoint-7.pt"}],
+               "scored": [{"mark_s": m, "time_s": m, "samples": 1e6, "gymnasium_return": 60.0 + seed,
+                           "warpgym_return": 60.0, "gymnasium_over_warpgym": 1.0} for m in marks] if scored else []}
+        path = folder / f"{sl.run_stem('Swimmer-v5', seed, tuple(config))}.json"
+        path.write_text(json.dumps({"meta": {"gpu": "NVIDIA H200", "scale": 1.0, "date": "2026-11-27"}, "run": run}))
+        return path
+
+    for seed in (0, 1):
+        doc(src, seed, ["gamma=0.999"])
+    doc(dest, 0, [])  # the row the candidate would replace
+    argv = ["--promote", str(src), "--into", str(dest)]
+    with pytest.raises(SystemExit, match="which Swimmer-v5's preset in agents/config.py does not hold; change the "
+                                         "preset first"):
+        sl.main(argv)
+    presets = dict(agents_config.PRESETS)
+    presets["Swimmer-v5"] = dict(presets["Swimmer-v5"], gamma=0.999)
+    monkeypatch.setattr(agents_config, "PRESETS", presets)
+    with pytest.raises(SystemExit, match=r"still holds Swimmer-v5's rows \(Swimmer-v5-seed0.json\); move them to "
+                                         ".*superseded/ first"):
+        sl.main(argv)
+    os.makedirs(dest / "superseded")
+    os.rename(dest / "Swimmer-v5-seed0.json", dest / "superseded" / "Swimmer-v5-seed0-gamma-0.9999.json")
+    unscored = doc(src, 2, ["gamma=0.999"], scored=False)
+    with pytest.raises(SystemExit, match="is not a scored run; score it first"):
+        sl.main(argv)
+    os.remove(unscored)
+    with pytest.raises(SystemExit) as stop:
+        sl.main(["--promote", str(src)])
+    assert stop.value.code == 2 and "--into DIR" in capsys.readouterr().err
+    other = tmp_path / "out2"  # a second lane of the same candidate: its seeds join, a seed twice is refused
+    os.makedirs(other)
+    twin = doc(other, 1, ["gamma=0.999"])
+    with pytest.raises(SystemExit, match="are both Swimmer-v5's seed 1; promote one"):
+        sl.main(["--promote", str(src), str(other), "--into", str(dest)])
+    os.remove(twin)
+    doc(other, 3, ["gamma=0.999"])
+    assert sl.main(["--promote", str(src), str(other), "--into", str(dest)]) == 0
+    assert sorted(os.listdir(dest)) == ["Swimmer-v5-seed0.json", "Swimmer-v5-seed1.json", "Swimmer-v5-seed3.json",
+                                        "superseded"]
+    os.remove(dest / "Swimmer-v5-seed3.json")
+    promoted = json.loads((dest / "Swimmer-v5-seed1.json").read_text())
+    assert promoted["run"]["config"] == [] and promoted["run"]["made_with"] == ["gamma=0.999"]
+    assert promoted["meta"]["promoted"] and promoted["run"]["scored"][-1]["gymnasium_return"] == 61.0
+    capsys.readouterr()
+    assert sl.report([str(dest)]) == 0
+    assert "| Swimmer-v5 | **60.5** (60.0, 61.0) | 44.4 (Tianshou SAC, v3) | 2.2 (2/2) |" in capsys.readouterr().out
+    # the promoted rows' policies are where the candidate's runs left them
+    assert sl.made_with(promoted["run"]) == ("gamma=0.999",)
+    os.makedirs(dest / "runs" / "Swimmer-v5-gamma=0.999-seed0")
+    os.makedirs(dest / "runs" / "Swimmer-v5-gamma=0.999-seed1")
+    played = []
+    monkeypatch.setattr(sv, "play", lambda path, *a, **k: played.append(os.path.relpath(path, dest)) or {
+        "episodes": 30, "gymnasium_return": 60.0, "gymnasium_length": 1000.0, "v4_return": 60.0, "v4_length": 1000.0,
+        "v4_over_v5": 1.0, "gymnasium_terms": {}, "v4_terms": {}})
+    for seed in (0, 1):
+        (dest / "runs" / f"Swimmer-v5-gamma=0.999-seed{seed}" / "checkpoint-7.pt").write_bytes(b"")
+    rows = sv.score([str(dest)], 10, "cpu")
+    assert sorted(played) == [os.path.join("runs", f"Swimmer-v5-gamma=0.999-seed{s}", "checkpoint-7.pt") for s in (0, 1)]
+    assert {r["task"] for r in rows} == {"Swimmer-v5"}
+
+
+def test_suite_versions_update_replaces_the_rows_of_the_runs_tasks_where_they_stood(monkeypatch, tmp_path):
+    """``--update JSON``: an earlier table's rows kept, those of the tasks the runs have replaced in place, a new task
+    last; the earlier table's meta kept under ``updated``; a file that is no such table is one line naming it."""
+    from benchmarks.learning import suite_versions as sv
+
+    def r(task, seed, value):
+        return {"task": task, "seed": seed, "mark_s": 600.0, "v5_return": value, "v4_return": value,
+                "v4_over_v5": 1.0, "v5_length": 1000.0, "v4_length": 1000.0, "v5_terms": {}, "v4_terms": {}}
+
+    old = [r("Reacher-v5", 0, -4.0), r("Hopper-v5", 0, 2000.0), r("Hopper-v5", 1, 2100.0), r("Swimmer-v5", 0, 40.0)]
+    new = [r("Hopper-v5", s, 3700.0) for s in range(4)] + [r("Walker2d-v5", 0, 6000.0)]
+    got = sv.updated(old, new)
+    assert [(x["task"], x["seed"], x["v5_return"]) for x in got] == [
+        ("Reacher-v5", 0, -4.0), *[("Hopper-v5", s, 3700.0) for s in range(4)], ("Swimmer-v5", 0, 40.0),
+        ("Walker2d-v5", 0, 6000.0)]
+    table = tmp_path / "versions.json"
+    table.write_text(json.dumps({"meta": {"date": "2026-11-26", "command": "earlier"}, "rows": old}))
+    monkeypatch.setattr(sv, "score", lambda folders, episodes, device: new[:4])
+    assert sv.main(["--runs", str(tmp_path), "--update", str(table)]) == 0
+    written = json.loads(table.read_text())
+    assert [x["task"] for x in written["rows"]] == ["Reacher-v5"] + ["Hopper-v5"] * 4 + ["Swimmer-v5"]
+    assert written["meta"]["updated"] == {"date": "2026-11-26", "command": "earlier"}
+    (tmp_path / "bad.json").write_text("[]")
+    with pytest.raises(SystemExit) as stop:
+        sv.main(["--runs", str(tmp_path), "--update", str(tmp_path / "bad.json")])
+    assert stop.value.code == 2
 
 
 def test_suite_learning_reads_minutes_to_the_reference_from_the_runs_evaluations():

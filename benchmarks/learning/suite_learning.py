@@ -13,11 +13,14 @@ than the others is marked ‡ and named in a note).
     python -m benchmarks.learning.suite_learning --out OUT --tasks Hopper-v5 Walker2d-v5 --seeds 0 1
     python -m benchmarks.learning.suite_learning --out OUT --seeds 0 1 --gpus 2    # one seed per GPU, at once
     python -m benchmarks.learning.suite_learning --report OUT OUT2 ...
-    python -m benchmarks.learning.suite_learning --out OUT --tasks Hopper-v5 --seeds 0 1 2 --config gamma=0.999
+    python -m benchmarks.learning.suite_learning --out OUT --tasks Swimmer-v5 --seeds 0 1 2 --config gamma=0.999
 
 ``--config NAME=VALUE`` (``warpgym train --config``) makes a candidate preset's row: its runs and JSON carry the
-setting in their names (``Hopper-v5-gamma=0.999-seed0.json``), and the table gives them a row of their own
-("Hopper-v5 (gamma=0.999)") beside the preset's, so that a preset changes only after its row is measured.
+setting in their names (``Swimmer-v5-gamma=0.999-seed0.json``), and the table gives them a row of their own
+("Swimmer-v5 (gamma=0.999)") beside the preset's, so that a preset changes only after its row is measured. Once
+agents/config.py's preset holds the settings, ``--promote OUT [OUT2 ...] --into docs/bench/suite_learning`` writes
+the candidate's JSON there as the preset's rows (``Swimmer-v5-seed0.json``, the settings kept as ``made_with``),
+after the rows they replace have moved to ``superseded/``.
 
 A machine call shorter than a run (10-minute runs, 10-minute calls) stops it with SIGTERM: the run saves its
 iteration, and the same command in the next call goes on with it (``warpgym train --resume``, its clock, marks and
@@ -81,8 +84,14 @@ def run_stem(task: str, seed: int, config: tuple[str, ...] = ()) -> str:
     return f"{task}-{label.replace(' ', '_').replace(',', 'x')}-seed{seed}" if label else f"{task}-seed{seed}"
 
 
+def made_with(run: dict) -> tuple[str, ...]:
+    """The settings a run was trained with beyond its preset then, which name its folder: a candidate's
+    ``config``, kept as ``made_with`` once promoted to the preset's row."""
+    return tuple(run.get("config") or run.get("made_with") or ())
+
+
 def row_name(run: dict) -> str:
-    """The table's row for a run: its task, and the settings it changed, if any (``Hopper-v5 (gamma=0.999)``)."""
+    """The table's row for a run: its task, and the settings it changed, if any (``Swimmer-v5 (gamma=0.999)``)."""
     config = run.get("config") or []
     return f"{run['task']} ({' '.join(config)})" if config else run["task"]
 
@@ -169,7 +178,7 @@ def play(target: str, episodes: int, seeds, out_json: str, device: str | None, e
 def score_run(run: dict, out: str, episodes: int, device: str | None) -> dict:
     """Score each kept policy of ``run`` (trained under ``out``) by ``warpgym eval`` in Gymnasium's env;
     policies it already holds, scored as this function scores them, are kept as they are."""
-    run_dir = os.path.join(out, "runs", run_stem(run["task"], run["seed"], tuple(run.get("config") or ())))
+    run_dir = os.path.join(out, "runs", run_stem(run["task"], run["seed"], made_with(run)))
     earlier = {s["mark_s"]: s for s in run.get("scored", []) if settled(s)}
     below = {s["mark_s"] for s in run.get("scored", []) if not settled(s)}  # known below HOLDS on SEEDS
     scored, results = [], {}
@@ -366,6 +375,52 @@ def report(folders: list[str], figure: str | None = None) -> int:
     return 0
 
 
+def promote(srcs: list[str], dest: str) -> int:
+    """A candidate preset's rows (``<task>-<settings>-seed<k>.json`` under ``srcs``, scored) as the preset's rows in
+    ``dest`` (``<task>-seed<k>.json``), once agents/config.py's preset holds the settings: ``config`` emptied, the
+    settings kept as ``made_with``. Refused, naming the fix, where the preset does not hold them yet, a run is
+    not scored, two candidates of one task are there, or ``dest`` still has the rows they replace."""
+    from warpgym.cli import write_json  # noqa: PLC0415
+    from warpgym.cli.train_args import is_preset  # noqa: PLC0415
+
+    docs, settings = {}, {}
+    for path in sorted(p for src in srcs for p in glob.glob(os.path.join(src, "*-seed*.json"))):
+        doc = json.load(open(path))
+        run = doc["run"]
+        if os.path.basename(path).startswith("sb3-") or not run.get("config"):
+            continue
+        task, config = run["task"], tuple(run["config"])
+        if "error" in run or needs_scoring(run):
+            raise SystemExit(f"--promote: {path} is not a scored run; score it first "
+                             f"(--score {os.path.dirname(path) or '.'})")
+        if not is_preset(task, list(config)):
+            raise SystemExit(f"--promote: {path} was made with {' '.join(config)}, which {task}'s preset in "
+                             "agents/config.py does not hold; change the preset first")
+        if settings.setdefault(task, config) != config:
+            raise SystemExit(f"--promote: {' '.join(srcs)} hold two candidates of {task} "
+                             f"({' '.join(settings[task])}; {' '.join(config)}); promote one candidate's folders")
+        twin = [p for p, d in docs.items() if (d["run"]["task"], d["run"]["seed"]) == (task, run["seed"])]
+        if twin:
+            raise SystemExit(f"--promote: {twin[0]} and {path} are both {task}'s seed {run['seed']}; promote one")
+        docs[path] = doc
+    if not docs:
+        raise SystemExit(f"--promote {' '.join(srcs)}: no candidate's row (<task>-<settings>-seed<k>.json) there")
+    for task in settings:
+        old = sorted(os.path.basename(p) for p in glob.glob(os.path.join(dest, f"{task}-seed*.json")))
+        if old:
+            raise SystemExit(f"--promote: {dest} still holds {task}'s rows ({', '.join(old)}); move them to "
+                             f"{os.path.join(dest, 'superseded')}/ first, named for what made them")
+    os.makedirs(dest, exist_ok=True)
+    for path, doc in docs.items():
+        run = doc["run"]
+        doc["run"] = {**run, "config": [], "made_with": run["config"]}
+        doc["meta"]["promoted"] = time.strftime("%Y-%m-%d")
+        target = os.path.join(dest, f"{run_stem(run['task'], run['seed'])}.json")
+        write_json(target, doc)
+        print(f"{path} -> {target} (made with {' '.join(run['config'])}, now {run['task']}'s preset)")
+    return 0
+
+
 def _band(runs: list[dict], x: int, smooth: int):
     """The seeds' training-return curves on one grid: x, mean, lowest, highest (seeds shaded)."""
     import numpy as np  # noqa: PLC0415
@@ -503,6 +558,10 @@ def main(argv=None) -> int:
     ap.add_argument("--no-score", action="store_true",
                     help="train only (keep the GPU for training); score later with --score OUT on any machine")
     ap.add_argument("--score", metavar="OUT", help="score the kept policies of the runs under OUT not yet scored")
+    ap.add_argument("--promote", nargs="+", metavar="OUT",
+                    help="a candidate's scored rows under OUT... as its task's preset rows (--into), once "
+                         "agents/config.py's preset holds its settings")
+    ap.add_argument("--into", metavar="DIR", help="with --promote: the table's folder, e.g. docs/bench/suite_learning")
     ap.add_argument("--gpus", type=int, default=1,
                     help="seeds at once, one process per GPU with an equal share of the cores (default 1)")
     ap.add_argument("--runs-at-once", type=int, default=1, help=argparse.SUPPRESS)  # set by --gpus for its children
@@ -512,10 +571,14 @@ def main(argv=None) -> int:
                     help="warpgym train's rollout capture (default: train's own, step); it shapes the first iteration")
     ap.add_argument("--config", action="append", default=[], metavar="NAME=VALUE",
                     help="a setting other than the preset's, as warpgym train --config takes it (repeat for more): "
-                         "its runs get a row of their own, e.g. 'Hopper-v5 (gamma=0.999)'")
+                         "its runs get a row of their own, e.g. 'Swimmer-v5 (gamma=0.999)'")
     args = ap.parse_args(argv)
     if args.report:
         return report(args.report, args.figure)
+    if args.promote:
+        if not args.into:
+            ap.error("--promote OUT... needs --into DIR, the table's folder (e.g. docs/bench/suite_learning)")
+        return promote(args.promote, args.into)
     from warpgym.cli import write_json  # noqa: PLC0415
 
     if args.score:
@@ -539,13 +602,16 @@ def main(argv=None) -> int:
     unknown = [t for t in tasks if t not in task_names("suite")]
     if unknown:
         ap.error(f"--tasks {unknown}: choose from {task_names('suite')}")
-    from warpgym.cli.train_args import task_config  # noqa: PLC0415
+    from warpgym.cli.train_args import is_preset, task_config  # noqa: PLC0415
 
     for task in tasks:  # a wrong setting is said now, not in each run's train.log
         try:
             task_config(task, args.config)
         except ValueError as e:
             ap.error(f"--config: {e}")
+        same = [c for c in args.config if is_preset(task, [c])]
+        if same:  # its row would stand beside the preset's as if it differed
+            ap.error(f"--config {' '.join(same)}: {task}'s preset holds it already; leave it out")
     config = tuple(args.config)
     os.makedirs(args.out, exist_ok=True)
     if args.gpus > 1:

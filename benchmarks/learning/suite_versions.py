@@ -11,6 +11,10 @@ otherwise and Pusher's v4 needs MuJoCo < 3: they are left out.
 
     python -m benchmarks.learning.suite_versions --runs OUT [OUT2 ...] --json docs/bench/suite_versions.json
     python -m benchmarks.learning.suite_versions --report docs/bench/suite_versions.json
+    python -m benchmarks.learning.suite_versions --runs OUT --update docs/bench/suite_versions.json
+
+``--update JSON`` keeps an earlier table's rows and replaces those of the rows (tasks) the runs have, in place:
+a row made again (a preset changed) needs only its own policies, not every earlier run's checkpoints.
 
 ``--runs`` takes suite_learning.py's output folders (the ``<task>-seed<k>.json`` and the ``runs/`` beside
 them, where the checkpoints are); the policies' own ``.v4.json`` lie beside their checkpoints, and a policy
@@ -29,7 +33,7 @@ import time
 
 
 from benchmarks.harness import read_report  # noqa: E402
-from benchmarks.learning.suite_learning import SEEDS, play, row_name, run_stem  # noqa: E402
+from benchmarks.learning.suite_learning import SEEDS, made_with, play, row_name, run_stem  # noqa: E402
 from benchmarks.targets import REFERENCE, REFERENCE_VERSION  # noqa: E402
 
 
@@ -57,7 +61,7 @@ def score(folders: list[str], episodes: int, device: str | None) -> list[dict]:
             if "error" in run or SUITE[run["task"]].v4_observation is None:
                 continue
             last = run["kept"][-1]
-            stem = run_stem(run["task"], run["seed"], tuple(run.get("config") or ()))
+            stem = run_stem(run["task"], run["seed"], made_with(run))
             ckpt = os.path.join(folder, "runs", stem, last["checkpoint"])
             if not os.path.exists(ckpt):
                 raise SystemExit(f"{path}: its last policy {ckpt} is not there; --runs takes the folder that "
@@ -72,6 +76,19 @@ def score(folders: list[str], episodes: int, device: str | None) -> list[dict]:
                          "v4_return": r["v4_return"], "v4_length": r["v4_length"], "v4_over_v5": r["v4_over_v5"],
                          "v5_terms": r["gymnasium_terms"], "v4_terms": r["v4_terms"]})
     return rows
+
+
+def updated(old: list[dict], new: list[dict]) -> list[dict]:
+    """``old`` rows with each row (task) that ``new`` has replaced by ``new``'s, where it stood; new rows last."""
+    fresh = {r["task"] for r in new}
+    out, placed = [], set()
+    for r in old:
+        if r["task"] not in fresh:
+            out.append(r)
+        elif r["task"] not in placed:
+            placed.add(r["task"])
+            out += [n for n in new if n["task"] == r["task"]]
+    return out + [n for n in new if n["task"] not in placed]
 
 
 def table(rows: list[dict]) -> str:
@@ -106,6 +123,9 @@ def main(argv=None) -> int:
     ap.add_argument("--runs", nargs="+", metavar="OUT", help="suite_learning.py output folders")
     ap.add_argument("--report", metavar="JSON", help="print the table of an earlier --json")
     ap.add_argument("--json", metavar="JSON", help="write the rows here")
+    ap.add_argument("--update", metavar="JSON",
+                    help="an earlier --json whose rows these runs' rows replace, row by row (written back to it "
+                         "unless --json names another file)")
     ap.add_argument("--eval-episodes", type=int, default=10, help="episodes per reset seed of 3 (default 10)")
     ap.add_argument("--device", default=None)
     args = ap.parse_args(argv)
@@ -116,14 +136,31 @@ def main(argv=None) -> int:
         ap.error("--runs OUT... (suite_learning.py's output folders) or --report JSON")
     if args.eval_episodes < 1:
         ap.error(f"--eval-episodes {args.eval_episodes}: must be a positive integer, e.g. 10")
+    earlier_rows, earlier_meta = None, None
+    if args.update:
+        try:
+            with open(args.update) as f:
+                earlier = json.load(f)
+        except (OSError, ValueError) as e:
+            earlier = e
+        if not isinstance(earlier, dict) or not isinstance(earlier.get("rows"), list):
+            ap.error(f"--update {args.update}: not a table an earlier --json wrote ({earlier!r:.80}); pass one, "
+                     "e.g. docs/bench/suite_versions.json")
+        earlier_rows, earlier_meta = earlier["rows"], earlier.get("meta")
     rows = score(args.runs, args.eval_episodes, args.device)
     if not rows:
         raise SystemExit(f"--runs {args.runs}: no run of a task that plays in v4 (<task>-seed<k>.json)")
+    if earlier_rows is not None:
+        rows = updated(earlier_rows, rows)
+        args.json = args.json or args.update
     if args.json:
         from warpgym.cli import write_json  # noqa: PLC0415
 
-        write_json(args.json, {"meta": {"date": time.strftime("%Y-%m-%d"), "command": " ".join(
-            ["python -m benchmarks.learning.suite_versions"] + (argv or sys.argv[1:]))}, "rows": rows})
+        meta = {"date": time.strftime("%Y-%m-%d"), "command": " ".join(
+            ["python -m benchmarks.learning.suite_versions"] + (argv or sys.argv[1:]))}
+        if earlier_meta is not None:
+            meta["updated"] = earlier_meta  # how the rows kept from it were made
+        write_json(args.json, {"meta": meta, "rows": rows})
     print(table(rows))
     return 0
 

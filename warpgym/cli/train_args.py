@@ -156,6 +156,15 @@ def task_config(task: str, texts: list[str]) -> dict:
     return config
 
 
+def is_preset(task: str, texts: list[str]) -> bool:
+    """Whether the settings ``texts`` leave ``task``'s preset as agents/config.py holds it now (a candidate's
+    settings once the preset took them)."""
+    from agents.config import Config  # noqa: PLC0415
+
+    preset = Config.for_task(TASK_NAMES[task.lower()])
+    return preset.replace(**task_config(task, texts)) == preset
+
+
 # Config fields that have a flag of their own: a config error names the flag (with_flag_names)
 FLAG_FIELDS = ("num_envs", "max_iterations", "total_steps", "eval_envs", "save_gap", "horizon_len", "minibatch_size",
                "repeat_times", "episode_length", "substeps", "time_limit", "learning_rate", "eval_gap", "seed")
