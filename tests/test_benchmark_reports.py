@@ -697,9 +697,9 @@ def test_suite_versions_plays_again_only_what_changed(monkeypatch, tmp_path):
 
 
 def test_the_published_suite_tables_are_what_their_scripts_print_from_the_committed_runs(capsys):
-    """docs/benchmarks.md's learning table (warpgym's and SB3's) and its v4-beside-v5 table, row for row, as
-    ``suite_learning.py --report`` and ``suite_versions.py --report`` print them from docs/bench: a row whose JSON
-    changed without the page (or the other way round) fails here."""
+    """docs/benchmarks.md's learning table (warpgym's and SB3's, and the candidate's row) and its v4-beside-v5 table,
+    row for row, as ``suite_learning.py --report`` and ``suite_versions.py --report`` print them from docs/bench: a
+    row whose JSON changed without the page (or the other way round) fails here."""
     from benchmarks.learning import suite_learning as sl
     from benchmarks.learning import suite_versions as sv
 
@@ -718,6 +718,10 @@ def test_the_published_suite_tables_are_what_their_scripts_print_from_the_commit
         readme = set(f.read().splitlines())
     readme_rows = [line for line in readme_part.splitlines() if line.startswith("| ") and "---" not in line]
     assert len(readme_rows) == 1 + 11 and [r for r in readme_rows if r not in readme] == []
+    # a candidate's row, shown (indented) where the page says why it is not the preset
+    assert sl.report([os.path.join(bench, "suite_learning", "candidates")]) == 0
+    candidate = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| Swimmer-v5 (")]
+    assert len(candidate) == 2 and candidate[0] in {line.strip() for line in page}
 
 
 @pytest.mark.parametrize("folder, task, settings", [("multi_gpu", "Ant", 9), ("multi_gpu", "Humanoid", 3),
