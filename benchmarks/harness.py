@@ -110,16 +110,16 @@ def gpu_slot(gpu: int, gpus: int) -> dict:
     return {"env": child_env(CUDA_VISIBLE_DEVICES=ids[gpu]), "preexec_fn": lambda: os.sched_setaffinity(0, mine)}
 
 
-def read_report(path: str, what: str) -> dict:
-    """The JSON an earlier run of a benchmark wrote, for its ``--report``; a missing or damaged file ends the
-    process with one line naming it and ``what`` to pass instead."""
+def read_report(path: str, what: str, flag: str = "--report") -> dict:
+    """The JSON an earlier run of a benchmark wrote, for its ``--report`` (or the ``flag`` that reads one); a missing
+    or damaged file ends the process with one line naming it and ``what`` to pass instead."""
     try:
         with open(path) as f:
             return json.load(f)
     except FileNotFoundError:
-        raise SystemExit(f"--report {path}: no such file; pass {what}") from None
+        raise SystemExit(f"{flag} {path}: no such file; pass {what}") from None
     except (OSError, ValueError) as e:
-        raise SystemExit(f"--report {path}: cannot be read as JSON ({e}); pass {what}") from None
+        raise SystemExit(f"{flag} {path}: cannot be read as JSON ({e}); pass {what}") from None
 
 
 def reported(ap, args, report, what: str) -> bool:

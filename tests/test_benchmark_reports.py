@@ -294,7 +294,7 @@ def test_suite_learning_promotes_a_candidates_rows_once_the_preset_holds_its_set
     assert {r["task"] for r in rows} == {"Swimmer-v5"}
 
 
-def test_suite_versions_update_replaces_the_rows_of_the_runs_tasks_where_they_stood(monkeypatch, tmp_path):
+def test_suite_versions_update_replaces_the_rows_of_the_runs_tasks_where_they_stood(monkeypatch, tmp_path, capsys):
     """``--update JSON``: an earlier table's rows kept, those of the tasks the runs have replaced in place, a new task
     last; the earlier table's meta kept under ``updated``; a file that is no such table is one line naming it."""
     from benchmarks.learning import suite_versions as sv
@@ -319,7 +319,12 @@ def test_suite_versions_update_replaces_the_rows_of_the_runs_tasks_where_they_st
     (tmp_path / "bad.json").write_text("[]")
     with pytest.raises(SystemExit) as stop:
         sv.main(["--runs", str(tmp_path), "--update", str(tmp_path / "bad.json")])
-    assert stop.value.code == 2
+    assert stop.value.code == 2 and "--update" in capsys.readouterr().err
+    (tmp_path / "bad.json").write_text('{"rows": [')  # a damaged or missing file: harness.read_report's one line
+    with pytest.raises(SystemExit, match=r"--update .*bad.json: cannot be read as JSON"):
+        sv.main(["--runs", str(tmp_path), "--update", str(tmp_path / "bad.json")])
+    with pytest.raises(SystemExit, match=r"--update .*nowhere.json: no such file; pass the file an earlier --json"):
+        sv.main(["--runs", str(tmp_path), "--update", str(tmp_path / "nowhere.json")])
 
 
 def test_suite_learning_reads_minutes_to_the_reference_from_the_runs_evaluations():

@@ -138,14 +138,10 @@ def main(argv=None) -> int:
         ap.error(f"--eval-episodes {args.eval_episodes}: must be a positive integer, e.g. 10")
     earlier_rows, earlier_meta = None, None
     if args.update:
-        try:
-            with open(args.update) as f:
-                earlier = json.load(f)
-        except (OSError, ValueError) as e:
-            earlier = e
+        what = "the file an earlier --json wrote, e.g. docs/bench/suite_versions.json"
+        earlier = read_report(args.update, what, flag="--update")
         if not isinstance(earlier, dict) or not isinstance(earlier.get("rows"), list):
-            ap.error(f"--update {args.update}: not a table an earlier --json wrote ({earlier!r:.80}); pass one, "
-                     "e.g. docs/bench/suite_versions.json")
+            ap.error(f"--update {args.update}: holds no table of rows; pass {what}")
         earlier_rows, earlier_meta = earlier["rows"], earlier.get("meta")
     rows = score(args.runs, args.eval_episodes, args.device)
     if not rows:
