@@ -1,5 +1,6 @@
 """benchmarks/multi_gpu/rllib_vs_warpgym.py --report: the rows of several earlier runs in one table."""
 
+import copy
 import json
 import os
 import shutil
@@ -468,6 +469,16 @@ def test_suite_sweep_ranks_combinations_by_their_return_in_gymnasiums_env():
     assert lines[2] == "| 1 | gamma=0.995 | 2400.0 | 2400 | 736 | 2.00 M | 0.970 |"
     assert lines[3] == "| 2 | gamma=0.99 | 900.0 | 900 | - | 2.00 M | 0.990 |"  # a sweep that kept no lengths
     assert lines[4] == "| 3 | gamma=0.9 | failed | failed | - | - | - |"
+    # a sweep that recorded when each seed's evaluations reached the task's figure shows the minutes beside the return
+    timed = copy.deepcopy({**doc, "meta": {"task": "Hopper-v5"}})
+    timed["rows"][0]["runs"][0]["reaching"] = {"target": {"time_s": 135.0, "samples": 1}, "half": None}
+    timed["rows"][1]["runs"].append({**timed["rows"][1]["runs"][0], "seed": 1,
+                                     "reaching": {"target": None, "half": None}})
+    lines = sw.table(timed).splitlines()
+    assert "| per seed | minutes to 3542.2 (each seed) | episode length |" in lines[0]
+    assert lines[2] == "| 1 | gamma=0.995 | 2400.0 | 2400, 2400 | not reached, not reached | 736 | 2.00 M | 0.970 |"
+    assert lines[3] == "| 2 | gamma=0.99 | 900.0 | 900 | 2.2 | - | 2.00 M | 0.990 |"
+    assert lines[4] == "| 3 | gamma=0.9 | failed | failed | failed | - | - | - |"
 
     meta = {"task": "Hopper-v5", "seconds": 180.0, "seeds": [1], "gpu": "H100", "date": "2026-11-25", "command": "c"}
     both = sw.merged([{"meta": meta, "rows": doc["rows"][:1]}, {"meta": meta, "rows": doc["rows"][1:]}])
@@ -583,9 +594,11 @@ def test_suite_sweep_scores_its_policies_again_and_keeps_the_first_score(monkeyp
             json.dump({"gymnasium_return": value, "gymnasium_over_warpgym": 0.98, "gymnasium_length": 700.0}, f)
 
     monkeypatch.setattr(eval_command, "main", fake_eval)
-    for name in ("Hopper-v5-0", "Hopper-v5-1"):
+    for k, name in enumerate(("Hopper-v5-0", "Hopper-v5-1")):
         os.makedirs(tmp_path / "runs" / name)
         (tmp_path / "runs" / name / "checkpoint.pt").write_bytes(b"")
+        (tmp_path / "runs" / name / "metrics.jsonl").write_text(
+            json.dumps({"time_s": 60.0, "samples": 1, "eval/return": 1800.0 + 2000.0 * k}) + "\n")
     meta = {"task": "Hopper-v5", "seconds": 480.0, "seeds": [0, 1], "gpu": "H200", "date": "2026-11-25", "command": "c"}
     runs = [{"seed": s, "run_dir": f"/root/sw/runs/Hopper-v5-{s}", "gymnasium_return": 1000.0 + s, "ratio": 0.9,
              "samples_per_s": 5e5} for s in (0, 1)]
@@ -598,6 +611,10 @@ def test_suite_sweep_scores_its_policies_again_and_keeps_the_first_score(monkeyp
     assert row["gymnasium_return"] == 2500.0
     assert [r.get("gymnasium_return") for r in row["runs"]] == [2000.0, 3000.0, None]
     assert row["runs"][1]["first_score"] == {"gymnasium_return": 1001.0, "ratio": 0.9, "episodes": 5, "seeds": [0]}
+    # and each run's minutes to the figure (3542.2), from its folder's metrics
+    assert [r.get("reaching") for r in row["runs"]] == [{"target": None, "half": {"time_s": 60.0, "samples": 1}},
+                                                        {"target": {"time_s": 60.0, "samples": 1},
+                                                         "half": {"time_s": 60.0, "samples": 1}}, None]
     assert doc["meta"]["scoring"] == {"episodes": 10, "seeds": [0, 1, 2]}
     path.write_text(json.dumps(doc))  # scored again once more: the first score is still the sweep machine's
     again = sw.score_again(str(path), {"episodes": 20, "seeds": [0]}, "cpu")
@@ -607,6 +624,36 @@ def test_suite_sweep_scores_its_policies_again_and_keeps_the_first_score(monkeyp
     os.remove(tmp_path / "runs" / "Hopper-v5-1" / "checkpoint.pt")
     with pytest.raises(SystemExit, match="Hopper-v5-1/checkpoint.pt is missing; copy the sweep's runs/ folder"):
         sw.score_again(str(path), {"episodes": 10, "seeds": [0]}, "cpu")
+
+
+def test_suite_sweep_times_each_seed_to_the_tasks_figure_from_its_runs_metrics(tmp_path):
+    """``--times`` (and every sweep from 2026-11-27 on): each run's first evaluation at the task's published figure and
+    at half of it, read from the metrics in its folder beside the JSON, where no checkpoint came back."""
+    from benchmarks.learning import suite_sweep as sw
+
+    evals = {"Walker2d-v5-0": [(77.0, 2360.0), (137.0, 4962.0), (198.0, 5421.0)],
+             "Walker2d-v5-1": [(78.0, 984.0), (138.0, 1862.0), (199.0, 2400.0)]}
+    for name, points in evals.items():
+        os.makedirs(tmp_path / "runs" / name)
+        with open(tmp_path / "runs" / name / "metrics.jsonl", "w") as f:
+            for i, (t, ret) in enumerate(points):
+                f.write(json.dumps({"iteration": i, "time_s": t - 1.0, "samples": 10 * i}) + "\n")
+                f.write(json.dumps({"iteration": i, "time_s": t, "samples": 10 * i + 5, "eval/return": ret}) + "\n")
+    meta = {"task": "Walker2d-v5", "seconds": 200.0, "seeds": [1], "gpu": "H200", "date": "2026-11-27", "command": "c"}
+    rows = [{"label": f"num_envs={n}", "gymnasium_return": 5000.0,
+             "runs": [{"seed": 1, "run_dir": f"/root/W/runs/Walker2d-v5-{k}", "gymnasium_return": 5000.0, "ratio": 1.0,
+                       "samples_per_s": 6e5}]} for k, n in enumerate((8192, 16384))]
+    path = tmp_path / "sweep-Walker2d-v5.json"
+    path.write_text(json.dumps({"meta": meta, "rows": rows}))
+    assert sw.main(["--times", str(path)]) == 0
+    doc = json.loads(path.read_text())
+    first, second = (r["runs"][0]["reaching"] for r in doc["rows"])
+    assert first == {"target": {"time_s": 198.0, "samples": 25}, "half": {"time_s": 137.0, "samples": 15}}
+    assert second == {"target": None, "half": None}  # half of 5007: 2503.5
+    assert sw.minutes(doc["rows"][0]["runs"][0]) == "3.3" and sw.minutes(doc["rows"][1]["runs"][0]) == "not reached"
+    os.remove(tmp_path / "runs" / "Walker2d-v5-1" / "metrics.jsonl")
+    with pytest.raises(SystemExit, match="Walker2d-v5-1 has no metrics.jsonl; copy the sweep's runs/ folder"):
+        sw.main(["--times", str(path)])
 
 
 def test_rollout_capture_reports_medians_of_the_rounds_against_the_whole_rollouts_graph():
@@ -725,8 +772,9 @@ def test_the_published_suite_tables_are_what_their_scripts_print_from_the_commit
     assert len(readme_rows) == 1 + 11 and [r for r in readme_rows if r not in readme] == []
     # a candidate's row, shown (indented) where the page says why it is not the preset
     assert sl.report([os.path.join(bench, "suite_learning", "candidates")]) == 0
-    candidate = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| Swimmer-v5 (")]
-    assert len(candidate) == 2 and candidate[0] in {line.strip() for line in page}
+    out = capsys.readouterr().out.split("The README's table:")[0]
+    candidates = [line for line in out.splitlines() if line.startswith("| Swimmer-v5 (")]
+    assert len(candidates) == 3 and [c for c in candidates if c not in {line.strip() for line in page}] == []
 
 
 @pytest.mark.parametrize("folder, task, settings", [("multi_gpu", "Ant", 9), ("multi_gpu", "Humanoid", 3),
@@ -791,6 +839,7 @@ def test_a_folder_of_several_tasks_asks_which(tmp_path):
     ("benchmarks.learning.suite_sweep", ["docs/bench/suite_sweep/HalfCheetah-v5-600s-h200x4/sweep-entropy-net.json"], 5),
     ("benchmarks.learning.suite_sweep", ["docs/bench/suite_sweep/Swimmer-v5-300s-h200x4/sweep-gamma-horizon.json"], 5),
     ("benchmarks.learning.suite_sweep", ["docs/bench/suite_sweep/InvertedPendulum-v5-180s-h200x4/sweep-kl.json"], 3),
+    ("benchmarks.learning.suite_sweep", ["docs/bench/suite_sweep/Walker2d-v5-200s-h200x2/sweep-envs.json"], 3),
     ("benchmarks.learning.reacher_planner", ["docs/bench/reacher_planner.json"], 4),
     ("benchmarks.learning.reacher_planner", ["docs/bench/reacher_planner_25knots.json"], 3)])
 def test_the_published_nodes_exits_and_planner_tables_are_what_their_scripts_print(capsys, module, args, count):

@@ -3,7 +3,8 @@
 Every combination of the grid trains for --seconds with each seed (``warpgym train --config ...``),
 and its final policy is scored by ``warpgym eval`` in ``gymnasium.make``'s env: 10 episodes from each of
 the reset seeds 0, 1 and 2 by default, as the learning table scores (where episodes end by falls, 5 do not
-rank two settings). The table ranks the combinations by that return (mean over seeds), beside the training's
+rank two settings). The table ranks the combinations by that return (mean over seeds), beside each seed's minutes
+to the task's published figure by its own evaluations (the learning table's measure) and the training's
 throughput; the best row is the candidate preset for agents/config.py.
 
     python -m benchmarks.learning.suite_sweep --out OUT --task Hopper-v5 --seconds 120 \\
@@ -13,6 +14,7 @@ throughput; the best row is the candidate preset for agents/config.py.
         --grid normalize_obs=true,false --gpus 4          # 8 runs, 4 at once
     python -m benchmarks.learning.suite_sweep --report GPU0/sweep-Hopper-v5.json GPU1/sweep-Hopper-v5.json  # one table
     python -m benchmarks.learning.suite_sweep --score OUT/sweep-Hopper-v5.json   # score again, e.g. on a CPU after a GPU
+    python -m benchmarks.learning.suite_sweep --times OUT/sweep-Hopper-v5.json   # the minutes, from runs/ beside it
 
 On a host of several GPUs, ``--gpus N`` runs every setting and seed as its own process, N at a time, one per
 GPU, each pinned to its share of the cores (what a one-GPU machine with that many cores gives), and joins
@@ -44,6 +46,7 @@ import threading
 import time
 
 from benchmarks.harness import ROOT, read_summary, train_in_parts, waits_out_sigterm  # noqa: E402
+from benchmarks.targets import REFERENCE  # noqa: E402
 
 
 def parse_grid(texts: list[str]) -> dict[str, list[str]]:
@@ -120,8 +123,37 @@ def run_combo(task: str, combo: dict, seeds: list[int], seconds: float, out: str
             continue
         summary = read_summary(run_dir)
         runs.append({"seed": seed, "run_dir": run_dir, **score(run_dir, scoring, device),
-                     "samples": summary["final"]["samples"], "samples_per_s": summary["steady_samples_per_s_median"]})
+                     "samples": summary["final"]["samples"], "samples_per_s": summary["steady_samples_per_s_median"],
+                     "reaching": reaching_of(run_dir, task)})
     return {"combo": combo, "label": label, "runs": runs, "gymnasium_return": mean_return(runs)}
+
+
+def reaching_of(run_dir: str, task: str) -> dict:
+    """When the run's own evaluations first reached the task's published figure and half of it (None where never),
+    as the learning table counts its minutes: the sweep's other measure beside the final policy's return."""
+    from agents.logger import read_metrics  # noqa: PLC0415
+    from benchmarks.learning.suite_learning import reaching  # noqa: PLC0415
+
+    return reaching(read_metrics(run_dir), REFERENCE.get(task))
+
+
+def add_times(path: str) -> dict:
+    """A sweep's JSON with each run's ``reaching`` taken from its folder's metrics (runs/ beside the JSON), for
+    sweeps written before the sweep recorded it or whose policies did not come back (no checkpoint is read)."""
+    with open(path) as f:
+        doc = json.load(f)
+    runs_dir = os.path.join(os.path.dirname(os.path.abspath(path)), "runs")
+    for row in doc["rows"]:
+        for run in row["runs"]:
+            if "error" in run:
+                continue
+            here = os.path.join(runs_dir, os.path.basename(run["run_dir"]))
+            try:
+                run["reaching"] = reaching_of(here, doc["meta"]["task"])
+            except FileNotFoundError:
+                raise SystemExit(f"--times {path}: {here} has no metrics.jsonl; copy the sweep's runs/ folder "
+                                 "beside its JSON") from None
+    return doc
 
 
 def score_again(path: str, scoring: dict, device: str | None) -> dict:
@@ -141,7 +173,7 @@ def score_again(path: str, scoring: dict, device: str | None) -> dict:
             # scored again twice, the first score is still the one the sweep's machine gave
             first = run.get("first_score") or {**{k: run[k] for k in ("gymnasium_return", "ratio")},
                                                **scoring_of(doc["meta"])}
-            run.update(score(here, scoring, device), first_score=first)
+            run.update(score(here, scoring, device), first_score=first, reaching=reaching_of(here, doc["meta"]["task"]))
         row["gymnasium_return"] = mean_return(row["runs"])
     doc["meta"]["scoring"] = scoring
     return doc
@@ -152,10 +184,19 @@ def scoring_of(meta: dict) -> dict:
     return meta.get("scoring", {"episodes": 5, "seeds": [0]})
 
 
+def minutes(run: dict) -> str:
+    hit = (run.get("reaching") or {}).get("target")
+    return "failed" if "error" in run else f"{hit['time_s'] / 60:.1f}" if hit else "not reached"
+
+
 def table(doc: dict) -> str:
     rows = sorted(doc["rows"], key=lambda r: -(r["gymnasium_return"] if r["gymnasium_return"] is not None else -1e30))
-    lines = ["| rank | settings | Gymnasium's env: return (mean of seeds) | per seed | episode length | samples/s "
-             "| lowest ratio |", "|---:|---|---:|---|---:|---:|---:|"]
+    # minutes to the published figure, for sweeps that recorded them (2026-11-27 on, or --times)
+    timed = any("reaching" in x for r in rows for x in r["runs"])
+    figure = REFERENCE.get(doc.get("meta", {}).get("task"))
+    to = f" minutes to {figure} (each seed) |" if timed else ""
+    lines = ["| rank | settings | Gymnasium's env: return (mean of seeds) | per seed |" + to + " episode length | "
+             "samples/s | lowest ratio |", "|---:|---|---:|---|" + ("---|" if timed else "") + "---:|---:|---:|"]
     for i, r in enumerate(rows, 1):
         good = [x for x in r["runs"] if "error" not in x]
         ret = f"{r['gymnasium_return']:.1f}" if r["gymnasium_return"] is not None else "failed"
@@ -165,7 +206,8 @@ def table(doc: dict) -> str:
         length = f"{sum(lengths) / len(lengths):.0f}" if lengths else "-"
         sps = f"{sum(x['samples_per_s'] for x in good) / len(good) / 1e6:.2f} M" if good else "-"
         ratio = f"{min(x['ratio'] for x in good):.3f}" if good else "-"
-        lines.append(f"| {i} | {r['label']} | {ret} | {seeds} | {length} | {sps} | {ratio} |")
+        times = f" {', '.join(minutes(x) for x in r['runs'])} |" if timed else ""
+        lines.append(f"| {i} | {r['label']} | {ret} | {seeds} |{times} {length} | {sps} | {ratio} |")
     return "\n".join(lines)
 
 
@@ -283,6 +325,9 @@ def main(argv=None) -> int:
     ap.add_argument("--eval-seeds", type=int, nargs="+", default=[0, 1, 2], help="reset seeds (default 0 1 2)")
     ap.add_argument("--score", nargs="+", metavar="JSON",
                     help="score the sweeps' final policies again (--eval-episodes, --eval-seeds) and rewrite the JSON")
+    ap.add_argument("--times", nargs="+", metavar="JSON",
+                    help="add each run's minutes to the task's figure from its metrics (runs/ beside the JSON) and "
+                         "rewrite the JSON; for sweeps that did not record them")
     ap.add_argument("--device", default=None)
     ap.add_argument("--no-warm-up", action="store_true",
                     help="no short run to fill the kernel cache first (the first run then compiles on its clock)")
@@ -301,6 +346,12 @@ def main(argv=None) -> int:
         for path in args.score:
             write_json(path, score_again(path, scoring, args.device))
         args.report = args.score
+    if args.times:
+        from warpgym.cli import write_json  # noqa: PLC0415
+
+        for path in args.times:
+            write_json(path, add_times(path))
+        args.report = args.times
     if args.report:
         docs = []
         for path in args.report:
