@@ -109,6 +109,10 @@ class Config:
     seed: int = 0
     eval_gap: float = 30.0
     eval_envs: int = 64
+    # play each evaluation beside training, a frozen copy of the policy on a side CUDA stream, a few steps per
+    # iteration, instead of stopping the run for it (agents.background_eval); the run's last evaluation stays
+    # synchronous
+    eval_background: bool = False
     save_gap: int = 50
     keep_checkpoints: bool = False  # also keep checkpoint-<iteration>.pt at every save
     # wall-clock seconds since the run started at which to keep a checkpoint-<iteration>.pt (the first
@@ -161,7 +165,8 @@ class Config:
             v = getattr(self, name)
             if not (_is_number(v) and v >= 0):
                 raise ValueError(f"{name}={v!r} must be 0 or a positive number, e.g. {name}={getattr(Config, name)}")
-        for name in ("overlap", "compile_update", "normalize_obs", "tf32", "keep_checkpoints", "anneal_lr"):
+        for name in ("overlap", "compile_update", "normalize_obs", "tf32", "keep_checkpoints", "anneal_lr",
+                     "eval_background"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name}={getattr(self, name)!r} must be True or False")
         data_parallel.check_mode(self.multi_gpu)

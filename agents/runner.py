@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import torch
 
 from agents.actor_critic import ActorCritic
+from agents.background_eval import BackgroundEvaluation
 from agents.checkpoint import load_bytes, read_checkpoint_bytes, rng_state, save_atomic, set_rng_state
 from agents.clock import IterationClock, Lap
 from agents.collect import CAPTURES, Collector
@@ -66,6 +67,12 @@ class OnPolicyRunner:
         self.print = print_fn if main else (lambda s: None)
         self.eval_env = eval_env if main else None
         self.eval_recorder = eval_recorder if main else None
+        self.background: BackgroundEvaluation | None = None  # Config.eval_background; a recorder needs every step
+        if cfg.eval_background and self.eval_env is not None and self.eval_recorder is None:
+            eval_spec = env_spec(self.eval_env)
+            self.background = BackgroundEvaluation(
+                self.eval_env, self.policy, self.normalizer, cfg.normalize_obs, eval_spec.max_episode_steps,
+                self.device, cuda_graph and eval_spec.graph_capturable, self.print)
         self.start_time = start_time if start_time is not None else time.time()
         self.iteration = 0
         self.samples = 0
@@ -192,6 +199,8 @@ class OnPolicyRunner:
                 if self.cfg.anneal_lr:
                     self.ppo.lr_scale.fill_(1.0 - self._progress(last_iter, time_limit))
                 stats = self.iterate()
+                if self.background is not None:  # the evaluation under way takes its next steps beside
+                    self.background.advance()
                 self.clock.mark("update")
                 self.timer.lap("PPO update")
                 self.iteration += 1
@@ -250,6 +259,8 @@ class OnPolicyRunner:
         """Free the CUDA graphs (before ``destroy_process_group``: see ``PPO.release_graph``)."""
         self.ppo.release_graph()
         self.collector.graph = None
+        if self.background is not None:
+            self.background.close()
         if self.eval_recorder is not None:
             self.eval_recorder.close()
         if self.device.type == "cuda":
@@ -300,7 +311,15 @@ class OnPolicyRunner:
                 self.print(f"warning: {name} = {int(count)} by iteration {staged.iteration} (all processes): "
                            f"{self._fault_help.get(name, 'see the env documentation')}")
         due = final or self.elapsed() - self.last_eval_time >= self.cfg.eval_gap
-        if self.eval_env is not None and may_evaluate and due:
+        if self.background is not None and may_evaluate and not final:
+            row.update(self.background.poll() or {})
+            if due and not self.background.running:
+                self.last_eval_time = self.elapsed()
+                self.background.start(self.policy, self.normalizer, {
+                    "time_s": round(self.last_eval_time, 3), "samples": self.samples, "iteration": self.iteration})
+        elif self.eval_env is not None and may_evaluate and due:
+            if self.background is not None:  # the last evaluation: one of its own, now
+                self.background.drop()
             t_eval = time.perf_counter()
             row.update(self.evaluate())
             if self.eval_recorder is not None:

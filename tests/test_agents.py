@@ -583,3 +583,64 @@ def test_an_evaluation_logs_each_reward_term_summed_over_the_first_episode_of_ev
     assert result["eval/reward_step"] == pytest.approx(((1 + 2) + (1 + 2 + 3 + 4) + 21) / 3)
     assert result["eval/reward_alive"] + result["eval/reward_step"] == pytest.approx(result["eval/return"])
     assert not {"eval/x_position", "eval/reward_matrix"} & set(result)
+
+
+def test_a_background_evaluation_scores_the_weights_it_started_with_as_a_synchronous_one_does():
+    """agents.background_eval on the CPU: its steps, a chunk per ``advance()``, give the synchronous evaluation's
+    numbers for the policy and normaliser as they were at ``start()``, whatever training does to them meanwhile."""
+    from agents.background_eval import STEPS_PER_ITERATION, BackgroundEvaluation
+    from agents.evaluate import evaluate
+
+    torch.manual_seed(3)
+    policy = ActorCritic(4, 2, (16,), "elu", 1.0)
+    normalizer = RunningMeanStd(4, 5.0)
+    normalizer.update(torch.randn(256, 4) * 2.0 + 1.0)
+    normalize = normalizer  # the runner's normalize_obs=True path
+    max_steps = 2 * STEPS_PER_ITERATION + 5  # the last chunk runs past the episodes' end and counts nothing
+    expected = evaluate(PointMassVecEnv(6, episode_length=max_steps, seed=4), policy, normalize, max_steps)
+
+    bg = BackgroundEvaluation(PointMassVecEnv(6, episode_length=max_steps, seed=4), policy, normalizer, True,
+                              max_steps, torch.device("cpu"), capturable=False)
+    assert not bg.running and bg.poll() is None
+    bg.start(policy, normalizer, {"time_s": 12.5, "samples": 640, "iteration": 5})
+    with torch.no_grad():  # training moves on: the evaluation keeps the copy it took
+        for p in policy.parameters():
+            p.add_(0.5)
+    normalizer.update(torch.randn(256, 4) * 5.0)
+    polls = []
+    for _ in range(3):
+        assert bg.running
+        polls.append(bg.poll())
+        bg.advance()
+    result = bg.poll()
+    assert polls == [None, None, None] and not bg.running and bg.poll() is None
+    assert result["eval/policy_time_s"] == 12.5 and result["eval/policy_samples"] == 640
+    assert set(expected) <= set(result)
+    for key, value in expected.items():
+        assert result[key] == pytest.approx(value, rel=1e-6, abs=1e-6), key
+    assert result["eval/length"] == max_steps  # every episode ran to the time limit, and no further
+    # started again, it plays the weights as they are now: another number
+    bg.start(policy, normalizer, {"time_s": 30.0, "samples": 1280, "iteration": 10})
+    for _ in range(3):
+        bg.advance()
+    assert bg.poll()["eval/return"] != pytest.approx(expected["eval/return"], rel=1e-3)
+
+
+def test_a_run_with_background_evaluations_logs_them_on_later_rows_and_ends_with_its_own():
+    """``Config.eval_background``: each evaluation's numbers arrive on a row after the one that started it, stamped
+    with the policy's time and samples; no row carries an evaluation's time (none stopped the run), but the last,
+    whose evaluation is synchronous as without the option."""
+    cfg = Config(net_dims=(8,), horizon_len=4, minibatch_size=32, repeat_times=1, eval_gap=0.0, save_gap=10**6,
+                 eval_background=True)
+    runner = OnPolicyRunner(PointMassVecEnv(8), cfg, eval_env=PointMassVecEnv(4, episode_length=40),
+                            print_fn=lambda s: None)
+    history = runner.learn(max_iterations=12)
+    evaluated = [r for r in history[:-1] if "eval/return" in r]
+    # 40 steps: two chunks, an evaluation started at one row comes back two rows later, when the next one starts
+    assert len(evaluated) >= 3 and all("eval_s" not in r for r in history[:-1])
+    for r in evaluated:
+        assert r["eval/policy_time_s"] <= r["time_s"] and r["eval/policy_samples"] < r["samples"]
+        assert r["eval/policy_iteration"] < r["iteration"]
+    assert "eval_s" in history[-1] and "eval/policy_time_s" not in history[-1] and "eval/return" in history[-1]
+    with pytest.raises(ValueError, match="eval_background='yes' must be True or False"):
+        Config(eval_background="yes").validated()

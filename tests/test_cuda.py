@@ -103,6 +103,45 @@ def test_captured_rollout_matches_the_eager_one(task):
         _assert_rollouts_close(eager, captured)
 
 
+def test_background_evaluation_replayed_on_its_side_stream_matches_a_synchronous_one():
+    """agents.background_eval on a GPU: after one eager chunk the evaluation's steps (policy copy, MuJoCo Warp's
+    step, tally) replay as a CUDA graph on a side stream while the main stream changes the policy and works; the
+    result is the synchronous evaluation's of the weights at the start, read without a wait."""
+    from agents import Config, OnPolicyRunner
+    from agents.background_eval import BackgroundEvaluation
+    from agents.evaluate import evaluate
+    from warpgym.envs import make_vec_env
+
+    cfg = Config.for_task("Hopper-v5", horizon_len=8, minibatch_size=256)
+    runner = OnPolicyRunner(make_vec_env("Hopper-v5", num_envs=32, device=DEV, seed=1), cfg, print_fn=lambda s: None)
+    runner.collect()  # a normaliser with statistics
+    policy, normalizer = runner.policy, runner.normalizer
+
+    def eval_env():  # short episodes: the runs end (falls and time limits) inside the captured steps
+        return make_vec_env("Hopper-v5", num_envs=16, device=DEV, seed=5, max_episode_steps=150)
+
+    with torch.no_grad():
+        expected = evaluate(eval_env(), policy, normalizer, 150)
+    bg = BackgroundEvaluation(eval_env(), policy, normalizer, True, 150, torch.device(DEV), capturable=True)
+    bg.start(policy, normalizer, {"time_s": 1.0, "samples": 2, "iteration": 3})
+    busy = torch.randn(2048, 2048, device=DEV)
+    results = []
+    while not results:
+        bg.advance()
+        with torch.no_grad():  # training goes on on the main stream
+            for p in policy.parameters():
+                p.mul_(0.9)
+            busy = (busy @ busy).tanh_()
+        r = bg.poll()
+        if r is not None:
+            results.append(r)
+        elif bg.left == 0:
+            torch.cuda.synchronize()
+    assert bg.graph is not None
+    for key, value in expected.items():
+        assert results[0][key] == pytest.approx(value, rel=2e-2, abs=0.5), key
+
+
 def _assert_rollouts_close(eager, captured):
     for i, (a, b) in enumerate(zip(eager, captured)):
         for name in a:

@@ -1,0 +1,152 @@
+"""Evaluation beside training (``Config.eval_background``).
+
+An evaluation plays one episode per eval env, up to the episode length (1000 steps for most of Gymnasium's
+tasks), one step after another. On a GPU each step of 64 worlds is bound by the simulator's kernel launches,
+not by work, so a synchronous evaluation every 60 s costs 8-16 % of a 10-minute run (docs/benchmarks.md,
+"Presets") and says only every minute how far the policy has come.
+
+Here an evaluation plays a frozen copy of the policy and of the observation normaliser (taken when it starts),
+``STEPS_PER_ITERATION`` steps per training iteration: captured once as a CUDA graph and replayed on a side stream
+of its own, where its small kernels run beside the training's. Its result goes to pinned host memory on that
+stream and is read once an event says it is there: neither stream ever waits for the other during the
+evaluation, and the host never waits for either. Its row is the one logged when the result is read, so the
+minutes it gives to a target are those at which the number was known; ``eval/policy_time_s`` says when its
+policy was taken.
+
+On the CPU (or where the capture fails, or an env cannot be captured) the same steps run eagerly, interleaved
+with the iterations: the numbers are those a synchronous evaluation of the same weights gives (tests/test_agents.py).
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+
+import torch
+
+from agents.evaluate import EpisodeTally
+
+# eval steps queued per training iteration: 32 steps of 64 worlds (about 0.2 s of a GPU's launch-bound steps)
+# beside an iteration of 4096 worlds x 32 steps (0.3-0.5 s on the suite's tasks); an evaluation of 1000 steps
+# spans about 32 iterations
+STEPS_PER_ITERATION = 32
+
+
+class BackgroundEvaluation:
+    """One evaluation at a time of ``env``, ``STEPS_PER_ITERATION`` steps per ``advance()``."""
+
+    def __init__(self, env, policy, normalizer, normalize_obs: bool, max_steps: int, device: torch.device,
+                 capturable: bool, print_fn=print):
+        self.env, self.normalize_obs, self.device, self.print = env, normalize_obs, device, print_fn
+        self.policy = copy.deepcopy(policy).requires_grad_(False)  # the frozen copy it plays (graph reads by address)
+        self.normalizer = copy.deepcopy(normalizer)
+        self.tally = EpisodeTally(env.num_envs, max_steps, device)
+        self.chunks = math.ceil(max_steps / STEPS_PER_ITERATION)  # the last may run past max_steps: not counted
+        cuda = device.type == "cuda"
+        self.stream = torch.cuda.Stream(device) if cuda else None
+        self.capture = cuda and capturable
+        self.graph: torch.cuda.CUDAGraph | None = None
+        self.obs: torch.Tensor | None = None  # the env's latest observation, in a buffer of this object's own
+        self.host = None  # the result's pinned host copy
+        self.done: torch.cuda.Event | None = None
+        self.left = 0  # chunks still to queue
+        self.stamp: dict | None = None  # when the evaluated policy was taken; None: no evaluation under way
+        self._eager_chunks = 0
+        self._joined = False  # whether the side stream has waited for the main stream since the last eager work
+
+    @property
+    def running(self) -> bool:
+        return self.stamp is not None
+
+    @torch.no_grad()
+    def start(self, policy, normalizer, stamp: dict) -> None:
+        """Begin an evaluation of ``policy`` (and ``normalizer``) as they are now; ``stamp`` (time, samples,
+        iteration) comes back with its result."""
+        self.policy.load_state_dict(policy.state_dict())  # in place: a captured graph reads these tensors
+        self.normalizer.load_state_dict(normalizer.state_dict())
+        obs, _ = self.env.reset()
+        if self.obs is None:
+            self.obs = obs.clone()
+        else:
+            self.obs.copy_(obs)
+        self.tally.reset()
+        self.left, self.stamp, self.done, self._joined = self.chunks, stamp, None, False
+
+    def _step(self) -> None:
+        obs = self.normalizer(self.obs) if self.normalize_obs else self.obs
+        next_obs, reward, terminated, truncated, info = self.env.step(self.policy.act_deterministic(obs))
+        self.tally.add(reward, terminated, truncated, info)
+        self.obs.copy_(next_obs)
+
+    def _chunk(self) -> None:
+        for _ in range(STEPS_PER_ITERATION):
+            self._step()
+
+    @torch.no_grad()
+    def advance(self) -> None:
+        """Queue the evaluation's next steps (none if there is no evaluation under way or all are queued)."""
+        if self.left == 0:
+            return
+        if self.capture and self.graph is None and self._eager_chunks > 0:  # the first chunk warmed every kernel
+            self.graph = self._capture()
+        if self.graph is not None:
+            if not self._joined:  # the reset, the copied weights and any eager steps come first
+                self.stream.wait_stream(torch.cuda.current_stream(self.device))
+                self._joined = True
+            with torch.cuda.stream(self.stream):
+                self.graph.replay()
+        else:
+            self._chunk()
+            self._eager_chunks += 1
+            self._joined = False
+        self.left -= 1
+        if self.left == 0:
+            self._stage()
+
+    def _capture(self):
+        graph = torch.cuda.CUDAGraph()
+        try:
+            with torch.cuda.device(self.device), torch.cuda.graph(graph, capture_error_mode="thread_local"):
+                self._chunk()
+        except RuntimeError as e:
+            # nothing ran during the failed capture: the steps go on eagerly, beside nothing
+            self.capture = False
+            self.print(f"warning: capturing the background evaluation as a CUDA graph failed ({e}); "
+                       "it runs eagerly, interleaved with the iterations")
+            return None
+        return graph
+
+    def _stage(self) -> None:
+        """The result's copy to the host, queued behind the evaluation's last steps."""
+        if self.stream is None:
+            self.host = self.tally.means()
+            return
+        if not self._joined:
+            self.stream.wait_stream(torch.cuda.current_stream(self.device))
+        with torch.cuda.stream(self.stream):
+            means = self.tally.means()
+            if self.host is None or self.host.shape != means.shape:
+                self.host = torch.empty(means.shape, dtype=means.dtype, pin_memory=True)
+            self.host.copy_(means, non_blocking=True)
+            self.done = torch.cuda.Event()
+            self.done.record(self.stream)
+
+    def poll(self) -> dict | None:
+        """The finished evaluation's row entries (with its policy's time and samples), once its result is on
+        the host; None while it runs or when none is under way. Never waits."""
+        if self.stamp is None or self.left > 0 or (self.done is not None and not self.done.query()):
+            return None
+        row = self.tally.row(self.host.tolist())
+        row.update({f"eval/policy_{k}": v for k, v in self.stamp.items()})
+        self.stamp = None
+        return row
+
+    def drop(self) -> None:
+        """Abandon the evaluation under way (the run ends with a synchronous one)."""
+        if self.stream is not None:
+            torch.cuda.current_stream(self.device).wait_stream(self.stream)  # its env is free again
+        self.left, self.stamp = 0, None
+
+    def close(self) -> None:
+        self.drop()
+        self.graph = None
