@@ -223,10 +223,15 @@ def wait_for_rows(job, run, log, rows: int, timeout: float = 240) -> None:
 def test_finished_two_process_runs_exit_within_10_s_of_their_last_row(tmp_path):
     """A run whose time limit is read at a checkpoint iteration once left rank 0 a step ahead of the
     others: it finished while they waited in the next iteration's collectives (on GPUs, for ever).
-    --save-gap 1 makes every iteration a checkpoint iteration."""
-    for name, flags in (("gap1", ["--save-gap", "1", "--time-limit", "10"]),
-                        ("gap3", ["--save-gap", "3", "--time-limit", "11"]),
-                        ("iterations", ["--save-gap", "1", "--max-iterations", "12"])):
+    --save-gap 1 makes every iteration a checkpoint iteration. The time limits count from the processes' start,
+    which took 8-15 s on the two-core CI machine: they are set a few seconds past the first row of the run of 12
+    iterations, so that each run's limit ends it after several save gaps, not at its first row."""
+    jobs = [("iterations", ["--save-gap", "1", "--max-iterations", "12"]),
+            ("gap1", ["--save-gap", "1", "--time-limit", "+6"]), ("gap3", ["--save-gap", "3", "--time-limit", "+7"])]
+    start = None
+    for name, flags in jobs:
+        if flags[-1].startswith("+"):  # seconds after the first run's first row
+            flags = [*flags[:-1], f"{start + float(flags[-1][1:]):.1f}"]
         job, run, log = start_job(tmp_path, name, *flags)
         code = job.wait(timeout=240)
         ended = time.time()
@@ -236,6 +241,7 @@ def test_finished_two_process_runs_exit_within_10_s_of_their_last_row(tmp_path):
         assert len(read_metrics(str(run))) >= 6, name  # the time limits ended runs of several save gaps
         saved = load(str(run / "checkpoint.pt"), torch.device("cpu"))["iteration"]
         assert saved == read_metrics(str(run))[-1]["iteration"]
+        start = start or read_metrics(str(run))[0]["time_s"]
 
 
 @pytest.mark.skipif(not os.path.isdir("/proc"), reason="finds the worker processes through /proc")

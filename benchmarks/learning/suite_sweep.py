@@ -137,43 +137,42 @@ def reaching_of(run_dir: str, task: str) -> dict:
     return reaching(read_metrics(run_dir), REFERENCE.get(task))
 
 
-def add_times(path: str) -> dict:
-    """A sweep's JSON with each run's ``reaching`` taken from its folder's metrics (runs/ beside the JSON), for
-    sweeps written before the sweep recorded it or whose policies did not come back (no checkpoint is read)."""
+def runs_beside(path: str) -> tuple[dict, list[tuple[dict, str]]]:
+    """A sweep's JSON, and each of its finished runs with the run's folder on this machine: runs/ beside the JSON,
+    as the sweep wrote them (on another machine, the JSON's paths are that machine's)."""
     with open(path) as f:
         doc = json.load(f)
     runs_dir = os.path.join(os.path.dirname(os.path.abspath(path)), "runs")
-    for row in doc["rows"]:
-        for run in row["runs"]:
-            if "error" in run:
-                continue
-            here = os.path.join(runs_dir, os.path.basename(run["run_dir"]))
-            try:
-                run["reaching"] = reaching_of(here, doc["meta"]["task"])
-            except FileNotFoundError:
-                raise SystemExit(f"--times {path}: {here} has no metrics.jsonl; copy the sweep's runs/ folder "
-                                 "beside its JSON") from None
+    return doc, [(run, os.path.join(runs_dir, os.path.basename(run["run_dir"])))
+                 for row in doc["rows"] for run in row["runs"] if "error" not in run]
+
+
+def add_times(path: str) -> dict:
+    """A sweep's JSON with each run's ``reaching`` taken from its folder's metrics (runs/ beside the JSON), for
+    sweeps written before the sweep recorded it or whose policies did not come back (no checkpoint is read)."""
+    doc, runs = runs_beside(path)
+    for run, here in runs:
+        try:
+            run["reaching"] = reaching_of(here, doc["meta"]["task"])
+        except FileNotFoundError:
+            raise SystemExit(f"--times {path}: {here} has no metrics.jsonl; copy the sweep's runs/ folder "
+                             "beside its JSON") from None
     return doc
 
 
 def score_again(path: str, scoring: dict, device: str | None) -> dict:
     """A sweep's JSON with every final policy scored again with ``scoring`` (on this machine: the runs' folders
     sit beside the JSON, under runs/, as the sweep wrote them); the earlier score stays as ``first_score``."""
-    with open(path) as f:
-        doc = json.load(f)
-    runs_dir = os.path.join(os.path.dirname(os.path.abspath(path)), "runs")
+    doc, runs = runs_beside(path)
+    for run, here in runs:
+        if not os.path.exists(os.path.join(here, "checkpoint.pt")):
+            raise SystemExit(f"--score {path}: {here}/checkpoint.pt is missing; copy the sweep's runs/ folder "
+                             "beside its JSON")
+        # scored again twice, the first score is still the one the sweep's machine gave
+        first = run.get("first_score") or {**{k: run[k] for k in ("gymnasium_return", "ratio")},
+                                           **scoring_of(doc["meta"])}
+        run.update(score(here, scoring, device), first_score=first, reaching=reaching_of(here, doc["meta"]["task"]))
     for row in doc["rows"]:
-        for run in row["runs"]:
-            if "error" in run:
-                continue
-            here = os.path.join(runs_dir, os.path.basename(run["run_dir"]))
-            if not os.path.exists(os.path.join(here, "checkpoint.pt")):
-                raise SystemExit(f"--score {path}: {here}/checkpoint.pt is missing; copy the sweep's runs/ folder "
-                                 "beside its JSON")
-            # scored again twice, the first score is still the one the sweep's machine gave
-            first = run.get("first_score") or {**{k: run[k] for k in ("gymnasium_return", "ratio")},
-                                               **scoring_of(doc["meta"])}
-            run.update(score(here, scoring, device), first_score=first, reaching=reaching_of(here, doc["meta"]["task"]))
         row["gymnasium_return"] = mean_return(row["runs"])
     doc["meta"]["scoring"] = scoring
     return doc
