@@ -67,8 +67,11 @@ class OnPolicyRunner:
         self.print = print_fn if main else (lambda s: None)
         self.eval_env = eval_env if main else None
         self.eval_recorder = eval_recorder if main else None
-        self.background: BackgroundEvaluation | None = None  # Config.eval_background; a recorder needs every step
-        if cfg.eval_background and self.eval_env is not None and self.eval_recorder is None:
+        self.background: BackgroundEvaluation | None = None  # Config.eval_background
+        if cfg.eval_background and self.eval_recorder is not None:
+            self.print("eval_background: the evaluation video draws every step of it, so the evaluations stay "
+                       "synchronous (record no video to run them beside training)")
+        elif cfg.eval_background and self.eval_env is not None:
             eval_spec = env_spec(self.eval_env)
             self.background = BackgroundEvaluation(
                 self.eval_env, self.policy, self.normalizer, cfg.normalize_obs, eval_spec.max_episode_steps,

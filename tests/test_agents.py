@@ -642,5 +642,10 @@ def test_a_run_with_background_evaluations_logs_them_on_later_rows_and_ends_with
         assert r["eval/policy_time_s"] <= r["time_s"] and r["eval/policy_samples"] < r["samples"]
         assert r["eval/policy_iteration"] < r["iteration"]
     assert "eval_s" in history[-1] and "eval/policy_time_s" not in history[-1] and "eval/return" in history[-1]
+    # an evaluation video draws every step: the evaluations stay synchronous, and the run says so
+    said = []
+    recorded = OnPolicyRunner(PointMassVecEnv(8), cfg, eval_env=PointMassVecEnv(4, episode_length=40),
+                              print_fn=said.append, eval_recorder=object())
+    assert recorded.background is None and any("stay synchronous" in line for line in said)
     with pytest.raises(ValueError, match="eval_background='yes' must be True or False"):
         Config(eval_background="yes").validated()
