@@ -202,9 +202,10 @@ class OnPolicyRunner:
                 if self.cfg.anneal_lr:
                     self.ppo.lr_scale.fill_(1.0 - self._progress(last_iter, time_limit))
                 stats = self.iterate()
-                if self.background is not None:  # the evaluation under way takes its next steps beside
-                    self.background.advance()
                 self.clock.mark("update")
+                if self.background is not None:  # the evaluation under way queues its next steps beside
+                    self.background.advance()
+                    self.clock.mark("evaluation")  # on the main stream only where its steps run eagerly
                 self.timer.lap("PPO update")
                 self.iteration += 1
                 self.timer.iterations += 1

@@ -638,6 +638,8 @@ def test_a_run_with_background_evaluations_logs_them_on_later_rows_and_ends_with
     evaluated = [r for r in history[:-1] if "eval/return" in r]
     # 40 steps: two chunks, an evaluation started at one row comes back two rows later, when the next one starts
     assert len(evaluated) >= 3 and all("eval_s" not in r for r in history[:-1])
+    # its eager steps (the CPU) are a phase of their own, not the update's
+    assert all(r["phase/evaluation_s"] > 0 for r in history[1:-1])
     for r in evaluated:
         assert r["eval/policy_time_s"] <= r["time_s"] and r["eval/policy_samples"] < r["samples"]
         assert r["eval/policy_iteration"] < r["iteration"]
