@@ -194,8 +194,14 @@ def table(doc: dict) -> str:
     timed = any("reaching" in x for r in rows for x in r["runs"])
     figure = REFERENCE.get(doc.get("meta", {}).get("task"))
     to = f" minutes to {figure} (each seed) |" if timed else ""
+    # samples/s is the steady iterations' median, which leaves synchronous evaluations out and counts those run
+    # beside training (eval_background) in: where the minutes are compared, the samples of the whole budget are
+    # shown beside it, evaluations and start included
+    seconds = doc.get("meta", {}).get("seconds")
+    budget = (f" samples in {seconds:g} s |" if seconds else " samples in the budget |") if timed else ""
     lines = ["| rank | settings | Gymnasium's env: return (mean of seeds) | per seed |" + to + " episode length | "
-             "samples/s | lowest ratio |", "|---:|---|---:|---|" + ("---|" if timed else "") + "---:|---:|---:|"]
+             "samples/s |" + budget + " lowest ratio |",
+             "|---:|---|---:|---|" + ("---|" if timed else "") + "---:|---:|" + ("---:|" if timed else "") + "---:|"]
     for i, r in enumerate(rows, 1):
         good = [x for x in r["runs"] if "error" not in x]
         ret = f"{r['gymnasium_return']:.1f}" if r["gymnasium_return"] is not None else "failed"
@@ -206,7 +212,9 @@ def table(doc: dict) -> str:
         sps = f"{sum(x['samples_per_s'] for x in good) / len(good) / 1e6:.2f} M" if good else "-"
         ratio = f"{min(x['ratio'] for x in good):.3f}" if good else "-"
         times = f" {', '.join(minutes(x) for x in r['runs'])} |" if timed else ""
-        lines.append(f"| {i} | {r['label']} | {ret} | {seeds} |{times} {length} | {sps} | {ratio} |")
+        counted = [x["samples"] for x in good if "samples" in x]  # a run written without it reads "-"
+        total = (f" {sum(counted) / len(counted) / 1e6:.1f} M |" if counted else " - |") if timed else ""
+        lines.append(f"| {i} | {r['label']} | {ret} | {seeds} |{times} {length} | {sps} |{total} {ratio} |")
     return "\n".join(lines)
 
 
