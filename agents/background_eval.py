@@ -7,11 +7,13 @@ not by work, so a synchronous evaluation every 60 s costs 8-16 % of a 10-minute 
 
 Here an evaluation plays a frozen copy of the policy and of the observation normaliser (taken when it starts),
 ``STEPS_PER_ITERATION`` steps per training iteration: captured once as a CUDA graph and replayed on a side stream
-of its own, where its small kernels run beside the training's. Its result goes to pinned host memory on that
-stream and is read once an event says it is there: neither stream ever waits for the other during the
-evaluation, and the host never waits for either. Its row is the one logged when the result is read, so the
-minutes it gives to a target are those at which the number was known; ``eval/policy_time_s`` says when its
-policy was taken.
+of its own, for its small kernels to run beside the training's. Its result goes to pinned host memory on that
+stream and is read once an event says it is there: neither stream waits for the other during the evaluation.
+The host does wait, in the replay call: on an H200 the launch of a graph of MuJoCo Warp's steps returned only
+once most of it had run (145 ms of a chunk's 160; benchmarks/speed/background_overlap.py), so the training's
+next iteration is queued late and the two mostly take turns; off by default until that changes. Its row is the
+one logged when the result is read, so the minutes it gives to a target are those at which the number was known;
+``eval/policy_time_s`` says when its policy was taken.
 
 On the CPU (or where the capture fails, or an env cannot be captured) the same steps run eagerly, interleaved
 with the iterations: the numbers are those a synchronous evaluation of the same weights gives (tests/test_agents.py).

@@ -851,6 +851,8 @@ def test_a_folder_of_several_tasks_asks_which(tmp_path):
     ("benchmarks.learning.suite_sweep", ["docs/bench/suite_sweep/Walker2d-v5-200s-h200x4/sweep-eval-background.json"], 3),
     ("benchmarks.learning.suite_sweep", [f"docs/bench/suite_sweep/Walker2d-v5-200s-h200x4/sweep-eval-gap-20-seeds{s}.json"
                                          for s in ("0-3", "4-7")], 2),
+    ("benchmarks.speed.background_overlap", [f"docs/bench/background_eval/walker2d_h200_{name}.json"
+                                             for name in ("queues8", "queues32", "host_replays")], 6),
     ("benchmarks.learning.reacher_planner", ["docs/bench/reacher_planner.json"], 4),
     ("benchmarks.learning.reacher_planner", ["docs/bench/reacher_planner_25knots.json"], 3)])
 def test_the_published_nodes_exits_and_planner_tables_are_what_their_scripts_print(capsys, module, args, count):
@@ -1025,3 +1027,23 @@ def test_by_iteration_line_sets_the_settings_side_by_side_at_one_gpus_median_ite
     assert "2 GPUs split: 95.00 at iterations 24, noise std 0.40 (1 of 2 runs)" in out
     assert "4 GPUs grow: - (0 of 1 runs got that far)" in out
     assert scaling.by_iteration_line(doc, lines, 100.0, {**grouped, (1, "-"): grouped[(2, "split")]}) == ""
+
+
+def test_background_overlap_times_the_chunk_beside_the_iteration_and_refuses_empty_timings(tmp_path, capsys):
+    """benchmarks/speed/background_overlap.py on the CPU: the evaluation's chunks run eagerly (nothing to capture),
+    every timing is there and positive, the JSON reads back into the same table; zero iterations is one line."""
+    from benchmarks.speed import background_overlap as bo
+
+    out = tmp_path / "smoke.json"
+    assert bo.main(["--task", "Hopper-v5", "--num-envs", "16", "--eval-envs", "4", "--iterations", "1",
+                    "--repeats", "1", "--device", "cpu", "--json", str(out)]) == 0
+    doc = json.loads(out.read_text())
+    assert doc["captured"] is False and doc["host_replay_s"] == {} and doc["steps_per_chunk"] == 32
+    assert all(v > 0 for v in doc["median_s"].values()) and doc["launch_idle_s"] > 0
+    printed = capsys.readouterr().out
+    assert bo.main(["--report", str(out)]) == 0
+    row = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| Hopper-v5")]
+    assert len(row) == 1 and "(eager)" in row[0] and row[0] in printed
+    with pytest.raises(SystemExit) as stop:
+        bo.main(["--iterations", "0"])
+    assert stop.value.code == 2 and "--iterations 0" in capsys.readouterr().err
