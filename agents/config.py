@@ -79,6 +79,10 @@ class Config:
     value_clip: float = 0.2
     value_coef: float = 1.0
     entropy_coef: float = 0.0
+    # the noise's std is held at or under this after every optimiser step (0: unbounded; skrl's max_log_std as a
+    # std): an entropy bonus can push it past the actions' range, where the env clips most samples (Swimmer-v5's
+    # seed 3 at entropy_coef=0.01: 3.7, docs/benchmarks.md)
+    max_noise_std: float = 0.0
     bounds_coef: float = 1e-4  # keeps the action mean near [-1, 1], where the env clips
     max_grad_norm: float = 1.0
     desired_kl: float = 0.008  # 0 disables the adaptive learning rate
@@ -162,7 +166,7 @@ class Config:
             if not (_is_number(v) and v > 0):
                 raise ValueError(f"{name}={v!r} must be a positive number, e.g. {name}={getattr(Config, name)}")
         for name in ("value_clip", "value_coef", "entropy_coef", "bounds_coef", "desired_kl", "eval_gap",
-                     "normalize_until"):
+                     "normalize_until", "max_noise_std"):
             v = getattr(self, name)
             if not (_is_number(v) and v >= 0):
                 raise ValueError(f"{name}={v!r} must be 0 or a positive number, e.g. {name}={getattr(Config, name)}")

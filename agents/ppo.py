@@ -18,6 +18,8 @@ running them.
 
 from __future__ import annotations
 
+import math
+
 import torch
 
 from agents import data_parallel
@@ -145,6 +147,9 @@ class PPO:
         self.lr.copy_(self.lr_free * self.lr_scale)
         torch.nn.utils.clip_grad_norm_(policy.parameters(), cfg.max_grad_norm, foreach=True)
         self.optimizer.step()
+        if cfg.max_noise_std > 0:  # in place: the captured step holds the parameter's address
+            with torch.no_grad():
+                policy.log_std.clamp_(max=math.log(cfg.max_noise_std))
         step = torch.stack([terms[0], terms[1], terms[2], kl, terms[4], self.lr])
         self._sums += step
         torch.maximum(self._peaks, step[3::2], out=self._peaks)  # kl, lr

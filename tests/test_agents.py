@@ -203,6 +203,26 @@ def test_ppo_learns_a_point_mass_within_seconds():
     assert history[-1]["eval/return"] > -20
 
 
+def test_a_large_entropy_bonus_raises_the_noise_but_never_past_max_noise_std():
+    """``max_noise_std`` bounds what an entropy bonus does to the noise: without it a strong bonus on the point
+    mass pushes the std above 1.5 within a few updates; with 1.2 it ends at 1.2, never above, after every step;
+    a negative bound is one line naming it."""
+    def final_std(**bound):
+        env = PointMassVecEnv(64, seed=0)
+        cfg = Config(net_dims=(32, 32), horizon_len=25, minibatch_size=400, repeat_times=4, learning_rate=3e-2,
+                     entropy_coef=1.0, desired_kl=0, eval_gap=1e9, save_gap=10**6, seed=0, **bound)
+        runner = OnPolicyRunner(env, cfg, print_fn=lambda s: None)
+        logged = max(r["policy/noise_std"] for r in runner.learn(max_iterations=8))
+        return float(runner.policy.log_std.detach().exp().max()), logged
+
+    free, _ = final_std()
+    assert free > 1.5
+    bounded, peak_logged = final_std(max_noise_std=1.2)
+    assert bounded == pytest.approx(1.2, rel=1e-5) and peak_logged <= 1.2 + 1e-5
+    with pytest.raises(ValueError, match="max_noise_std=-1"):
+        Config(max_noise_std=-1).validated()
+
+
 @pytest.mark.parametrize("normalize_obs", [False, True])
 def test_a_rollout_stored_at_a_device_step_index_equals_a_plain_loop_over_the_steps(normalize_obs):
     """The runner's rollout step writes at an index held on the device (so one captured step can replay
