@@ -1031,7 +1031,8 @@ def test_by_iteration_line_sets_the_settings_side_by_side_at_one_gpus_median_ite
 
 def test_background_overlap_times_the_chunk_beside_the_iteration_and_refuses_empty_timings(tmp_path, capsys):
     """benchmarks/speed/background_overlap.py on the CPU: the evaluation's chunks run eagerly (nothing to capture),
-    every timing is there and positive, the JSON reads back into the same table; zero iterations is one line."""
+    every timing is there and positive, the JSON reads back into the same table; zero iterations is one line. A
+    table with an interleaved run beside older ones gives those "-" there."""
     from benchmarks.speed import background_overlap as bo
 
     out = tmp_path / "smoke.json"
@@ -1039,11 +1040,15 @@ def test_background_overlap_times_the_chunk_beside_the_iteration_and_refuses_emp
                     "--repeats", "1", "--device", "cpu", "--json", str(out)]) == 0
     doc = json.loads(out.read_text())
     assert doc["captured"] is False and doc["host_replay_s"] == {} and doc["steps_per_chunk"] == 32
+    assert "interleaved_s" not in doc  # a GPU's captured graphs only
     assert all(v > 0 for v in doc["median_s"].values()) and doc["launch_idle_s"] > 0
     printed = capsys.readouterr().out
     assert bo.main(["--report", str(out)]) == 0
     row = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| Hopper-v5")]
     assert len(row) == 1 and "(eager)" in row[0] and row[0] in printed
+    woven = {**doc, "interleaved_s": [0.4, 0.3], "overlap_interleaved": 0.75}
+    rows = [line for line in bo.table([doc, woven]).splitlines() if line.startswith("| Hopper-v5")]
+    assert rows[0].endswith("| - | - |") and rows[1].endswith("| 350.0 ms | 0.75 |")
     with pytest.raises(SystemExit) as stop:
         bo.main(["--iterations", "0"])
     assert stop.value.code == 2 and "--iterations 0" in capsys.readouterr().err

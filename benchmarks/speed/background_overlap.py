@@ -10,9 +10,14 @@ evaluation envs, each the median of --repeats timings of --iterations, in one pr
   both     an iteration with a chunk queued beside it, as the runner queues them
   launch   the host's time in queuing one chunk (``BackgroundEvaluation.advance``) right after an iteration was
            queued, nothing synchronised; "idle": the same call with the GPU idle (its own cost)
+  interleaved
+           an iteration whose rollout launches one evaluation step (a one-step graph, side stream) after each of
+           its own steps: the way to run them side by side if a long graph's launch is what keeps them apart
 
 and ``overlap = (train + eval - both) / min(train, eval)``: 1 where the chunk hides wholly beside the iteration,
-0 where the two take turns. Run it again under ``CUDA_DEVICE_MAX_CONNECTIONS=32`` to see whether the streams'
+0 where the two take turns (the interleaved iteration's likewise, beside the same evaluation steps). On a GPU it
+also reads the host's time in one replay call of graphs of each kind (the rollout's, the chunk's, torch's own,
+one and four env steps). Run it again under ``CUDA_DEVICE_MAX_CONNECTIONS=32`` to see whether the streams'
 hardware queues are what serialises them (the variable is read when CUDA starts: one process each).
 
     python -m benchmarks.speed.background_overlap --task Walker2d-v5 --json OUT/a.json
@@ -95,6 +100,7 @@ def measure(task: str, num_envs: int | None, eval_envs: int, iterations: int, re
             sync()
     med = {name: statistics.median(v) for name, v in times.items()}
     replays = host_replays(runner, bg, iterations, dev) if bg.graph is not None else {}
+    woven = interleaved(runner, bg, timed, repeats, dev) if bg.graph is not None else None
     return {"task": task, "num_envs": runner.spec.num_envs, "eval_envs": eval_envs,
             "steps_per_chunk": STEPS_PER_ITERATION, "captured": bg.graph is not None,
             "device": torch.cuda.get_device_name(dev) if dev.type == "cuda" else "cpu",
@@ -102,9 +108,50 @@ def measure(task: str, num_envs: int | None, eval_envs: int, iterations: int, re
             "iterations": iterations, "repeats": repeats, "times_s": times, "median_s": med,
             "launch_s": statistics.median(launch), "launch_idle_s": statistics.median(launch_idle),
             "host_replay_s": replays,
-            "overlap": (med["train"] + med["eval"] - med["both"]) / min(med["train"], med["eval"]),
+            "overlap": overlap_of(med["train"], med["eval"], med["both"]),
+            **({} if woven is None else {
+                "interleaved_s": woven["seconds"], "horizon": woven["horizon"],
+                # the same work as "both" when the horizon is the chunk's 32 steps; else scaled to it
+                "overlap_interleaved": overlap_of(med["train"], med["eval"] * woven["horizon"] / STEPS_PER_ITERATION,
+                                                  statistics.median(woven["seconds"]))}),
             "date": time.strftime("%Y-%m-%d"), "command": "python -m benchmarks.speed.background_overlap "
                                                            + " ".join(sys.argv[1:])}
+
+
+def overlap_of(a: float, b: float, together: float) -> float:
+    """How much of the shorter of two pieces of work hid beside the longer: 1 wholly, 0 not at all."""
+    return (a + b - together) / min(a, b)
+
+
+def interleaved(runner, bg, timed, repeats: int, dev) -> dict | None:
+    """A training iteration whose rollout launches one evaluation step on the side stream after each of its own
+    steps, the evaluation captured as a one-step graph (seconds an iteration, ``repeats`` timings). A launch that
+    holds the host then holds it for both, and the evaluation's steps are queued while the training's run: the
+    way to run them side by side if a long graph's launch is what keeps them apart. None where the rollout is not
+    captured step by step (``--rollout-graph step``, the default)."""
+    import torch  # noqa: PLC0415
+
+    from agents.collect import StepGraphs, capture_rollout  # noqa: PLC0415
+
+    steps = runner.collector.graph
+    if not isinstance(steps, StepGraphs):
+        return None
+    one = capture_rollout("step", bg._step, lambda: None, 1, dev).step  # noqa: SLF001  (the chunk's own step)
+
+    class Woven:
+        def replay(self):
+            for _ in range(steps.horizon):
+                steps.step.replay()
+                with torch.cuda.stream(bg.stream):
+                    one.replay()
+            steps.finish.replay()
+
+    bg.stream.wait_stream(torch.cuda.current_stream(dev))
+    runner.collector.graph = Woven()
+    try:
+        return {"seconds": [timed(runner.iterate) for _ in range(repeats)], "horizon": steps.horizon}
+    finally:
+        runner.collector.graph = steps
 
 
 def host_replays(runner, bg, n: int, dev) -> dict:
@@ -164,15 +211,19 @@ def host_replays(runner, bg, n: int, dev) -> dict:
 
 
 def table(docs: list[dict]) -> str:
+    woven = any("interleaved_s" in d for d in docs)  # measured since the fourth run
     lines = ["| task | device | CUDA_DEVICE_MAX_CONNECTIONS | envs / eval envs | train | eval chunk | both | launch "
-             "(idle) | overlap |", "|---|---|---|---|---:|---:|---:|---:|---:|"]
+             "(idle) | overlap |" + (" interleaved | its overlap |" if woven else ""),
+             "|---|---|---|---|---:|---:|---:|---:|---:|" + ("---:|---:|" if woven else "")]
     for d in docs:
         m = d["median_s"]
         captured = "" if d["captured"] else " (eager)"
         idle = f" ({d['launch_idle_s'] * 1e3:.2f} ms)" if "launch_idle_s" in d else ""  # measured since the first run
         lines.append(f"| {d['task']} | {d['device']} | {d['max_connections']} | {d['num_envs']} / {d['eval_envs']} | "
                      f"{m['train'] * 1e3:.1f} ms | {m['eval'] * 1e3:.1f} ms{captured} | {m['both'] * 1e3:.1f} ms | "
-                     f"{d['launch_s'] * 1e3:.2f} ms{idle} | {d['overlap']:.2f} |")
+                     f"{d['launch_s'] * 1e3:.2f} ms{idle} | {d['overlap']:.2f} |"
+                     + ((f" {statistics.median(d['interleaved_s']) * 1e3:.1f} ms | {d['overlap_interleaved']:.2f} |"
+                         if "interleaved_s" in d else " - | - |") if woven else ""))
     replayed = [d for d in docs if d.get("host_replay_s")]
     if replayed:  # measured since the second run
         names = list(replayed[0]["host_replay_s"])
