@@ -205,7 +205,9 @@ class OnPolicyRunner:
                 self.clock.mark("update")
                 if self.background is not None:  # the evaluation under way queues its next steps beside
                     self.background.advance()
-                    self.clock.mark("evaluation")  # on the main stream only where its steps run eagerly
+                    # eager steps run here; a captured chunk's replay holds the host while most of it runs
+                    # (benchmarks/speed/background_overlap.py), which this phase then shows as well
+                    self.clock.mark("evaluation")
                 self.timer.lap("PPO update")
                 self.iteration += 1
                 self.timer.iterations += 1

@@ -30,11 +30,12 @@ hardware queues are what serialises them (the variable is read when CUDA starts:
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import statistics
 import sys
 import time
+
+from benchmarks.harness import read_report, write_json  # noqa: E402
 
 # an evaluation that never ends within the timings: every advance() queues a chunk
 ENDLESS = 10**7
@@ -45,8 +46,8 @@ def measure(task: str, num_envs: int | None, eval_envs: int, iterations: int, re
 
     from agents import Config, OnPolicyRunner  # noqa: PLC0415
     from agents.background_eval import STEPS_PER_ITERATION, BackgroundEvaluation  # noqa: PLC0415
+    from warpgym.cli.bench import timed as timings  # noqa: PLC0415
     from warpgym.envs import make_vec_env  # noqa: PLC0415
-
     from warpgym.tasks.registry import task_entry  # noqa: PLC0415
 
     dev = torch.device(device)
@@ -69,13 +70,8 @@ def measure(task: str, num_envs: int | None, eval_envs: int, iterations: int, re
         bg.advance()
     sync()
 
-    def timed(step) -> float:
-        sync()
-        t = time.perf_counter()
-        for _ in range(iterations):
-            step()
-        sync()
-        return (time.perf_counter() - t) / iterations
+    def timed(step) -> float:  # seconds a call, over ``iterations`` calls, the device synchronised around them
+        return timings(step, iterations, 1, device)[0] / iterations
 
     def both():
         runner.iterate()
@@ -248,19 +244,13 @@ def main(argv=None) -> int:
     ap.add_argument("--report", nargs="+", metavar="JSON", help="print the table of earlier --json files")
     args = ap.parse_args(argv)
     if args.report:
-        docs = []
-        for path in args.report:
-            with open(path) as f:
-                docs.append(json.load(f))
-        print(table(docs))
+        print(table([read_report(path, "a JSON this script wrote with --json") for path in args.report]))
         return 0
     if args.iterations < 1 or args.repeats < 1 or args.eval_envs < 1:
         ap.error(f"--iterations {args.iterations} / --repeats {args.repeats} / --eval-envs {args.eval_envs}: each "
                  "at least 1, e.g. --iterations 20 --repeats 5 --eval-envs 64")
     doc = measure(args.task, args.num_envs, args.eval_envs, args.iterations, args.repeats, args.device)
     if args.json:
-        from warpgym.cli import write_json  # noqa: PLC0415
-
         os.makedirs(os.path.dirname(os.path.abspath(args.json)), exist_ok=True)
         write_json(args.json, doc)
     print(table([doc]))
