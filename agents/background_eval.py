@@ -5,39 +5,42 @@ tasks), one step after another. On a GPU each step of 64 worlds is bound by the 
 not by work, so a synchronous evaluation every 60 s costs 8-16 % of a 10-minute run (docs/benchmarks.md,
 "Presets") and says only every minute how far the policy has come.
 
-Here an evaluation plays a frozen copy of the policy and of the observation normaliser (taken when it starts),
-``STEPS_PER_ITERATION`` steps per training iteration: captured once as a CUDA graph and replayed on a side stream
-of its own, for its small kernels to run beside the training's. Its result goes to pinned host memory on that
-stream and is read once an event says it is there: neither stream waits for the other during the evaluation.
-The host does wait, in the replay call: on an H200 the launch of a graph of MuJoCo Warp's steps returned only
-once most of it had run (145 ms of a chunk's 160; benchmarks/speed/background_overlap.py), so the training's
-next iteration is queued late and the two mostly take turns; off by default until that changes. Its row is the
-one logged when the result is read, so the minutes it gives to a target are those at which the number was known;
-``eval/policy_time_s`` says when its policy was taken.
+Here an evaluation plays a frozen copy of the policy and of the observation normaliser (taken when it starts), one
+step beside each of the training rollout's: the collector calls ``beside()`` after each of its steps, and each call
+replays the evaluation's step, captured once as a one-step CUDA graph, on a side stream of its own, for its small
+kernels to run beside the training's. Its result goes to pinned host memory on that stream and is read once an event
+says it is there: neither stream waits for the other during the evaluation. One step at a time because a replay
+holds the host: on an H200 the launch of a 32-step graph of MuJoCo Warp steps returned only once most of it had run
+(145-150 ms of its 160), so a chunk queued after the iteration mostly took turns with the next one (0.24-0.29 of it
+overlapped), while one step's graph returns in 0.2-0.5 ms and the steps woven one by one overlapped 0.85-0.88
+(benchmarks/speed/background_overlap.py; docs/benchmarks.md, "Walker2d-v5's evaluations"). Where the rollout has no
+steps to weave into (captured whole), ``advance()`` queues ``STEPS_PER_ITERATION`` steps after the iteration. Its
+row is the one logged when the result is read, so the minutes it gives to a target are those at which the number
+was known; ``eval/policy_time_s`` says when its policy was taken.
 
-On the CPU (or where the capture fails, or an env cannot be captured) the same steps run eagerly, interleaved
-with the iterations: the numbers are those a synchronous evaluation of the same weights gives (tests/test_agents.py).
+On the CPU (or where the capture fails, or an env cannot be captured) the same steps run eagerly, woven into the
+rollout's likewise: the numbers are those a synchronous evaluation of the same weights gives (tests/test_agents.py).
 """
 
 from __future__ import annotations
 
 import copy
-import math
 
 import torch
 
 from agents.collect import capture_rollout
 from agents.evaluate import EpisodeTally
 
-# eval steps queued per training iteration: 32 steps of 64 worlds took 0.17-0.28 s as synchronous evaluations (a
-# 1000-step evaluation: Walker2d-v5's 5.4 s on an H200, Ant-v5's 8.7 s on an H100), beside iterations of 4096
-# worlds x 32 steps of 0.13-0.69 s (HalfCheetah-v5 to HumanoidStandup-v5 at the learning table's samples/s); an
-# evaluation of 1000 steps spans 32 iterations
+# eval steps queued per iteration by advance() where the rollout wove none in: 32 steps of 64 worlds took 0.17-0.28 s
+# as synchronous evaluations (a 1000-step evaluation: Walker2d-v5's 5.4 s on an H200, Ant-v5's 8.7 s on an H100),
+# beside iterations of 4096 worlds x 32 steps of 0.13-0.69 s; an evaluation of 1000 steps spans 32 iterations, as
+# it does woven into the presets' 32-step rollouts
 STEPS_PER_ITERATION = 32
 
 
 class BackgroundEvaluation:
-    """One evaluation at a time of ``env``, ``STEPS_PER_ITERATION`` steps per ``advance()``."""
+    """One evaluation at a time of ``env``: a step per ``beside()`` (the collector's, after each rollout step), or
+    ``STEPS_PER_ITERATION`` per ``advance()`` where the iteration's rollout launched none."""
 
     def __init__(self, env, policy, normalizer, normalize_obs: bool, max_steps: int, device: torch.device,
                  capturable: bool, print_fn=print):
@@ -45,18 +48,19 @@ class BackgroundEvaluation:
         self.policy = copy.deepcopy(policy).requires_grad_(False)  # the frozen copy it plays (graph reads by address)
         self.normalizer = copy.deepcopy(normalizer)
         self.tally = EpisodeTally(env.num_envs, max_steps, device)
-        self.chunks = math.ceil(max_steps / STEPS_PER_ITERATION)  # the last may run past max_steps: not counted
+        self.max_steps = max_steps
         cuda = device.type == "cuda"
         self.stream = torch.cuda.Stream(device) if cuda else None
         self.capture = cuda and capturable
-        self.graph: torch.cuda.CUDAGraph | None = None
+        self.graph: torch.cuda.CUDAGraph | None = None  # one step's, once captured
         self.obs: torch.Tensor | None = None  # the env's latest observation, in a buffer of this object's own
         self.host = None  # the result's pinned host copy
         self.done: torch.cuda.Event | None = None
-        self.left = 0  # chunks still to queue
+        self.left = 0  # steps still to queue
         self.stamp: dict | None = None  # when the evaluated policy was taken; None: no evaluation under way
-        self._eager_chunks = 0
-        self._joined = False  # whether the side stream has waited for the main stream since the last eager work
+        self._eager_steps = 0
+        self._woven = 0  # steps queued by beside() since the last advance()
+        self._joined = False  # whether the side stream has waited for the current stream since the last eager work
 
     @property
     def running(self) -> bool:
@@ -74,25 +78,35 @@ class BackgroundEvaluation:
         else:
             self.obs.copy_(obs)
         self.tally.reset()
-        self.left, self.stamp, self.done, self._joined = self.chunks, stamp, None, False
+        self.left, self.stamp, self.done, self._joined = self.max_steps, stamp, None, False
 
-    def _step(self) -> None:
+    def play_step(self) -> None:
+        """One step of every eval env by the frozen policy, tallied (what the graph captures)."""
         obs = self.normalizer(self.obs) if self.normalize_obs else self.obs
         next_obs, reward, terminated, truncated, info = self.env.step(self.policy.act_deterministic(obs))
         self.tally.add(reward, terminated, truncated, info)
         self.obs.copy_(next_obs)
 
-    def _chunk(self) -> None:
-        for _ in range(STEPS_PER_ITERATION):
-            self._step()
+    @torch.no_grad()
+    def beside(self) -> None:
+        """Queue the evaluation's next step, after a step of the training's (none if no evaluation is under way or
+        all its steps are queued)."""
+        if self.left > 0:
+            self._queue_step()
+            self._woven += 1
 
     @torch.no_grad()
     def advance(self) -> None:
-        """Queue the evaluation's next steps (none if there is no evaluation under way or all are queued)."""
-        if self.left == 0:
-            return
-        if self.capture and self.graph is None and self._eager_chunks > 0:  # the first chunk warmed every kernel
+        """Between iterations: capture the step once its kernels have run eagerly, and queue
+        ``STEPS_PER_ITERATION`` steps if the iteration's rollout wove none in."""
+        woven, self._woven = self._woven, 0
+        if self.capture and self.graph is None and self._eager_steps > 0:
             self.graph = self._capture()
+        if woven == 0:
+            for _ in range(min(STEPS_PER_ITERATION, self.left)):
+                self._queue_step()
+
+    def _queue_step(self) -> None:
         if self.graph is not None:
             if not self._joined:  # the reset, the copied weights and any eager steps come first
                 self.stream.wait_stream(torch.cuda.current_stream(self.device))
@@ -100,21 +114,21 @@ class BackgroundEvaluation:
             with torch.cuda.stream(self.stream):
                 self.graph.replay()
         else:
-            self._chunk()
-            self._eager_chunks += 1
+            self.play_step()
+            self._eager_steps += 1
             self._joined = False
         self.left -= 1
         if self.left == 0:
             self._stage()
 
     def _capture(self):
-        try:  # the chunk's steps as one graph, as a rollout captured whole is (nothing runs while capturing)
-            return capture_rollout("rollout", self._step, lambda: None, STEPS_PER_ITERATION, self.device)
+        try:  # one step as a graph, as the rollout's step is (nothing runs while capturing)
+            return capture_rollout("rollout", self.play_step, lambda: None, 1, self.device)
         except RuntimeError as e:
             # nothing ran during the failed capture: the steps go on eagerly, beside nothing
             self.capture = False
             self.print(f"warning: capturing the background evaluation as a CUDA graph failed ({e}); "
-                       "it runs eagerly, interleaved with the iterations")
+                       "its steps run eagerly, between the training's")
             return None
 
     def _stage(self) -> None:

@@ -40,9 +40,11 @@ class StepGraphs:
     def __init__(self, step: torch.cuda.CUDAGraph, finish: torch.cuda.CUDAGraph, horizon: int):
         self.step, self.finish, self.horizon = step, finish, horizon
 
-    def replay(self) -> None:
+    def replay(self, beside: Callable[[], None] | None = None) -> None:
         for _ in range(self.horizon):
             self.step.replay()
+            if beside is not None:
+                beside()
         self.finish.replay()
 
 
@@ -81,6 +83,12 @@ class Collector:
         self.storage, self.episodes, self.device, self.capture = storage, episodes, device, capture
         self.print = print_fn
         self.graph = None  # a CUDAGraph or StepGraphs, once captured
+        # work of another stream's launched after each of the rollout's steps, eager or replayed (the background
+        # evaluation's): a replay of a long graph of MuJoCo Warp steps holds the host until most of it has run, so
+        # work queued after it mostly runs after it, while one step's graph returns at once (docs/benchmarks.md,
+        # "Walker2d-v5's evaluations"). Never captured into the rollout's graphs; a rollout captured whole has no
+        # steps to launch it between.
+        self.beside: Callable[[], None] | None = None
         self.eager_rollouts = 0
         self.step_index = torch.zeros(1, dtype=torch.long, device=device)
         self.last_raw_obs: torch.Tensor | None = None  # the env's latest observation, not yet acted on
@@ -96,18 +104,25 @@ class Collector:
     def rollout(self, timer: PhaseTimer) -> None:
         """One rollout of the storage's horizon (this process's steps): replayed, captured (the second) or eager."""
         if self.graph is not None:
-            self.graph.replay()
+            self.replay()
             timer.lap("collect: rollout graph (policy, env step, storage, GAE)")
         elif self.capture != "off" and self.eager_rollouts > 0:
             self.graph = self._capture()
             if self.graph is not None:
-                self.graph.replay()
+                self.replay()
             else:
                 self.run_eagerly(timer)
             timer.lap("collect: rollout graph capture")
         else:
             self.run_eagerly(timer)
             self.eager_rollouts += 1
+
+    def replay(self) -> None:
+        """The captured rollout, with ``beside`` after each step where it was captured step by step."""
+        if isinstance(self.graph, StepGraphs):
+            self.graph.replay(self.beside)
+        else:
+            self.graph.replay()
 
     def _capture(self):
         timer = PhaseTimer(self.device)  # never synchronises: a synchronisation would break the capture
@@ -123,6 +138,8 @@ class Collector:
     def run_eagerly(self, timer: PhaseTimer) -> None:
         for _ in range(self.storage.horizon):
             self.step(timer)
+            if self.beside is not None:
+                self.beside()
         self.finish(timer)
 
     def step(self, timer: PhaseTimer) -> None:

@@ -114,9 +114,9 @@ class Config:
     seed: int = 0
     eval_gap: float = 30.0
     eval_envs: int = 64
-    # play each evaluation beside training, a frozen copy of the policy on a side CUDA stream, a few steps per
-    # iteration, instead of stopping the run for it (agents.background_eval); the run's last evaluation stays
-    # synchronous
+    # play each evaluation beside training, a frozen copy of the policy on a side CUDA stream, one step beside each
+    # of the rollout's, instead of stopping the run for it (agents.background_eval); the run's last evaluation
+    # stays synchronous
     eval_background: bool = False
     save_gap: int = 50
     keep_checkpoints: bool = False  # also keep checkpoint-<iteration>.pt at every save

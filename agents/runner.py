@@ -95,6 +95,8 @@ class OnPolicyRunner:
         capturable = cuda_graph and self.device.type == "cuda" and spec.graph_capturable
         self.collector = Collector(env, cfg, self.acting_policy, self.normalize, self.storage, self.episodes,
                                    self.device, rollout_graph if capturable else "off", self.print)
+        if self.background is not None:  # its steps go one beside each of the rollout's (agents.background_eval)
+            self.collector.beside = self.background.beside
         # and the learner's own: non-finite observation or reward entries that reached the rollout
         self._faults = {**self._faults, "nonfinite_obs_rewards": self.collector.nonfinite}
         self._fault_help = {**getattr(env, "FAULT_HELP", {}), "nonfinite_obs_rewards":
@@ -165,7 +167,7 @@ class OnPolicyRunner:
             self._old_log_std = pipe.behaviour.log_std.detach().clone()
             pipe.stream.wait_stream(main)  # the behaviour weights and the normaliser are written
             with torch.cuda.stream(pipe.stream):
-                self.collector.graph.replay()
+                self.collector.replay()
             stats = self.update()
             self.clock.mark("update")
             main.wait_stream(pipe.stream)
@@ -203,10 +205,10 @@ class OnPolicyRunner:
                     self.ppo.lr_scale.fill_(1.0 - self._progress(last_iter, time_limit))
                 stats = self.iterate()
                 self.clock.mark("update")
-                if self.background is not None:  # the evaluation under way queues its next steps beside
+                if self.background is not None:  # the evaluation under way: its graph captured, or its steps
+                    # queued here where the rollout launched none beside its own (one captured whole); woven
+                    # steps are the collect phase's
                     self.background.advance()
-                    # eager steps run here; a captured chunk's replay holds the host while most of it runs
-                    # (benchmarks/speed/background_overlap.py), which this phase then shows as well
                     self.clock.mark("evaluation")
                 self.timer.lap("PPO update")
                 self.iteration += 1

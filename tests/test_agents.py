@@ -605,9 +605,11 @@ def test_an_evaluation_logs_each_reward_term_summed_over_the_first_episode_of_ev
     assert not {"eval/x_position", "eval/reward_matrix"} & set(result)
 
 
-def test_a_background_evaluation_scores_the_weights_it_started_with_as_a_synchronous_one_does():
-    """agents.background_eval on the CPU: its steps, a chunk per ``advance()``, give the synchronous evaluation's
-    numbers for the policy and normaliser as they were at ``start()``, whatever training does to them meanwhile."""
+@pytest.mark.parametrize("woven", [False, True])
+def test_a_background_evaluation_scores_the_weights_it_started_with_as_a_synchronous_one_does(woven):
+    """agents.background_eval on the CPU: its steps, a chunk per ``advance()`` or one per ``beside()`` (the collector's
+    call after each rollout step), give the synchronous evaluation's numbers for the policy and normaliser as they
+    were at ``start()``, whatever training does to them meanwhile. After woven steps ``advance()`` queues none."""
     from agents.background_eval import STEPS_PER_ITERATION, BackgroundEvaluation
     from agents.evaluate import evaluate
 
@@ -631,9 +633,18 @@ def test_a_background_evaluation_scores_the_weights_it_started_with_as_a_synchro
     for _ in range(3):
         assert bg.running
         polls.append(bg.poll())
-        bg.advance()
+        if woven:  # a rollout of 32 steps, then the iteration's advance(), which adds nothing
+            for _ in range(STEPS_PER_ITERATION):
+                bg.beside()
+            left = bg.left
+            bg.advance()
+            assert bg.left == left
+        else:
+            bg.advance()
     result = bg.poll()
     assert polls == [None, None, None] and not bg.running and bg.poll() is None
+    bg.beside()  # nothing under way: nothing queued
+    assert bg.left == 0 and not bg.running
     assert result["eval/policy_time_s"] == 12.5 and result["eval/policy_samples"] == 640
     assert set(expected) <= set(result)
     for key, value in expected.items():
@@ -652,14 +663,15 @@ def test_a_run_with_background_evaluations_logs_them_on_later_rows_and_ends_with
     whose evaluation is synchronous as without the option."""
     cfg = Config(net_dims=(8,), horizon_len=4, minibatch_size=32, repeat_times=1, eval_gap=0.0, save_gap=10**6,
                  eval_background=True)
-    runner = OnPolicyRunner(PointMassVecEnv(8), cfg, eval_env=PointMassVecEnv(4, episode_length=40),
+    runner = OnPolicyRunner(PointMassVecEnv(8), cfg, eval_env=PointMassVecEnv(4, episode_length=12),
                             print_fn=lambda s: None)
     history = runner.learn(max_iterations=12)
     evaluated = [r for r in history[:-1] if "eval/return" in r]
-    # 40 steps: two chunks, an evaluation started at one row comes back two rows later, when the next one starts
-    assert len(evaluated) >= 3 and all("eval_s" not in r for r in history[:-1])
-    # its eager steps (the CPU) are a phase of their own, not the update's
-    assert all(r["phase/evaluation_s"] > 0 for r in history[1:-1])
+    assert len(evaluated) == 3 and all("eval_s" not in r for r in history[:-1])
+    # its 12 steps go one beside each of the rollouts' 4 (the collector's hook): an evaluation spans 3 iterations,
+    # where a chunk of 32 after each iteration would finish one in each
+    assert [b["iteration"] - a["iteration"] for a, b in zip(evaluated, evaluated[1:])] == [3, 3]
+    assert all(r["eval/length"] == 12 for r in evaluated)
     for r in evaluated:
         assert r["eval/policy_time_s"] <= r["time_s"] and r["eval/policy_samples"] < r["samples"]
         assert r["eval/policy_iteration"] < r["iteration"]

@@ -853,6 +853,8 @@ def test_a_folder_of_several_tasks_asks_which(tmp_path):
                                          for s in ("0-3", "4-7")], 2),
     ("benchmarks.speed.background_overlap", [f"docs/bench/background_eval/walker2d_h200_{name}.json"
                                              for name in ("queues8", "queues32", "host_replays")], 6),
+    ("benchmarks.speed.background_overlap", [f"docs/bench/background_eval/walker2d_h200x2_interleaved{name}.json"
+                                             for name in ("", "_r5")], 6),
     ("benchmarks.learning.reacher_planner", ["docs/bench/reacher_planner.json"], 4),
     ("benchmarks.learning.reacher_planner", ["docs/bench/reacher_planner_25knots.json"], 3)])
 def test_the_published_nodes_exits_and_planner_tables_are_what_their_scripts_print(capsys, module, args, count):
@@ -1030,8 +1032,8 @@ def test_by_iteration_line_sets_the_settings_side_by_side_at_one_gpus_median_ite
 
 
 def test_background_overlap_times_the_chunk_beside_the_iteration_and_refuses_empty_timings(tmp_path, capsys):
-    """benchmarks/speed/background_overlap.py on the CPU: the evaluation's chunks run eagerly (nothing to capture),
-    every timing is there and positive, the JSON reads back into the same table; zero iterations is one line. A
+    """benchmarks/speed/background_overlap.py on the CPU: the evaluation's chunks and woven steps run eagerly
+    (nothing to capture), every timing is there and positive, the JSON reads back into the same table; zero iterations is one line. A
     table with an interleaved run beside older ones gives those "-" there."""
     from benchmarks.speed import background_overlap as bo
 
@@ -1040,14 +1042,16 @@ def test_background_overlap_times_the_chunk_beside_the_iteration_and_refuses_emp
                     "--repeats", "1", "--device", "cpu", "--json", str(out)]) == 0
     doc = json.loads(out.read_text())
     assert doc["captured"] is False and doc["host_replay_s"] == {} and doc["steps_per_chunk"] == 32
-    assert "interleaved_s" not in doc  # a GPU's captured graphs only
+    # the runner's woven iterations: eager on a CPU, its rollout's steps each with one evaluation step beside
+    assert doc["horizon"] == 32 and len(doc["interleaved_s"]) == 1 and doc["interleaved_s"][0] > 0
     assert all(v > 0 for v in doc["median_s"].values()) and doc["launch_idle_s"] > 0
     printed = capsys.readouterr().out
     assert bo.main(["--report", str(out)]) == 0
     row = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| Hopper-v5")]
     assert len(row) == 1 and "(eager)" in row[0] and row[0] in printed
+    older = {k: v for k, v in doc.items() if k not in ("interleaved_s", "overlap_interleaved", "horizon")}
     woven = {**doc, "interleaved_s": [0.4, 0.3], "overlap_interleaved": 0.75}
-    rows = [line for line in bo.table([doc, woven]).splitlines() if line.startswith("| Hopper-v5")]
+    rows = [line for line in bo.table([older, woven]).splitlines() if line.startswith("| Hopper-v5")]
     assert rows[0].endswith("| - | - |") and rows[1].endswith("| 350.0 ms | 0.75 |")
     with pytest.raises(SystemExit) as stop:
         bo.main(["--iterations", "0"])

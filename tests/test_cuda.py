@@ -103,10 +103,12 @@ def test_captured_rollout_matches_the_eager_one(task):
         _assert_rollouts_close(eager, captured)
 
 
-def test_background_evaluation_replayed_on_its_side_stream_matches_a_synchronous_one():
-    """agents.background_eval on a GPU: after one eager chunk the evaluation's steps (policy copy, MuJoCo Warp's
-    step, tally) replay as a CUDA graph on a side stream while the main stream changes the policy and works; the
-    result is the synchronous evaluation's of the weights at the start, read without a wait."""
+@pytest.mark.parametrize("woven", [False, True])
+def test_background_evaluation_replayed_on_its_side_stream_matches_a_synchronous_one(woven):
+    """agents.background_eval on a GPU: after one eager chunk the evaluation's step (policy copy, MuJoCo Warp's
+    step, tally) replays as a one-step CUDA graph on a side stream, a chunk per ``advance()`` or one step per
+    ``beside()`` between the main stream's work, while the main stream changes the policy and works; the result is
+    the synchronous evaluation's of the weights at the start, read without a wait."""
     from agents import Config, OnPolicyRunner
     from agents.background_eval import BackgroundEvaluation
     from agents.evaluate import evaluate
@@ -127,6 +129,10 @@ def test_background_evaluation_replayed_on_its_side_stream_matches_a_synchronous
     busy = torch.randn(2048, 2048, device=DEV)
     results = []
     while not results:
+        for _ in range(8 if woven and bg.graph is not None else 0):  # a rollout's steps, each with one of its own
+            bg.beside()
+            with torch.no_grad():
+                busy = (busy @ busy).tanh_()
         bg.advance()
         with torch.no_grad():  # training goes on on the main stream
             for p in policy.parameters():

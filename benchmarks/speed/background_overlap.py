@@ -6,19 +6,21 @@ two ran one after the other. This times, on one GPU, one task at its preset's en
 evaluation envs, each the median of --repeats timings of --iterations, in one process:
 
   train    a training iteration alone (rollout and update, their graphs captured)
-  eval     one of the evaluation's chunks alone (agents.background_eval: 32 steps as one graph, on its side stream)
-  both     an iteration with a chunk queued beside it, as the runner queues them
-  launch   the host's time in queuing one chunk (``BackgroundEvaluation.advance``) right after an iteration was
-           queued, nothing synchronised; "idle": the same call with the GPU idle (its own cost)
+  eval     a chunk of the evaluation alone: 32 steps as one graph on its side stream, as the runner queued them
+           after each iteration until 2026-11-27 (eager on a CPU)
+  both     an iteration with a chunk queued after it
+  launch   the host's time in queuing one chunk right after an iteration was queued, nothing synchronised; "idle":
+           the same call with the GPU idle (its own cost)
   interleaved
-           an iteration whose rollout launches one evaluation step (a one-step graph, side stream) after each of
-           its own steps: the way to run them side by side if a long graph's launch is what keeps them apart
+           an iteration as the runner now runs it with an evaluation under way: its rollout launches one
+           evaluation step (a one-step graph, side stream) after each of its own steps (the collector's
+           ``beside`` hook)
 
 and ``overlap = (train + eval - both) / min(train, eval)``: 1 where the chunk hides wholly beside the iteration,
-0 where the two take turns (the interleaved iteration's likewise, beside the same evaluation steps). On a GPU it
+0 where the two take turns (the interleaved iteration's likewise, beside as many evaluation steps). On a GPU it
 also reads the host's time in one replay call of graphs of each kind (the rollout's, the chunk's, torch's own,
-one and four env steps). Run it again under ``CUDA_DEVICE_MAX_CONNECTIONS=32`` to see whether the streams'
-hardware queues are what serialises them (the variable is read when CUDA starts: one process each).
+one and four env steps, one evaluation step). Run it again under ``CUDA_DEVICE_MAX_CONNECTIONS=32`` to see whether
+the streams' hardware queues are what serialises them (the variable is read when CUDA starts: one process each).
 
     python -m benchmarks.speed.background_overlap --task Walker2d-v5 --json OUT/a.json
     CUDA_DEVICE_MAX_CONNECTIONS=32 python -m benchmarks.speed.background_overlap --task Walker2d-v5 --json OUT/b.json
@@ -37,7 +39,7 @@ import time
 
 from benchmarks.harness import read_report, write_json  # noqa: E402
 
-# an evaluation that never ends within the timings: every advance() queues a chunk
+# an evaluation that never ends within the timings: every call queues its steps
 ENDLESS = 10**7
 
 
@@ -46,6 +48,7 @@ def measure(task: str, num_envs: int | None, eval_envs: int, iterations: int, re
 
     from agents import Config, OnPolicyRunner  # noqa: PLC0415
     from agents.background_eval import STEPS_PER_ITERATION, BackgroundEvaluation  # noqa: PLC0415
+    from agents.collect import capture_rollout  # noqa: PLC0415
     from warpgym.cli.bench import timed as timings  # noqa: PLC0415
     from warpgym.envs import make_vec_env  # noqa: PLC0415
     from warpgym.tasks.registry import task_entry  # noqa: PLC0415
@@ -66,8 +69,16 @@ def measure(task: str, num_envs: int | None, eval_envs: int, iterations: int, re
     for _ in range(3):  # the second iteration captures the rollout's and the update's graphs
         runner.iterate()
     bg.start(runner.policy, runner.normalizer, {})
-    for _ in range(3):  # the first chunk runs eagerly, the second is captured
+    for _ in range(3):  # the first chunk runs eagerly; then the step's graph is captured and replayed
         bg.advance()
+    if bg.graph is not None:  # the chunk as one 32-step graph on the side stream, as the runner queued it until
+        chunk = capture_rollout("rollout", bg.play_step, lambda: None, STEPS_PER_ITERATION, dev)  # 2026-11-27
+
+        def queue_chunk():
+            with torch.cuda.stream(bg.stream):
+                chunk.replay()
+    else:  # eager: a chunk of steps, between the iterations
+        chunk, queue_chunk = None, bg.advance
     sync()
 
     def timed(step) -> float:  # seconds a call, over ``iterations`` calls, the device synchronised around them
@@ -75,28 +86,28 @@ def measure(task: str, num_envs: int | None, eval_envs: int, iterations: int, re
 
     def both():
         runner.iterate()
-        bg.advance()
+        queue_chunk()
 
     times = {name: [] for name in ("train", "eval", "both")}
     launch, launch_idle = [], []
     for _ in range(repeats):  # interleaved, so that a drift of the clocks touches all three alike
         times["train"].append(timed(runner.iterate))
-        times["eval"].append(timed(bg.advance))
+        times["eval"].append(timed(queue_chunk))
         times["both"].append(timed(both))
         for _ in range(iterations):
             runner.iterate()
             t = time.perf_counter()
-            bg.advance()
+            queue_chunk()
             launch.append(time.perf_counter() - t)
         sync()
         for _ in range(iterations):  # the same call with nothing queued before it: the call's own cost
             t = time.perf_counter()
-            bg.advance()
+            queue_chunk()
             launch_idle.append(time.perf_counter() - t)
             sync()
     med = {name: statistics.median(v) for name, v in times.items()}
-    replays = host_replays(runner, bg, iterations, dev) if bg.graph is not None else {}
-    woven = interleaved(runner, bg, timed, repeats, dev) if bg.graph is not None else None
+    replays = host_replays(runner, bg, chunk, iterations, dev) if chunk is not None else {}
+    woven = interleaved(runner, bg, timed, repeats)
     return {"task": task, "num_envs": runner.spec.num_envs, "eval_envs": eval_envs,
             "steps_per_chunk": STEPS_PER_ITERATION, "captured": bg.graph is not None,
             "device": torch.cuda.get_device_name(dev) if dev.type == "cuda" else "cpu",
@@ -119,38 +130,30 @@ def overlap_of(a: float, b: float, together: float) -> float:
     return (a + b - together) / min(a, b)
 
 
-def interleaved(runner, bg, timed, repeats: int, dev) -> dict | None:
-    """A training iteration whose rollout launches one evaluation step on the side stream after each of its own
-    steps, the evaluation captured as a one-step graph (seconds an iteration, ``repeats`` timings). A launch that
-    holds the host then holds it for both, and the evaluation's steps are queued while the training's run: the
-    way to run them side by side if a long graph's launch is what keeps them apart. None where the rollout is not
-    captured step by step (``--rollout-graph step``, the default)."""
-    import torch  # noqa: PLC0415
+def interleaved(runner, bg, timed, repeats: int) -> dict | None:
+    """Training iterations as the runner runs them with an evaluation under way: its steps one beside each of the
+    rollout's (the collector's ``beside`` hook; on a GPU a one-step graph on the side stream after each of the
+    rollout's step graphs), seconds an iteration, ``repeats`` timings. None where the rollout is captured whole
+    (``--rollout-graph rollout``): it has no steps to weave into."""
+    from agents.collect import StepGraphs  # noqa: PLC0415
 
-    from agents.collect import StepGraphs, capture_rollout  # noqa: PLC0415
-
-    steps = runner.collector.graph
-    if not isinstance(steps, StepGraphs):
+    graph = runner.collector.graph
+    if graph is not None and not isinstance(graph, StepGraphs):
         return None
-    one = capture_rollout("step", bg._step, lambda: None, 1, dev).step  # noqa: SLF001  (the chunk's own step)
 
-    class Woven:
-        def replay(self):
-            for _ in range(steps.horizon):
-                steps.step.replay()
-                with torch.cuda.stream(bg.stream):
-                    one.replay()
-            steps.finish.replay()
+    def iteration():
+        runner.iterate()
+        bg.advance()  # nothing queued: the rollout wove its steps in
 
-    bg.stream.wait_stream(torch.cuda.current_stream(dev))
-    runner.collector.graph = Woven()
+    runner.collector.beside = bg.beside
     try:
-        return {"seconds": [timed(runner.iterate) for _ in range(repeats)], "horizon": steps.horizon}
+        iteration()  # the first woven rollout
+        return {"seconds": [timed(iteration) for _ in range(repeats)], "horizon": runner.storage.horizon}
     finally:
-        runner.collector.graph = steps
+        runner.collector.beside = None
 
 
-def host_replays(runner, bg, n: int, dev) -> dict:
+def host_replays(runner, bg, chunk, n: int, dev) -> dict:
     """The host's seconds in one replay call, the GPU idle before it (median of ``n``), for graphs of each kind: is a
     replay that holds the host the evaluation's own, any graph with MuJoCo Warp's step in it, or any on a side
     stream?"""
@@ -184,8 +187,8 @@ def host_replays(runner, bg, n: int, dev) -> dict:
         y = x
         for _ in range(400):
             y = (y @ x).tanh_()
-    out = {"rollout_main": host(runner.collector.graph.replay), "eval_chunk_main": host(bg.graph.replay),
-           "eval_chunk_side": host(on_side(bg.graph.replay)), "torch_only_side": host(on_side(plain.replay)),
+    out = {"rollout_main": host(runner.collector.graph.replay), "eval_chunk_main": host(chunk.replay),
+           "eval_chunk_side": host(on_side(chunk.replay)), "torch_only_side": host(on_side(plain.replay)),
            "torch_only_main": host(plain.replay)}
     # graphs of 1 and 4 of the eval env's steps, captured by torch and (the simulation alone) by Warp: does a graph
     # hold the host for its later steps whoever captured it?
@@ -203,7 +206,8 @@ def host_replays(runner, bg, n: int, dev) -> dict:
                 env.sim.simulate()
         out[f"warp_graph_{k}_simulates"] = host(lambda graph=cap.graph: wp.capture_launch(graph))
     out["env_step_eager"] = host(lambda: env.step(act))
-    return out
+    out["eval_step_side"] = host(on_side(bg.graph.replay))  # the runner's: one evaluation step (measured since the
+    return out                                             # sixth run)
 
 
 def table(docs: list[dict]) -> str:
@@ -222,13 +226,14 @@ def table(docs: list[dict]) -> str:
                          if "interleaved_s" in d else " - | - |") if woven else ""))
     replayed = [d for d in docs if d.get("host_replay_s")]
     if replayed:  # measured since the second run
-        names = list(replayed[0]["host_replay_s"])
+        names = list(dict.fromkeys(k for d in replayed for k in d["host_replay_s"]))  # older runs have fewer
         lines += ["", "host time of one replay call, the GPU idle before it (ms):", "",
                   "| device | CUDA_DEVICE_MAX_CONNECTIONS | " + " | ".join(names) + " |",
                   "|---|---|" + "---:|" * len(names)]
         for d in replayed:
+            got = d["host_replay_s"]
             lines.append(f"| {d['device']} | {d['max_connections']} | "
-                         + " | ".join(f"{d['host_replay_s'][k] * 1e3:.2f}" for k in names) + " |")
+                         + " | ".join(f"{got[k] * 1e3:.2f}" if k in got else "-" for k in names) + " |")
     return "\n".join(lines)
 
 
