@@ -11,8 +11,8 @@ replays the evaluation's step, captured once as a one-step CUDA graph, on a side
 kernels to run beside the training's. Its result goes to pinned host memory on that stream and is read once an event
 says it is there: neither stream waits for the other during the evaluation. One step at a time because a replay
 holds the host: on an H200 the launch of a 32-step graph of MuJoCo Warp steps returned only once most of it had run
-(145-150 ms of its 160), so a chunk queued after the iteration mostly took turns with the next one (0.24-0.29 of it
-overlapped), while one step's graph returns in 0.2-0.5 ms and the steps woven one by one overlapped 0.85-0.88
+(145-151 ms of its 158-164), so a chunk queued after the iteration mostly took turns with the next one (0.24-0.29 of
+it overlapped), while a graph of one env step returns in 0.2-0.5 ms and the steps woven one by one overlapped 0.85-0.88
 (benchmarks/speed/background_overlap.py; docs/benchmarks.md, "Walker2d-v5's evaluations"). Where the rollout has no
 steps to weave into (captured whole), ``advance()`` queues ``STEPS_PER_ITERATION`` steps after the iteration. Its
 row is the one logged when the result is read, so the minutes it gives to a target are those at which the number
@@ -87,12 +87,12 @@ class BackgroundEvaluation:
         self.tally.add(reward, terminated, truncated, info)
         self.obs.copy_(next_obs)
 
-    @torch.no_grad()
     def beside(self) -> None:
         """Queue the evaluation's next step, after a step of the training's (none if no evaluation is under way or
-        all its steps are queued)."""
+        all its steps are queued). Called after every rollout step: nothing but the check when idle."""
         if self.left > 0:
-            self._queue_step()
+            with torch.no_grad():
+                self._queue_step()
             self._woven += 1
 
     @torch.no_grad()

@@ -129,11 +129,14 @@ def test_background_evaluation_replayed_on_its_side_stream_matches_a_synchronous
     busy = torch.randn(2048, 2048, device=DEV)
     results = []
     while not results:
-        for _ in range(8 if woven and bg.graph is not None else 0):  # a rollout's steps, each with one of its own
+        wove = woven and bg.graph is not None
+        for _ in range(8 if wove else 0):  # a rollout's steps, each with one of its own
             bg.beside()
             with torch.no_grad():
                 busy = (busy @ busy).tanh_()
+        left = bg.left
         bg.advance()
+        assert not wove or bg.left == left  # woven steps: the iteration's advance() queues none of its own
         with torch.no_grad():  # training goes on on the main stream
             for p in policy.parameters():
                 p.mul_(0.9)
