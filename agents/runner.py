@@ -222,8 +222,9 @@ class OnPolicyRunner:
                     # The checkpoint's own row reaches disk first. Every process flushes here, not only
                     # rank 0, which saves: a flush reads the stop request of the row it logs, and a
                     # process that read it one iteration before the others would leave them waiting in
-                    # the next iteration's collectives forever (a finished job that never exits).
-                    stop = self.flush_log(last_iter) or stop
+                    # the next iteration's collectives forever (a finished job that never exits). That row is
+                    # the run's last where a stop is read by now or with it: it carries the final evaluation.
+                    stop = self.flush_log(last_iter, final=stop, final_if_stop=True) or stop
                     if self.run_dir:
                         self.save()
                 self._keep_if_due()
@@ -258,10 +259,12 @@ class OnPolicyRunner:
         self._in_flight = staged
         return stop
 
-    def flush_log(self, last_iter: int | None, final: bool = False, may_evaluate: bool = True) -> bool:
-        """Log the row in flight now, if there is one (one host wait); return whether to stop."""
+    def flush_log(self, last_iter: int | None, final: bool = False, may_evaluate: bool = True,
+                  final_if_stop: bool = False) -> bool:
+        """Log the row in flight now, if there is one (one host wait); return whether to stop. ``final``:
+        the run's last row, which always carries an evaluation; ``final_if_stop``: it is, if it asks to stop."""
         staged, self._in_flight = self._in_flight, None
-        return False if staged is None else self._log_row(staged, last_iter, final, may_evaluate)
+        return False if staged is None else self._log_row(staged, last_iter, final, may_evaluate, final_if_stop)
 
     def close(self) -> None:
         """Free the CUDA graphs (before ``destroy_process_group``: see ``PPO.release_graph``)."""
@@ -298,10 +301,12 @@ class OnPolicyRunner:
         return StagedRow(self.iteration, self.samples, keys, host, self.clock.finish())
 
     def _log_row(self, staged: StagedRow, last_iter: int | None, final: bool = False,
-                 may_evaluate: bool = True) -> bool:
+                 may_evaluate: bool = True, final_if_stop: bool = False) -> bool:
         """Log a staged row (evaluating first when one is due); return whether any process asked to stop."""
         seconds = self.clock.seconds(staged.lap)
         values = staged.host.tolist()
+        stop = values[-1] > 0
+        final = final or (final_if_stop and stop) or (last_iter is not None and staged.iteration >= last_iter)
         keys = staged.keys
         row = {"iteration": staged.iteration, "samples": staged.samples, "time_s": round(self.elapsed(), 3),
                "samples_per_s": self._per_iter / max(seconds["iteration"], 1e-9), "iteration_s": seconds["iteration"]}
@@ -346,7 +351,7 @@ class OnPolicyRunner:
             self.logger.log(row)
         self._logged_through = staged.iteration
         self.print(progress_line(row, last_iter))
-        return values[-1] > 0
+        return stop
 
     def evaluate(self) -> dict:
         self.last_eval_time = self.elapsed()

@@ -460,6 +460,32 @@ def test_a_time_limit_stops_every_process_after_the_same_iteration():
     assert [r["iteration"] for r in history] == [1, 2]
 
 
+@pytest.mark.parametrize("save_gap, end", [(2, "iterations"), (4, "stop read with its own row"),
+                                           (5, "stop read the row before"), (2, "time limit")])
+def test_the_last_row_carries_the_evaluation_when_the_run_ends_on_a_save(tmp_path, save_gap, end):
+    """A save flushes its iteration's row at once (the checkpoint's row first); when that iteration is the run's
+    last, the row is the last one, and it carries the run's final evaluation as the row after the loop does.
+    Found by a Walker2d-v5 run on an H200 whose time limit was read at iteration 550, a save: no final evaluation."""
+    cfg = Config(net_dims=(8,), horizon_len=4, minibatch_size=32, repeat_times=1, eval_gap=1e9, save_gap=save_gap)
+    runner = OnPolicyRunner(PointMassVecEnv(8), cfg, eval_env=PointMassVecEnv(4, episode_length=10),
+                            run_dir=str(tmp_path), print_fn=lambda s: None)
+    real_update = runner.update
+
+    def update_and_ask_to_stop():
+        if runner.iteration == 3:
+            runner.request_stop()  # read with iteration 4's row, the save (4) or during iteration 5, the save (5)
+        return real_update()
+
+    if end.startswith("stop"):
+        runner.update = update_and_ask_to_stop
+    budget = {"iterations": {"max_iterations": 4}, "time limit": {"time_limit": 0.0}}.get(end, {"max_iterations": 100})
+    history = runner.learn(**budget)
+    last = {"iterations": 4, "time limit": 2}.get(end, save_gap)
+    assert [r["iteration"] for r in history] == list(range(1, last + 1))
+    assert ["eval/return" in r for r in history] == [False] * (last - 1) + [True]
+    assert load(str(tmp_path / "checkpoint.pt"), torch.device("cpu"))["iteration"] == last
+
+
 class SlowPointMass(PointMassVecEnv):
     """A point mass whose steps take 4 ms of waiting, not of work: its evaluations stay long beside an
     iteration however busy the machine's cores are (a busy machine slowed the iterations of an

@@ -48,6 +48,11 @@ import time
 from benchmarks.harness import ROOT, read_summary, train_in_parts, waits_out_sigterm  # noqa: E402
 from benchmarks.targets import REFERENCE  # noqa: E402
 
+# what a sweep's JSON says of Warp's kernel cache at its first run: filled by the sweep's own warm-up, or as the
+# machine had it (--no-warm-up: empty on a fresh machine, warm after another sweep of the task; the runs' train.log
+# says which)
+KERNEL_CACHE = {False: "warm", True: "as found (--no-warm-up; each run's train.log says)"}
+
 
 def parse_grid(texts: list[str]) -> dict[str, list[str]]:
     """``["gamma=0.99,0.995", "net_dims=256x128"]`` -> {"gamma": ["0.99", "0.995"], "net_dims": ["256,128"]}"""
@@ -398,14 +403,14 @@ def main(argv=None) -> int:
             ap.error(f"--gpus {args.gpus}: this machine shows {torch.cuda.device_count()} GPU(s)")
         doc = spread(args, grid, list(argv if argv is not None else sys.argv[1:]))
         doc["meta"].update(grid=grid, runs_at_once=args.gpus, cores=len(os.sched_getaffinity(0)) // args.gpus,
-                           kernel_cache="empty at the first run" if args.no_warm_up else "warm",
+                           kernel_cache=KERNEL_CACHE[args.no_warm_up],
                            command=" ".join(["python -m benchmarks.learning.suite_sweep"] + (argv or sys.argv[1:])))
         write_json(path, doc)
         print(table(doc))
         return 0
     gpu = torch.cuda.get_device_name(0) if torch.cuda.is_available() and args.device != "cpu" else "cpu"
     doc = {"meta": {"task": args.task, "seconds": args.seconds, "seeds": args.seeds, "grid": grid, "gpu": gpu,
-                    "scoring": scoring, "kernel_cache": "empty at the first run" if args.no_warm_up else "warm",
+                    "scoring": scoring, "kernel_cache": KERNEL_CACHE[args.no_warm_up],
                     "date": time.strftime("%Y-%m-%d"),
                     "command": " ".join(["python -m benchmarks.learning.suite_sweep"] + (argv or sys.argv[1:]))}, "rows": []}
     names = list(grid)
