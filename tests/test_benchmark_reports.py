@@ -851,6 +851,8 @@ def test_a_folder_of_several_tasks_asks_which(tmp_path):
     ("benchmarks.learning.suite_sweep", ["docs/bench/suite_sweep/Walker2d-v5-200s-h200x4/sweep-eval-background.json"], 3),
     ("benchmarks.learning.suite_sweep", ["docs/bench/suite_sweep/Walker2d-v5-200s-h200x2/sweep-eval-woven-seeds0-3.json"], 3),
     ("benchmarks.learning.suite_sweep", ["docs/bench/suite_sweep/Walker2d-v5-200s-h200x2/sweep-eval-woven-seeds4-7.json"], 2),
+    ("benchmarks.learning.suite_sweep", [f"docs/bench/suite_sweep/Walker2d-v5-200s-h200x2/sweep-{arm}.json"
+                                         for arm in ("minibatch", "kl")], 4),
     ("benchmarks.learning.suite_sweep", [f"docs/bench/suite_sweep/Walker2d-v5-200s-h200x4/sweep-eval-gap-20-seeds{s}.json"
                                          for s in ("0-3", "4-7")], 2),
     ("benchmarks.speed.background_overlap", [f"docs/bench/background_eval/walker2d_h200_{name}.json"
