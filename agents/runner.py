@@ -198,7 +198,7 @@ class OnPolicyRunner:
         stop = False
         finished = True  # the state is that of a finished iteration
         try:
-            while not stop and (last_iter is None or self.iteration < last_iter):
+            while not stop and self._budget_left(last_iter):
                 finished = False
                 self.clock.mark("idle")  # the GPU waited this long for the host to queue the iteration
                 if self.cfg.anneal_lr:
@@ -223,8 +223,10 @@ class OnPolicyRunner:
                     # rank 0, which saves: a flush reads the stop request of the row it logs, and a
                     # process that read it one iteration before the others would leave them waiting in
                     # the next iteration's collectives forever (a finished job that never exits). That row is
-                    # the run's last where a stop is read by now or with it: it carries the final evaluation.
-                    stop = self.flush_log(last_iter, final=stop, final_if_stop=True) or stop
+                    # the run's last where a stop is read by now or with it, or the budget is spent: it carries
+                    # the final evaluation.
+                    last = stop or not self._budget_left(last_iter)
+                    stop = self.flush_log(last_iter, final=last, final_if_stop=True) or stop
                     if self.run_dir:
                         self.save()
                 self._keep_if_due()
@@ -243,6 +245,10 @@ class OnPolicyRunner:
             if self.run_dir and finished and self._logged_through == self.iteration:
                 self.save()
         return self.history
+
+    def _budget_left(self, last_iter: int | None) -> bool:
+        """Whether the iteration budget (from the iteration or sample goal) allows another iteration."""
+        return last_iter is None or self.iteration < last_iter
 
     def _progress(self, last_iter: int | None, time_limit: float | None) -> float:
         """How far through its budget the run is, in [0, 1]: the furthest of its iterations (from the
@@ -306,7 +312,7 @@ class OnPolicyRunner:
         seconds = self.clock.seconds(staged.lap)
         values = staged.host.tolist()
         stop = values[-1] > 0
-        final = final or (final_if_stop and stop) or (last_iter is not None and staged.iteration >= last_iter)
+        final = final or (final_if_stop and stop)
         keys = staged.keys
         row = {"iteration": staged.iteration, "samples": staged.samples, "time_s": round(self.elapsed(), 3),
                "samples_per_s": self._per_iter / max(seconds["iteration"], 1e-9), "iteration_s": seconds["iteration"]}
