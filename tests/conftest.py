@@ -9,7 +9,7 @@ import pytest
 os.environ.setdefault("WARP_CACHE_PATH", os.path.expanduser("~/.cache/warp"))
 # Under pytest-xdist (the README's command: a worker a core) each worker, and every process its tests start, gets
 # one OpenMP thread, as torchrun gives its workers: with torch's default of a thread a core, two workers' threads
-# spin for each other's cores (the overlapped point-mass test took 3-4 s alone and 59-70 s beside another worker).
+# spin for each other's cores (the overlapped point-mass test took under 4 s alone, 59-70 s beside another worker).
 if os.environ.get("PYTEST_XDIST_WORKER"):
     os.environ.setdefault("OMP_NUM_THREADS", "1")
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
