@@ -757,7 +757,7 @@ def test_suite_versions_plays_again_only_what_changed(monkeypatch, tmp_path):
 
 
 def test_the_published_suite_tables_are_what_their_scripts_print_from_the_committed_runs(capsys):
-    """docs/benchmarks.md's learning table (warpgym's and SB3's, and the candidate's row) and its v4-beside-v5 table,
+    """docs/benchmarks.md's learning table (warpgym's and SB3's, and the candidates' rows) and its v4-beside-v5 table,
     row for row, as ``suite_learning.py --report`` and ``suite_versions.py --report`` print them from docs/bench: a
     row whose JSON changed without the page (or the other way round) fails here."""
     from benchmarks.learning import suite_learning as sl
@@ -781,8 +781,8 @@ def test_the_published_suite_tables_are_what_their_scripts_print_from_the_commit
     # a candidate's row, shown (indented) where the page says why it is not the preset
     assert sl.report([os.path.join(bench, "suite_learning", "candidates")]) == 0
     out = capsys.readouterr().out.split("The README's table:")[0]
-    candidates = [line for line in out.splitlines() if line.startswith("| Swimmer-v5 (")]
-    assert len(candidates) == 2 and [c for c in candidates if c not in {line.strip() for line in page}] == []
+    candidates = [line for line in out.splitlines() if line.startswith(("| Swimmer-v5 (", "| Walker2d-v5 ("))]
+    assert len(candidates) == 3 and [c for c in candidates if c not in {line.strip() for line in page}] == []
 
 
 @pytest.mark.parametrize("folder, task, settings", [("multi_gpu", "Ant", 9), ("multi_gpu", "Humanoid", 3),
@@ -853,6 +853,8 @@ def test_a_folder_of_several_tasks_asks_which(tmp_path):
     ("benchmarks.learning.suite_sweep", ["docs/bench/suite_sweep/Walker2d-v5-200s-h200x2/sweep-eval-woven-seeds4-7.json"], 2),
     ("benchmarks.learning.suite_sweep", [f"docs/bench/suite_sweep/Walker2d-v5-200s-h200x2/sweep-{arm}.json"
                                          for arm in ("minibatch", "kl")], 4),
+    ("benchmarks.learning.suite_sweep", [f"docs/bench/suite_sweep/Walker2d-v5-200s-h200x2/sweep-{arm}.json"
+                                         for arm in ("minibatch-seeds4-7", "kl-seeds4-5", "kl-seeds6-7")], 3),
     ("benchmarks.learning.suite_sweep", [f"docs/bench/suite_sweep/Walker2d-v5-200s-h200x4/sweep-eval-gap-20-seeds{s}.json"
                                          for s in ("0-3", "4-7")], 2),
     ("benchmarks.speed.background_overlap", [f"docs/bench/background_eval/walker2d_h200_{name}.json"
