@@ -222,11 +222,13 @@ class OnPolicyRunner:
                     # The checkpoint's own row reaches disk first. Every process flushes here, not only
                     # rank 0, which saves: a flush reads the stop request of the row it logs, and a
                     # process that read it one iteration before the others would leave them waiting in
-                    # the next iteration's collectives forever (a finished job that never exits). That row is
-                    # the run's last where a stop is read by now or with it, or the budget is spent: it carries
-                    # the final evaluation.
-                    last = stop or not self._budget_left(last_iter)
-                    stop = self.flush_log(last_iter, final=last, final_if_stop=True) or stop
+                    # the next iteration's collectives forever (a finished job that never exits). Read before
+                    # it is written, that row tells whether it is the run's last: a stop read by now or with
+                    # it, or the budget spent. The last carries the final evaluation.
+                    arrived = self._arrive()
+                    if arrived is not None:
+                        stop = stop or arrived.stop
+                        self._log_row(arrived, last_iter, final=stop or not self._budget_left(last_iter))
                     if self.run_dir:
                         self.save()
                 self._keep_if_due()
@@ -265,12 +267,19 @@ class OnPolicyRunner:
         self._in_flight = staged
         return stop
 
-    def flush_log(self, last_iter: int | None, final: bool = False, may_evaluate: bool = True,
-                  final_if_stop: bool = False) -> bool:
-        """Log the row in flight now, if there is one (one host wait); return whether to stop. ``final``:
-        the run's last row, which always carries an evaluation; ``final_if_stop``: it is, if it asks to stop."""
+    def flush_log(self, last_iter: int | None, final: bool = False, may_evaluate: bool = True) -> bool:
+        """Log the row in flight now, if there is one (one host wait); return whether any process asked to
+        stop with it. ``final``: the run's last row, which always carries an evaluation."""
+        arrived = self._arrive()
+        if arrived is None:
+            return False
+        self._log_row(arrived, last_iter, final, may_evaluate)
+        return arrived.stop
+
+    def _arrive(self) -> ArrivedRow | None:
+        """The row in flight, read on the host (the one wait for it), and no longer in flight."""
         staged, self._in_flight = self._in_flight, None
-        return False if staged is None else self._log_row(staged, last_iter, final, may_evaluate, final_if_stop)
+        return None if staged is None else ArrivedRow(staged, staged.host.tolist())
 
     def close(self) -> None:
         """Free the CUDA graphs (before ``destroy_process_group``: see ``PPO.release_graph``)."""
@@ -306,13 +315,11 @@ class OnPolicyRunner:
         host.copy_(values, non_blocking=pinned)
         return StagedRow(self.iteration, self.samples, keys, host, self.clock.finish())
 
-    def _log_row(self, staged: StagedRow, last_iter: int | None, final: bool = False,
-                 may_evaluate: bool = True, final_if_stop: bool = False) -> bool:
-        """Log a staged row (evaluating first when one is due); return whether any process asked to stop."""
+    def _log_row(self, arrived: ArrivedRow, last_iter: int | None, final: bool = False,
+                 may_evaluate: bool = True) -> None:
+        """Log a row read on the host, evaluating first when one is due (always when ``final``)."""
+        staged, values = arrived.staged, arrived.values
         seconds = self.clock.seconds(staged.lap)
-        values = staged.host.tolist()
-        stop = values[-1] > 0
-        final = final or (final_if_stop and stop)
         keys = staged.keys
         row = {"iteration": staged.iteration, "samples": staged.samples, "time_s": round(self.elapsed(), 3),
                "samples_per_s": self._per_iter / max(seconds["iteration"], 1e-9), "iteration_s": seconds["iteration"]}
@@ -357,7 +364,6 @@ class OnPolicyRunner:
             self.logger.log(row)
         self._logged_through = staged.iteration
         self.print(progress_line(row, last_iter))
-        return stop
 
     def evaluate(self) -> dict:
         self.last_eval_time = self.elapsed()
@@ -440,6 +446,18 @@ class StagedRow:
     keys: list[str]
     host: torch.Tensor
     lap: Lap
+
+
+@dataclass
+class ArrivedRow:
+    """A staged row read on the host; the stop request summed over the processes is its last value."""
+
+    staged: StagedRow
+    values: list[float]
+
+    @property
+    def stop(self) -> bool:
+        return self.values[-1] > 0
 
 
 def progress_line(row: dict, last_iter: int | None) -> str:
