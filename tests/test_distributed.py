@@ -224,9 +224,9 @@ def test_finished_two_process_runs_exit_within_10_s_of_their_last_row(tmp_path):
     """A run whose time limit is read at a checkpoint iteration once left rank 0 a step ahead of the
     others: it finished while they waited in the next iteration's collectives (on GPUs, for ever).
     --save-gap 1 makes every iteration a checkpoint iteration. The time limits count from the processes' start,
-    which took 7.9-14.7 s on the two-core development machine (2026-11-27), and as long again beside another
-    pytest-xdist worker's tests: they are set 12-13 s past the first row of the run of 12 iterations, so that each
-    run's limit ends it after several save gaps, not at its first row, however slowly it started."""
+    which took 7.9-14.7 s on the two-core development machine (2026-11-27), and longer beside another pytest-xdist
+    worker's tests (the call-limit test's first row came 14 s in there): they are set 12-13 s past the first row of
+    the run of 12 iterations, so that each run's limit ends it after several save gaps, not at its first row."""
     jobs = [("iterations", ["--save-gap", "1", "--max-iterations", "12"]),
             ("gap1", ["--save-gap", "1", "--time-limit", "+12"]), ("gap3", ["--save-gap", "3", "--time-limit", "+13"])]
     start = None
