@@ -857,6 +857,8 @@ def test_a_folder_of_several_tasks_asks_which(tmp_path):
                                          for arm in ("minibatch-seeds4-7", "kl-seeds4-5", "kl-seeds6-7")], 3),
     ("benchmarks.learning.suite_sweep", [f"docs/bench/suite_sweep/Walker2d-v5-200s-h200x4/sweep-eval-gap-20-seeds{s}.json"
                                          for s in ("0-3", "4-7")], 2),
+    ("benchmarks.learning.suite_sweep", [f"docs/bench/suite_sweep/Walker2d-v5-200s-h200x4/sweep-net-seeds{s}.json"
+                                         for s in ("0-7", "8-15")], 2),
     ("benchmarks.speed.background_overlap", [f"docs/bench/background_eval/walker2d_h200_{name}.json"
                                              for name in ("queues8", "queues32", "host_replays")], 6),
     ("benchmarks.speed.background_overlap", [f"docs/bench/background_eval/walker2d_h200x2_interleaved{name}.json"
