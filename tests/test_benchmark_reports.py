@@ -1065,3 +1065,27 @@ def test_background_overlap_times_the_chunk_beside_the_iteration_and_refuses_emp
     with pytest.raises(SystemExit) as stop:
         bo.main(["--iterations", "0"])
     assert stop.value.code == 2 and "--iterations 0" in capsys.readouterr().err
+
+
+def test_the_readmes_gif_caption_gives_the_drawn_policies_scores_and_cards_from_the_tables_json():
+    """The README's GIFs of Gymnasium's tasks are seed 0's 10-minute policies of the learning table: the caption's
+    scores and each alt text's card are those of the table's JSON, so a row made again (a preset changed, the row
+    promoted, the GIF redrawn) cannot leave the superseded row's score or card on the front page."""
+    import re
+
+    root = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
+    with open(os.path.join(root, "README.md")) as f:
+        readme = f.read()
+    caption = re.search(r"Gymnasium's ((?:[\w-]+-v5, )+[\w-]+-v5 and [\w-]+-v5) after 10 minutes, which score "
+                        r"([\d, and-]+) in `gymnasium.make`'s env \(seed 0\)", " ".join(readme.split()))
+    assert caption, "the README's GIF caption moved or changed its form"
+    tasks = re.split(r", | and ", caption.group(1))
+    scores = [int(v) for v in re.split(r", | and ", caption.group(2))]
+    assert len(tasks) == len(scores) == 7
+    for task, score in zip(tasks, scores):
+        with open(os.path.join(root, "docs", "bench", "suite_learning", f"{task}-seed0.json")) as f:
+            doc = json.load(f)
+        last = max(doc["run"]["scored"], key=lambda s: s["mark_s"])
+        assert round(last["gymnasium_return"]) == score, task
+        card = "H200" if "H200" in doc["meta"]["gpu"] else "H100"
+        assert f"alt=\"Gymnasium's {task} trained for 10 minutes on one {card}\"" in readme, task
