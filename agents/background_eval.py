@@ -28,7 +28,7 @@ import copy
 
 import torch
 
-from agents.collect import capture_rollout
+from agents.collect import WholeRollout, capture_rollout
 from agents.evaluate import EpisodeTally
 
 # eval steps queued per iteration by advance() where the rollout wove none in: 32 steps of 64 worlds took 0.17-0.28 s
@@ -52,7 +52,7 @@ class BackgroundEvaluation:
         cuda = device.type == "cuda"
         self.stream = torch.cuda.Stream(device) if cuda else None
         self.capture = cuda and capturable
-        self.graph: torch.cuda.CUDAGraph | None = None  # one step's, once captured
+        self.graph: WholeRollout | None = None  # one step's graph, once captured
         self.obs: torch.Tensor | None = None  # the env's latest observation, in a buffer of this object's own
         self.host = None  # the result's pinned host copy
         self.done: torch.cuda.Event | None = None

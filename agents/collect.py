@@ -33,6 +33,17 @@ from agents.storage import RolloutStorage, compute_gae
 CAPTURES = ("step", "rollout", "off")
 
 
+class WholeRollout:
+    """A rollout captured as one graph: nothing runs between its steps, so ``replay`` cannot call ``beside``
+    there (a background evaluation queues its steps after it instead: agents/background_eval.py)."""
+
+    def __init__(self, graph: torch.cuda.CUDAGraph):
+        self.graph = graph
+
+    def replay(self, beside: Callable[[], None] | None = None) -> None:
+        self.graph.replay()
+
+
 class StepGraphs:
     """The step's graph ``horizon`` times, then the finishing graph: a rollout, as ``replay()`` of a
     rollout captured whole gives it."""
@@ -62,7 +73,7 @@ def capture_rollout(capture: str, step: Callable[[], None], finish: Callable[[],
                 for _ in range(horizon):
                     step()
                 finish()
-            return graph
+            return WholeRollout(graph)
         one, last = torch.cuda.CUDAGraph(), torch.cuda.CUDAGraph()
         with torch.cuda.graph(one, capture_error_mode="thread_local"):
             step()
@@ -119,10 +130,7 @@ class Collector:
 
     def replay(self) -> None:
         """The captured rollout, with ``beside`` after each step where it was captured step by step."""
-        if isinstance(self.graph, StepGraphs):
-            self.graph.replay(self.beside)
-        else:
-            self.graph.replay()
+        self.graph.replay(self.beside)
 
     def _capture(self):
         timer = PhaseTimer(self.device)  # never synchronises: a synchronisation would break the capture

@@ -223,6 +223,31 @@ def test_a_large_entropy_bonus_raises_the_noise_but_never_past_max_noise_std():
         Config(max_noise_std=-1).validated()
 
 
+def test_a_captured_rollout_replays_beside_after_each_step_only_where_it_was_captured_step_by_step():
+    """The collector replays either capture through one call (agents.collect): the step's graph ``horizon``
+    times with the hook after each step, then the finishing graph; a rollout captured whole replays as one
+    graph and cannot call the hook between its steps (a background evaluation then queues its own)."""
+    from agents.collect import StepGraphs, WholeRollout
+
+    calls = []
+
+    class Graph:  # what a CUDA graph offers the collector: replay()
+        def __init__(self, name):
+            self.name = name
+
+        def replay(self):
+            calls.append(self.name)
+
+    StepGraphs(Graph("step"), Graph("finish"), 3).replay(lambda: calls.append("beside"))
+    assert calls == ["step", "beside"] * 3 + ["finish"]
+    calls.clear()
+    StepGraphs(Graph("step"), Graph("finish"), 2).replay()
+    assert calls == ["step", "step", "finish"]
+    calls.clear()
+    WholeRollout(Graph("rollout")).replay(lambda: calls.append("beside"))
+    assert calls == ["rollout"]
+
+
 @pytest.mark.parametrize("normalize_obs", [False, True])
 def test_a_rollout_stored_at_a_device_step_index_equals_a_plain_loop_over_the_steps(normalize_obs):
     """The runner's rollout step writes at an index held on the device (so one captured step can replay

@@ -135,10 +135,9 @@ def interleaved(runner, bg, timed, repeats: int) -> dict | None:
     rollout's (the collector's ``beside`` hook; on a GPU a one-step graph on the side stream after each of the
     rollout's step graphs), seconds an iteration, ``repeats`` timings. None where the rollout is captured whole
     (``--rollout-graph rollout``): it has no steps to weave into."""
-    from agents.collect import StepGraphs  # noqa: PLC0415
+    from agents.collect import WholeRollout  # noqa: PLC0415
 
-    graph = runner.collector.graph
-    if graph is not None and not isinstance(graph, StepGraphs):
+    if isinstance(runner.collector.graph, WholeRollout):
         return None
 
     def iteration():
