@@ -119,8 +119,10 @@ def test_suite_learning_report_merges_runs_made_alike_and_refuses_others(tmp_pat
     assert sl.report([str(tmp_path / "a"), str(tmp_path / "b")]) == 0
     table = capsys.readouterr().out
     # both seeds in one row: the marks' mean returns, the reference reached by one seed of two, the lowest ratio
-    assert ("| Hopper-v5 | 2 | 1 min: 1000; 2 min: 2000; 5 min: 3000; 10 min: 4000 | 3542.2 | 7.0, not reached (3.0, 3.0) "
-            "| 35 s | 240.0 M |") in table and "†" not in table
+    # (the scores rise 1000 a mark: 3000 at 3 minutes, 4000 at 5; Gymnasium's env judges the first mark at 3542.2)
+    assert ("| Hopper-v5 | 2 | 1 min: 1000; 2 min: 2000; 3 min: 3000; 5 min: 4000; 10 min: 5000 | 3542.2 | "
+            "7.0, not reached (3.0, 3.0) | 5, 5 | 35 s | 240.0 M |") in table and "†" not in table
+    assert "by the 3-minute mark in every seed: 0 of 1 rows (none)" in table
     # a seed from before the step capture (no rollout_graph in its JSON): its start took the whole rollout's capture
     doc(tmp_path / "b", "Hopper-v5", 1, hit=False)
     assert sl.report([str(tmp_path / "a"), str(tmp_path / "b")]) == 0
@@ -185,10 +187,13 @@ def test_suite_learning_gives_a_candidate_presets_runs_a_row_of_their_own(tmp_pa
     doc(1, ["gamma=0.995"], 3500.0)
     assert sl.report([str(tmp_path)]) == 0
     out = capsys.readouterr().out
-    assert "| Hopper-v5 | 1 | 1 min: 2600; 2 min: 2600; 5 min: 2600; 10 min: 2600 | 3542.2 | not reached (" in out
-    assert "| Hopper-v5 (gamma=0.995) | 2 | 1 min: 3550; 2 min: 3550; 5 min: 3550; 10 min: 3550 | 3542.2 | " \
+    assert "| Hopper-v5 | 1 | 1 min: 2600; 2 min: 2600; 3 min: 2600; 5 min: 2600; 10 min: 2600 | 3542.2 | not reached (" \
+        in out
+    assert "| Hopper-v5 (gamma=0.995) | 2 | 1 min: 3550; 2 min: 3550; 3 min: 3550; 5 min: 3550; 10 min: 3550 | 3542.2 | " \
            "3.3, not reached (" in out
-    assert "| Hopper-v5 (gamma=0.995) | **3550** (3600, 3500) | 3542.2 (Tianshou SAC, v3) | 3.3, not reached |" in out
+    # the kept policies in Gymnasium's env: seed 0's 3600 at the first mark, seed 1's 3500 at none
+    assert "| Hopper-v5 (gamma=0.995) | **3550** (3600, 3500) | 3542.2 (Tianshou SAC, v3) | 3.3, not reached | " \
+           "1, not by 10 |" in out
     assert sl.finished(str(tmp_path), "Hopper-v5", 1, ("gamma=0.995",))
     assert not sl.finished(str(tmp_path), "Hopper-v5", 1)
     runs, _ = sl.load_runs([str(tmp_path)], "")  # the curves: a panel each, not the two rows' seeds in one band
@@ -281,7 +286,7 @@ def test_suite_learning_promotes_a_candidates_rows_once_the_preset_holds_its_set
     assert promoted["meta"]["promoted"] and promoted["run"]["scored"][-1]["gymnasium_return"] == 61.0
     capsys.readouterr()
     assert sl.report([str(dest)]) == 0
-    assert "| Swimmer-v5 | **60.5** (60.0, 61.0) | 44.4 (Tianshou SAC, v3) | 2.2, 2.2 |" in capsys.readouterr().out
+    assert "| Swimmer-v5 | **60.5** (60.0, 61.0) | 44.4 (Tianshou SAC, v3) | 2.2, 2.2 | 1, 1 |" in capsys.readouterr().out
     # the promoted rows' policies are where the candidate's runs left them
     assert sl.made_with(promoted["run"]) == ("gamma=0.991",)
     os.makedirs(dest / "runs" / "Swimmer-v5-gamma=0.991-seed0")
@@ -340,7 +345,7 @@ def test_suite_learning_reads_minutes_to_the_reference_from_the_runs_evaluations
     run = {"task": "InvertedDoublePendulum-v5", "seed": 0, "marks_s": [60.0], "samples": 8e7, "samples_per_s": 5e5,
            "reference": 9360.0, "first_eval_reaching": {"target": None, "half": None}, "scored": [], "evals": evals}
     row = next(line for line in sl.table([run]).splitlines() if line.startswith("| InvertedDoublePendulum"))
-    assert f"| {sl.REFERENCE['InvertedDoublePendulum-v5']} | 2.3 (1.3) |" in row
+    assert f"| {sl.REFERENCE['InvertedDoublePendulum-v5']} | 2.3 (1.3) | - |" in row  # no policy scored yet
     evals[1]["eval/return"] = 9359.0  # below Tianshou's 9359.5
     assert "not reached (1.3)" in sl.table([run])
     # the lowest ratio, and where its policy was also played from nudged starts, Gymnasium against itself
@@ -426,7 +431,7 @@ def test_suite_learning_report_sets_sb3_beside_warpgym_and_draws_both(tmp_path, 
     assert sl.report([str(tmp_path)], figure) == 0
     out = capsys.readouterr().out
     warpgym_table, sb3_table = out.split("Stable-Baselines3")
-    assert "| Ant-v5 | 1 | 1 min: 60.0; 2 min: 120; 5 min: 300; 10 min: 600 |" in warpgym_table
+    assert "| Ant-v5 | 1 | 1 min: 60.0; 2 min: 120; 3 min: 180; 5 min: 300; 10 min: 600 |" in warpgym_table
     ant_row = next(line for line in warpgym_table.splitlines() if line.startswith("| Ant-v5"))
     assert ant_row.endswith("| 0.26 M | 1.000 |")
     assert "Intel Xeon" in sb3_table and sb3_table.rstrip().endswith("| 550 | - |")  # samples/s, no ratio
@@ -757,6 +762,32 @@ def test_suite_versions_plays_again_only_what_changed(monkeypatch, tmp_path):
     assert calls == ["10", "5", "5"]
 
 
+def test_suite_learning_judges_the_minutes_to_the_figure_by_gymnasiums_scores_at_the_marks():
+    """A seed is at its figure by a mark where the policy kept there scored it in Gymnasium's env, whatever the
+    training's own evaluations said; a row is within 3 minutes only if every seed's policy was by the 3-minute mark,
+    and a negative figure (a cost) is passed from below."""
+    from benchmarks.learning import suite_learning as sl
+
+    def run(task, seed, scores):
+        marks = list(sl.marks_of(task, 1.0))
+        return {"task": task, "seed": seed, "marks_s": marks, "reference": sl.REFERENCE[task], "samples": 1e6,
+                "samples_per_s": 1e5, "evals": [{"time_s": 70.0, "samples": 1e6, "eval/return": 9e9}],  # training evals say 1.2 for all
+                "scored": [{"mark_s": m, "gymnasium_return": v, "gymnasium_over_warpgym": 1.0}
+                           for m, v in zip(marks, scores)]}
+
+    walker = [run("Walker2d-v5", 0, [4000, 5100, 5200, 6000, 6500]), run("Walker2d-v5", 1, [3000, 4000, 5006.9, 5100, 6000])]
+    assert sl.first_marks_at(walker, 5007.0) == [120.0, 300.0] and sl.marks_at(walker, 5007.0) == "2, 5"
+    pusher = [run("Pusher-v5", s, [-45.0, -42.6, -40.0]) for s in (0, 1)]
+    swimmer = [run("Swimmer-v5", 0, [10.0, 20.0, 30.0, 40.0, 44.0])]
+    assert sl.marks_at(swimmer, 44.4) == "not by 10"
+    assert sl.within(walker + pusher + swimmer, 180.0) == ["Pusher-v5"]
+    walker[1]["scored"][2]["gymnasium_return"] = 5007.0
+    assert sl.within(walker + pusher + swimmer, 180.0) == ["Pusher-v5", "Walker2d-v5"]
+    assert sl.within(walker + pusher, 120.0) == ["Pusher-v5"]
+    row = next(line for line in sl.table(walker).splitlines() if line.startswith("| Walker2d-v5"))
+    assert "| 1.2, 1.2 (1.2, 1.2) | 2, 3 |" in row
+
+
 def test_the_published_suite_tables_are_what_their_scripts_print_from_the_committed_runs(capsys):
     """docs/benchmarks.md's learning table (warpgym's and SB3's, and the candidates' rows) and its v4-beside-v5 table,
     row for row, as ``suite_learning.py --report`` and ``suite_versions.py --report`` print them from docs/bench: a
@@ -784,6 +815,11 @@ def test_the_published_suite_tables_are_what_their_scripts_print_from_the_commit
     out = capsys.readouterr().out.split("The README's table:")[0]
     candidates = [line for line in out.splitlines() if line.startswith(("| Swimmer-v5 (", "| Walker2d-v5 ("))]
     assert len(candidates) == 3 and [c for c in candidates if c not in {line.strip() for line in page}] == []
+    # Walker2d-v5's network beside the preset of its day, paired on one host
+    assert sl.report([os.path.join(bench, "suite_learning", "walker2d_paired")]) == 0
+    out = capsys.readouterr().out.split("The README's table:")[0]
+    paired = [line for line in out.splitlines() if line.startswith("| Walker2d-v5")]
+    assert len(paired) == 2 and [p for p in paired if p not in page] == []
 
 
 @pytest.mark.parametrize("folder, task, settings", [("multi_gpu", "Ant", 9), ("multi_gpu", "Humanoid", 3),
@@ -990,7 +1026,7 @@ def test_suite_learning_report_of_runs_not_scored_yet_says_so(tmp_path, capsys):
                                                                         "command": "x"}, "run": run}))
     assert sl.report([str(tmp_path)]) == 0
     out = capsys.readouterr().out
-    assert "| Hopper-v5 | 1 | 1 min: -; 2 min: -; 5 min: -; 10 min: - |" in out and "| not scored |" in out
+    assert "| Hopper-v5 | 1 | 1 min: -; 2 min: -; 3 min: -; 5 min: -; 10 min: - |" in out and "| not scored |" in out
     assert "| Hopper-v5 | not scored yet (`--score OUT`) | 3542.2 (Tianshou SAC, v3) | not reached |" in out
 
 
