@@ -4,9 +4,9 @@ Each task and seed trains ``stable_baselines3.PPO`` for --minutes on ``gymnasium
 the RL Baselines3 Zoo's hyperparameters for the task (``ZOO``: its hyperparams/ppo.yml, tuned on the v4
 tasks, whose v5 versions change some observations, Ant's contact forces among them; VecNormalize on observations and rewards, as its ``normalize: true``). The Zoo runs
 these with one env, one process: so does this script, each run pinned to one core with one torch thread,
---parallel runs at once. Its policies at the marks (1, 2, 5, 10 minutes of training) are kept in memory
-and scored after training as suite_learning.py scores warpgym's: the deterministic policy, 10 episodes
-from each of 3 seeds in ``gymnasium.make``'s env. Every 30 s of training a deterministic 5-episode
+--parallel runs at once. Its policies at the marks (1, 2, 3, 5, 10 minutes of training; 1, 2, 5, 10 before
+2026-11-28) are kept in memory and scored after training as suite_learning.py scores warpgym's: the
+deterministic policy, 10 episodes from each of 3 seeds in ``gymnasium.make``'s env. Every 30 s of training a deterministic 5-episode
 evaluation gives the minutes to the reference; its time, and the snapshots', is kept off the training
 clock.
 
