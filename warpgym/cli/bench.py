@@ -140,7 +140,8 @@ def bench_one(robot: str, num_envs: int, device: str, steps: int, repeats: int, 
     result["physics_over_raw"] = result["physics_steps_per_s"] / result["raw_steps_per_s"]
     result["env_over_physics"] = result["env_steps_per_s"] / result["physics_steps_per_s"]
     env.close()
-    del env, sim, raw, mjwarp
+    # drop every reference, env_step's closure cell among them, so that the next size's memory reading starts clean
+    env = sim = raw = mjwarp = None
     return result
 
 
