@@ -241,11 +241,8 @@ def first_marks_at(rs: list[dict], ref: float) -> list[float | None]:
     """Each seed's first mark (seconds) whose kept policy scored ``ref`` or more in Gymnasium's env (None where no
     scored mark did): the judge of a time to the figure, where the training's own evaluations (every 60 s, in
     warpgym's env) only place it between two of them."""
-    firsts = []
-    for r in rs:
-        at = sorted(s["mark_s"] for s in r["scored"] if s["gymnasium_return"] >= ref)
-        firsts.append(at[0] if at else None)
-    return firsts
+    # (agents.logger.first_reaching gives the iteration's time, not the mark its policy was kept for)
+    return [min((s["mark_s"] for s in r["scored"] if s["gymnasium_return"] >= ref), default=None) for r in rs]
 
 
 def marks_at(rs: list[dict], ref: float) -> str:
