@@ -39,10 +39,14 @@ class MjwSim(CapturedLaunches):
         nconmax, njmax: contacts and constraint rows per world MuJoCo Warp makes room for; a world that
             needs more loses the rest for that step (counted in ``solver_overflows``).
         contact_forces: compute ``cfrc_ext`` after the last physics step (``mj_rnePostConstraint``).
+        contact_sensor_maxmatch: contacts a contact sensor considers (MuJoCo Warp's option of that name).
+
+    ``after_substep``, when set, launches its work after each physics step of a control step (inside the graph).
     """
 
     def __init__(self, model: str | CompiledModel, num_envs: int = 1, device: str | None = None,
-                 frame_skip: int = 1, nconmax: int = 32, njmax: int = 128, contact_forces: bool = False):
+                 frame_skip: int = 1, nconmax: int = 32, njmax: int = 128, contact_forces: bool = False,
+                 contact_sensor_maxmatch: int | None = None):
         import mujoco  # noqa: PLC0415
         import mujoco_warp as mjw  # noqa: PLC0415
 
@@ -77,6 +81,10 @@ class MjwSim(CapturedLaunches):
         self._drop_bits = int(OF.NEFC | OF.NJMAX_NNZ | OF.BROADPHASE | OF.NARROWPHASE)
         quiet = ~int(OF.ITERATIONS | OF.LS_ITERATIONS | self._drop_bits)
         self.m.opt.warn_overflow = int(self.m.opt.warn_overflow) & quiet
+        if contact_sensor_maxmatch is not None:
+            self.m.opt.contact_sensor_maxmatch = check_positive_int(
+                "contact_sensor_maxmatch", contact_sensor_maxmatch, "pass e.g. 64")
+        self.after_substep = None
         n = self.num_envs
         self._peak_nefc = wp.zeros(n, dtype=wp.int32, device=self.device)
         self._peak_nacon = wp.zeros(1, dtype=wp.int32, device=self.device)
@@ -94,8 +102,36 @@ class MjwSim(CapturedLaunches):
                 wp.launch(track_solver_load, dim=self.num_envs,
                           inputs=[d.nefc, d.nacon, self._drop_bits, int(i == 0)],
                           outputs=[d.overflow, self._peak_nefc, self._peak_nacon, self._overflowed])
+                if self.after_substep is not None:
+                    self.after_substep()
             if self.contact_forces:
                 mjw.rne_postconstraint(m, d)
+
+    def forward(self) -> None:
+        """MuJoCo's forward pass of every world's current state (``mj_forward``): body frames, velocities,
+        contacts, constraint forces and sensors."""
+        with wp.ScopedDevice(self.device), mujoco_contact_frames():
+            self._mjw.forward(self.m, self.d)
+
+    def per_world(self, *fields: str) -> None:
+        """Give each world its own copy of these model fields (MuJoCo Warp reads a model field's row
+        ``world % rows``), so that kernels can write a value per world: domain randomisation."""
+        with wp.ScopedDevice(self.device):
+            for name in fields:
+                arr = getattr(self.m, name)
+                if arr.shape[0] == self.num_envs:
+                    continue
+                if arr.shape[0] != 1:
+                    raise ValueError(f"model field {name} has {arr.shape[0]} rows: neither shared nor one per world")
+                tiled = arr.numpy().repeat(self.num_envs, axis=0)
+                setattr(self.m, name, wp.array(tiled, dtype=arr.dtype, device=self.device))
+        self._graph = None
+
+    def set_const(self) -> None:
+        """Recompute the model constants derived from fields a kernel changed (MuJoCo Warp's ``set_const``:
+        subtree masses, inverse weights, actuator accelerations), per world."""
+        with wp.ScopedDevice(self.device):
+            self._mjw.set_const(self.m, self.d)
 
     def kinematics(self, com: bool) -> None:
         """Body poses of the current qpos (``mj_kinematics``) and, with ``com``, com inertias and

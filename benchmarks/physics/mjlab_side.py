@@ -1,0 +1,251 @@
+"""The mjlab side of warpgym's legged tasks: everything that imports mjlab, run by mjlab's own interpreter.
+
+mjlab 1.6 pins MuJoCo and MuJoCo Warp 3.11 where warpgym pins 3.17, so mjlab lives in a virtual environment of
+its own (CI's mjlab stage; on the GPU machine, its staged wheels) and this file imports nothing of warpgym. Its
+commands:
+
+- ``export DIR``: mjlab's velocity scenes (robot, actuators, sensors, floor, keyframe and the physics options its
+  config sets after compiling) written as MJCF: the files warpgym's legged tasks compile
+  (warpgym/tasks/legged/assets). The visual meshes are left out: they collide with nothing, and the physics of
+  the file is the same without them (tests/test_legged.py compares the compiled fields).
+- ``reference OUT.npz``: transitions of mjlab's own env on the CPU, with everything warpgym needs to start
+  from the same state (tests/test_legged_judge.py steps warpgym's env from it and compares).
+- ``speed``: mjlab's env stepped with random actions, env-steps per second (benchmarks/learning/mjlab_side_by_side.py).
+- ``scalars RUN_DIR``: the scalars of an mjlab training run's TensorBoard log, as JSON.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+
+# mjlab asks for an OpenGL context and for ffmpeg when it is imported; neither is used here
+os.environ.setdefault("MUJOCO_GL", "disable")
+
+TASKS = {  # warpgym's id -> the mjlab task it mirrors
+    "Go1VelocityFlat-v0": "Mjlab-Velocity-Flat-Unitree-Go1",
+    "G1VelocityFlat-v0": "Mjlab-Velocity-Flat-Unitree-G1",
+}
+SCENE_FILES = {"Go1VelocityFlat-v0": "go1_velocity_flat.xml", "G1VelocityFlat-v0": "g1_velocity_flat.xml"}
+
+
+def _env_cfg(task_id: str, num_envs: int):
+    import mjlab.tasks  # noqa: F401  (registers the tasks)
+    from mjlab.tasks.registry import load_env_cfg
+
+    cfg = load_env_cfg(task_id)
+    cfg.scene.num_envs = num_envs
+    return cfg
+
+
+# ---------------------------------------------------------------------------------------------------- export
+def scene_xml(task_id: str) -> str:
+    """mjlab's scene of ``task_id`` as MJCF, with the options mjlab applies after compiling and without the
+    visual meshes."""
+    import mujoco
+    from mjlab.scene import Scene
+
+    cfg = _env_cfg(task_id, 1)
+    spec = Scene(cfg.scene, device="cpu").spec
+    m = cfg.sim.mujoco
+    opt = spec.option
+    opt.timestep, opt.impratio, opt.iterations, opt.tolerance = m.timestep, m.impratio, m.iterations, m.tolerance
+    opt.ls_iterations, opt.ls_tolerance, opt.ccd_iterations = m.ls_iterations, m.ls_tolerance, m.ccd_iterations
+    opt.gravity = list(m.gravity)
+    opt.cone = {"elliptic": mujoco.mjtCone.mjCONE_ELLIPTIC, "pyramidal": mujoco.mjtCone.mjCONE_PYRAMIDAL}[m.cone]
+    opt.integrator = {"euler": mujoco.mjtIntegrator.mjINT_EULER,
+                      "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST}[m.integrator]
+    opt.jacobian = {"auto": mujoco.mjtJacobian.mjJAC_AUTO, "dense": mujoco.mjtJacobian.mjJAC_DENSE,
+                    "sparse": mujoco.mjtJacobian.mjJAC_SPARSE}[m.jacobian]
+    opt.solver = {"newton": mujoco.mjtSolver.mjSOL_NEWTON, "cg": mujoco.mjtSolver.mjSOL_CG}[m.solver]
+    for geom in [g for g in spec.geoms if g.type == mujoco.mjtGeom.mjGEOM_MESH]:
+        if geom.contype or geom.conaffinity:
+            raise ValueError(f"{task_id}: mesh geom {geom.name!r} collides; it cannot be left out")
+        spec.delete(geom)
+    for mesh in list(spec.meshes):
+        spec.delete(mesh)
+    # MuJoCo 3.11 writes the main default class as an empty <default/>, which MuJoCo 3.17 refuses
+    # ("empty class name"); it holds nothing
+    xml = spec.to_xml().replace("<default>\n    <default/>\n", "<default>\n", 1)
+    header = (f"<!-- mjlab {_version()}'s scene of {task_id}: the robot of mjlab's asset zoo (from MuJoCo Menagerie, "
+              "BSD-3-Clause, see LICENSE-menagerie.txt), its actuators, sensors and floor (mjlab, Apache-2.0, see "
+              "NOTICE-mjlab.txt), with the physics options mjlab sets after compiling and without the visual "
+              "meshes. Written by `python -m benchmarks.physics.mjlab_side export DIR` in mjlab's environment. -->\n")
+    return header + xml
+
+
+def _version() -> str:
+    from importlib.metadata import version
+
+    return version("mjlab")
+
+
+def export(folder: str) -> None:
+    os.makedirs(folder, exist_ok=True)
+    for ours, theirs in TASKS.items():
+        path = os.path.join(folder, SCENE_FILES[ours])
+        with open(path, "w") as f:
+            f.write(scene_xml(theirs))
+        print(f"{theirs} -> {path}")
+
+
+# ---------------------------------------------------------------------------------------------------- reference
+def _np(t):
+    return t.detach().cpu().numpy().copy()
+
+
+def _parts(env):
+    """The pieces of mjlab's env a transition reads and writes."""
+    cmd = env.command_manager.get_term("twist")
+    feet = env.scene["feet_ground_contact"]
+    swing = env.reward_manager.get_term_cfg("foot_swing_height").func
+    collision = env.scene.sensors.get("self_collision") if hasattr(env.scene, "sensors") else None
+    return cmd, feet, swing, collision
+
+
+def snapshot(env, foot_geoms) -> dict:
+    """Everything of mjlab's env that warpgym's needs to start from the same state."""
+    import mujoco
+
+    cmd, feet, swing, _ = _parts(env)
+    data, model = env.sim.data, env.sim.model
+    mjm = env.sim.mj_model
+    geom_ids = [mujoco.mj_name2id(mjm, mujoco.mjtObj.mjOBJ_GEOM, g) for g in foot_geoms]
+    kind = (cmd.is_heading_env.int() * 1 + cmd.is_standing_env.int() * 2 + cmd.is_forward_env.int() * 4)
+    return {
+        "qpos": _np(data.qpos), "qvel": _np(data.qvel), "warm_start": _np(data.qacc_warmstart),
+        "action": _np(env.action_manager.action), "prev_action": _np(env.action_manager.prev_action),
+        "command": _np(cmd.vel_command_b), "heading_target": _np(cmd.heading_target), "command_kind": _np(kind),
+        "command_time_left": _np(cmd.time_left), "push_time_left": _np(env.event_manager._interval_term_time_left[0]),
+        "air_time": _np(feet.data.current_air_time), "contact_time": _np(feet.data.current_contact_time),
+        "peak_height": _np(swing.peak_heights), "foot_height": _np(env.scene["foot_height_scan"].data.heights),
+        "encoder_bias": _np(env.scene["robot"].data.encoder_bias), "length": _np(env.episode_length_buf),
+        "step_count": env.common_step_counter,
+        "errors": _np(torch_stack([cmd.metrics["error_vel_xy"], cmd.metrics["error_vel_yaw"]])),
+        "foot_friction": _np(model.geom_friction[:, geom_ids]), "body_ipos": _np(model.body_ipos),
+        "dof_invweight0": _np(model.dof_invweight0), "body_invweight0": _np(model.body_invweight0),
+    }
+
+
+def torch_stack(tensors):
+    import torch
+
+    return torch.stack(tensors, dim=1)
+
+
+MODEL_FIELDS = (
+    "opt.timestep", "opt.integrator", "opt.cone", "opt.impratio", "opt.gravity", "opt.tolerance", "opt.ls_tolerance",
+    "opt.iterations", "opt.ls_iterations", "opt.ccd_iterations", "opt.disableflags", "opt.enableflags",
+    "body_mass", "body_inertia", "body_ipos", "body_iquat", "body_pos", "body_quat", "body_parentid",
+    "jnt_type", "jnt_range", "jnt_limited", "jnt_stiffness", "jnt_solref", "jnt_solimp", "qpos0",
+    "dof_damping", "dof_armature", "dof_frictionloss", "actuator_gainprm", "actuator_biasprm", "actuator_gaintype",
+    "actuator_biastype", "actuator_forcerange", "actuator_forcelimited", "actuator_ctrllimited", "actuator_trnid",
+    "sensor_type", "sensor_adr", "sensor_dim", "sensor_objid", "sensor_refid", "key_qpos",
+    "site_pos", "site_bodyid",
+)
+GEOM_FIELDS = ("geom_type", "geom_size", "geom_pos", "geom_quat", "geom_friction", "geom_solref", "geom_solimp",
+               "geom_condim", "geom_contype", "geom_conaffinity", "geom_priority", "geom_margin", "geom_gap",
+               "geom_bodyid")
+
+
+def model_fields(mjm) -> dict:
+    """mjlab's compiled model, field by field (the geoms' by name: mjlab's model also holds the visual meshes)."""
+    import mujoco
+    import numpy as np
+
+    out = {}
+    for name in MODEL_FIELDS:
+        obj = mjm
+        for part in name.split("."):
+            obj = getattr(obj, part)
+        out["model/" + name] = np.asarray(obj).copy()
+    names = [mujoco.mj_id2name(mjm, mujoco.mjtObj.mjOBJ_GEOM, i) or "" for i in range(mjm.ngeom)]
+    keep = [i for i, n in enumerate(names) if n]
+    out["geom_names"] = np.array([names[i] for i in keep])
+    for name in GEOM_FIELDS:
+        out["geom/" + name] = np.asarray(getattr(mjm, name))[keep].copy()
+    return out
+
+
+def reference(path: str, task: str, num_envs: int, warmup: int, steps: int, seed: int) -> None:
+    """``steps`` transitions of mjlab's env on the CPU (observation noise off), each from a state reached by
+    ``warmup`` steps of random actions after the one before: the state before, the action, and what came out.
+    The compared steps draw nothing: their command and push timers are moved past the step first."""
+    import numpy as np
+    import torch
+
+    from mjlab.envs import ManagerBasedRlEnv
+
+    theirs = TASKS[task]
+    cfg = _env_cfg(theirs, num_envs)
+    cfg.seed = seed
+    cfg.observations["actor"].enable_corruption = False
+    friction = cfg.events.get("foot_friction_slide") or cfg.events["foot_friction"]
+    foot_geoms = ["robot/" + g for g in friction.params["asset_cfg"].geom_names]
+    env = ManagerBasedRlEnv(cfg, device="cpu")
+    gen = torch.Generator().manual_seed(seed)
+    cmd, _, _, _ = _parts(env)
+    nu = env.action_manager.total_action_dim
+    names = list(env.reward_manager._term_names)
+    weights = np.array([env.reward_manager.get_term_cfg(n).weight for n in names])
+    record: dict[str, list] = {}
+
+    def add(prefix, values):
+        for key, value in values.items():
+            record.setdefault(prefix + key, []).append(value)
+
+    env.reset()
+    for _ in range(steps):
+        for _ in range(warmup):
+            env.step(0.3 * torch.randn(num_envs, nu, generator=gen))
+        cmd.time_left[:] = 100.0
+        env.event_manager._interval_term_time_left[0][:] = 100.0
+        add("before/", snapshot(env, foot_geoms))
+        action = 0.3 * torch.randn(num_envs, nu, generator=gen)
+        obs, reward, terminated, time_outs, _ = env.step(action)
+        # mjlab's contact sensor caches what its rewards read after the last physics step, and only a reset (of
+        # any world) clears that cache before the observation: the critic's contacts and forces come from the last
+        # physics step in a step without resets, from the forward pass in one with them. The observation again
+        # with the cache cleared is the second case, which warpgym always computes.
+        feet = env.scene["feet_ground_contact"]
+        feet._invalidate_cache()
+        fresh = env.observation_manager.compute_group("critic")
+        add("", {"action": _np(action), "actor": _np(obs["actor"]), "critic": _np(obs["critic"]),
+                 "critic_fresh": _np(fresh),
+                 "reward": _np(reward), "terms": _np(env.reward_manager._step_reward) * env.step_dt,
+                 "terminated": _np(terminated), "time_outs": _np(time_outs)})
+        add("after/", snapshot(env, foot_geoms))
+    arrays = {k: np.stack(v) for k, v in record.items()}
+    arrays.update(model_fields(env.sim.mj_model))
+    arrays["term_names"] = np.array(names)
+    arrays["foot_geoms"] = np.array(foot_geoms)
+    np.savez_compressed(path, **arrays)
+    env.close()
+    print(f"{theirs}: {steps} transitions of {num_envs} worlds -> {path}")
+
+
+# ---------------------------------------------------------------------------------------------------- main
+def main(argv=None) -> None:
+    p = argparse.ArgumentParser(prog="python -m benchmarks.physics.mjlab_side", description=__doc__.split("\n\n")[0])
+    sub = p.add_subparsers(dest="command", required=True)
+    e = sub.add_parser("export", help="write mjlab's velocity scenes as MJCF into DIR")
+    e.add_argument("folder")
+    r = sub.add_parser("reference", help="record transitions of mjlab's env on the CPU into OUT (.npz)")
+    r.add_argument("out")
+    r.add_argument("--task", choices=list(TASKS), required=True)
+    r.add_argument("--envs", type=int, default=8)
+    r.add_argument("--warmup", type=int, default=25)
+    r.add_argument("--steps", type=int, default=4)
+    r.add_argument("--seed", type=int, default=0)
+    args = p.parse_args(argv)
+    if args.command == "export":
+        export(args.folder)
+    elif args.command == "reference":
+        reference(args.out, args.task, args.envs, args.warmup, args.steps, args.seed)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])

@@ -1,0 +1,171 @@
+"""What the legged velocity tasks' kernels read and write: the task's numbers (``LeggedParams``, filled by
+``warpgym.tasks.legged``), the robot's indices in MuJoCo's model (``LeggedRobot``), MuJoCo Warp's arrays
+(``MjLegged``), the per-world task state (``LeggedState``: command, timers, contact times, action history,
+randomised encoder bias) and the episode bookkeeping (``LeggedEpisodes``), and the reward terms, named once
+(``Term``: each is written at its column of ``LeggedEpisodes.terms``, and ``info["reward_<name>"]`` reads it).
+
+Shapes: N worlds, J actuated joints (hinges, in the model's order, which is the action's), F feet,
+K reward terms, S command stages, Q = nq, V = nv, B bodies, T sites, D sensor data entries.
+"""
+
+import enum
+
+import warp as wp
+
+
+class Term(enum.IntEnum):
+    """mjlab's reward terms of the velocity tasks, in its config's order."""
+
+    track_linear_velocity = 0
+    track_angular_velocity = 1
+    upright = 2
+    pose = 3
+    body_ang_vel = 4
+    angular_momentum = 5
+    dof_pos_limits = 6
+    action_rate_l2 = 7
+    air_time = 8
+    foot_clearance = 9
+    foot_swing_height = 10
+    foot_slip = 11
+    soft_landing = 12
+    self_collisions = 13
+
+
+NUM_TERMS = len(Term)
+
+# Command flags (LeggedState.command_kind): bits of one int per world
+HEADING = 1  # the yaw rate steers toward a heading target
+STANDING = 2  # the whole command is zero
+FORWARD = 4  # forward only: x at least the forward minimum, no sideways or turning
+
+
+@wp.struct
+class LeggedParams:
+    dt: float  # control step: decimation * timestep [s]
+    physics_dt: float  # MuJoCo's timestep [s]
+    episode_length: int  # control steps to the time limit
+    # velocity command (mjlab's UniformVelocityCommand and its command curriculum)
+    stage_steps: wp.array[wp.int32]  # (S,) env step from which stage s's ranges hold
+    stage_ranges: wp.array2d[float]  # (S, 6) lin_x lo, hi, lin_y lo, hi, ang_z lo, hi
+    heading_lo: float
+    heading_hi: float
+    resample_lo: float  # seconds between resamples, uniform in [lo, hi]
+    resample_hi: float
+    rel_standing: float
+    rel_heading: float
+    rel_forward: float
+    heading_stiffness: float
+    forward_min: float
+    max_command_steps: float  # resample_hi / dt: the tracking errors' divisor
+    # rewards: weights (0 skips a term) and each term's parameters
+    weights: wp.array[float]  # (K,)
+    lin_var: float  # std^2 of the tracking and upright kernels
+    ang_var: float
+    upright_var: float
+    walking_threshold: float  # command speed from which the posture's walking / running stds hold
+    running_threshold: float
+    air_min: float
+    air_max: float
+    air_command: float
+    clearance_height: float
+    clearance_command: float
+    swing_height: float
+    swing_command: float
+    slip_command: float
+    landing_command: float
+    collision_force: float  # contact force [N] above which a self-collision substep counts
+    # termination
+    limit_angle: float  # tilt of the base from upright that ends an episode [rad]
+    # observation noise: uniform in [-x, x] on the policy's terms (0 with noise off)
+    noise_lin_vel: float
+    noise_ang_vel: float
+    noise_gravity: float
+    noise_joint_pos: float
+    noise_joint_vel: float
+    # events
+    push_interval_lo: float  # seconds between pushes, uniform in [lo, hi]
+    push_interval_hi: float
+    push_lo: wp.array[float]  # (6,) velocity added by a push: x, y, z, roll, pitch, yaw (world frame)
+    push_hi: wp.array[float]
+    reset_lo: wp.array[float]  # (4,) x, y, z, yaw of the reset pose, added to the default root pose
+    reset_hi: wp.array[float]
+    joint_pos_offset_lo: float
+    joint_pos_offset_hi: float
+    joint_vel_lo: float
+    joint_vel_hi: float
+
+
+@wp.struct
+class LeggedRobot:
+    root_body: int
+    upright_body: int  # whose tilt the upright reward scores
+    angvel_body: int  # whose roll and pitch rates body_ang_vel charges
+    root_qpos: int  # qpos address of the free joint
+    root_dof: int
+    joint_qpos: wp.array[wp.int32]  # (J,)
+    joint_dof: wp.array[wp.int32]  # (J,)
+    default_root: wp.array[float]  # (7,) position, quaternion (w, x, y, z)
+    default_joint_pos: wp.array[float]  # (J,)
+    soft_lo: wp.array[float]  # (J,) soft joint limits
+    soft_hi: wp.array[float]
+    std_standing: wp.array[float]  # (J,) the posture reward's stds by regime
+    std_walking: wp.array[float]
+    std_running: wp.array[float]
+    joint_actuator: wp.array[wp.int32]  # (J,) the actuator (control) of each joint
+    action_scale: wp.array[float]  # (J,)
+    foot_site: wp.array[wp.int32]  # (F,)
+    foot_body: wp.array[wp.int32]  # (F,) the body each foot's site is fixed to
+    foot_found: wp.array[wp.int32]  # (F,) sensordata address of each foot's contact count
+    foot_force: wp.array[wp.int32]  # (F,) ... of its net contact force (world frame)
+    imu_lin_vel: int  # sensordata addresses (velocimeter, gyro, subtree angular momentum)
+    imu_ang_vel: int
+    angmom: int
+    collision_force: int  # sensordata address of the self-collision sensor's force; -1: none
+
+
+@wp.struct
+class MjLegged:
+    """MuJoCo Warp's ``Data``, one row per world."""
+
+    qpos: wp.array2d[float]  # (N, Q)
+    qvel: wp.array2d[float]  # (N, V)
+    ctrl: wp.array2d[float]  # (N, J) in the actuators' order
+    xpos: wp.array2d[wp.vec3]  # (N, B)
+    xquat: wp.array2d[wp.quat]  # (N, B) (w, x, y, z) as MuJoCo orders them
+    cvel: wp.array2d[wp.spatial_vector]  # (N, B) (angular, linear) about the subtree's centre of mass
+    subtree_com: wp.array2d[wp.vec3]  # (N, B)
+    site_xpos: wp.array2d[wp.vec3]  # (N, T)
+    sensordata: wp.array2d[float]  # (N, D)
+    warm_start: wp.array2d[float]  # (N, V) qacc_warmstart
+
+
+@wp.struct
+class LeggedState:
+    """What a world carries from step to step beside MuJoCo's state."""
+
+    action: wp.array2d[float]  # (N, J) the last action (NaN entries as 0), one entry per joint
+    prev_action: wp.array2d[float]  # (N, J)
+    command: wp.array2d[float]  # (N, 3) vx, vy [m/s], yaw rate [rad/s] in the base's frame
+    heading_target: wp.array[float]  # (N,)
+    command_kind: wp.array[wp.int32]  # (N,) HEADING | STANDING | FORWARD
+    command_time_left: wp.array[float]  # (N,) seconds to the next resample
+    push_time_left: wp.array[float]  # (N,) seconds to the next push
+    air_time: wp.array2d[float]  # (N, F) seconds each foot has been off the ground
+    contact_time: wp.array2d[float]  # (N, F) ... on it
+    peak_height: wp.array2d[float]  # (N, F) highest foot height of the swing in progress
+    foot_height: wp.array2d[float]  # (N, F) foot heights when the last observation was made
+    collision_hits: wp.array[wp.int32]  # (N,) physics steps of this step with a self-collision
+    encoder_bias: wp.array2d[float]  # (N, J) randomised once per world
+    step_count: wp.array[wp.int32]  # (1,) env steps since the env was built (the command curriculum's clock)
+
+
+@wp.struct
+class LeggedEpisodes:
+    length: wp.array[wp.int32]  # (N,)
+    total_return: wp.array[float]  # (N,)
+    errors: wp.array2d[float]  # (N, 2) mjlab's tracking errors so far: xy speed, yaw rate
+    ended_return: wp.array[float]  # (N,)
+    ended_length: wp.array[wp.int32]  # (N,)
+    ended_errors: wp.array2d[float]  # (N, 2)
+    terms: wp.array2d[float]  # (N, K) this step's weighted reward terms (their sum is the reward)

@@ -1,0 +1,19 @@
+"""Legged robots following a velocity command, as mjlab defines them: ``LEGGED`` maps each id to its default
+definition."""
+
+from warpgym.tasks.legged.base import LeggedTask
+from warpgym.tasks.legged.g1 import G1VelocityFlat
+from warpgym.tasks.legged.go1 import Go1VelocityFlat
+
+LEGGED: dict[str, LeggedTask] = {t.name: t for t in (Go1VelocityFlat(), G1VelocityFlat())}
+
+
+def get_legged_task(name) -> LeggedTask:
+    if isinstance(name, LeggedTask):
+        return name
+    if name not in LEGGED:
+        raise ValueError(f"unknown task {name!r}: the legged velocity tasks are {list(LEGGED)}")
+    return LEGGED[name]
+
+
+__all__ = ["LEGGED", "LeggedTask", "get_legged_task"]

@@ -1,0 +1,221 @@
+"""What the legged robots' velocity tasks share (mjlab's ``make_velocity_env_cfg`` and its flat-ground edits): the
+command, the reward terms' weights and parameters, observation noise, the fall, pushes, resets and the
+randomisation drawn when an env is built. Each robot's file beside this one names its parts in its scene and
+sets what its mjlab config sets for it; the kernels (``kernels/legged``) hold the step.
+
+Every field is a constructor keyword of the env (``gym.make_vec("warpgym/Go1VelocityFlat-v0", num_envs=4096,
+lin_vel_x=(-2.0, 2.0))``); ``replace`` checks a change and ``validate`` the whole.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, field, fields, replace
+from typing import ClassVar
+
+from kernels.legged.params import Term
+
+ASSETS = os.path.join(os.path.dirname(os.path.abspath(__file__)), "assets")
+TERM_NAMES = tuple(t.name for t in Term)
+
+# mjlab's reward weights of the velocity tasks before a robot's config changes them (0: the term is off)
+BASE_WEIGHTS = {
+    "track_linear_velocity": 2.0, "track_angular_velocity": 2.0, "upright": 1.0, "pose": 1.0, "body_ang_vel": 0.0,
+    "angular_momentum": 0.0, "dof_pos_limits": -1.0, "action_rate_l2": -0.1, "air_time": 0.0, "foot_clearance": -2.0,
+    "foot_swing_height": -0.25, "foot_slip": -0.1, "soft_landing": -1e-5, "self_collisions": 0.0,
+}
+
+
+def _weights(**changes) -> tuple[tuple[str, float], ...]:
+    return tuple({**BASE_WEIGHTS, **changes}.items())
+
+
+@dataclass(frozen=True)
+class LeggedTask:
+    name: str
+    mirrors: str  # the mjlab task this one mirrors
+    scene_file: str  # in warpgym/tasks/legged/assets, or a path
+    # the robot's parts, by their names in the scene
+    root_body: str
+    upright_body: str  # whose tilt the upright reward scores
+    angvel_body: str  # whose roll and pitch rates body_ang_vel charges
+    com_body: str  # whose centre of mass is randomised
+    foot_geoms: tuple[str, ...]  # whose friction is randomised
+    foot_sites: tuple[str, ...]  # the feet's heights and velocities
+    foot_sensors: tuple[str, ...]  # contact sensors "<name>_found" and "<name>_force", one per foot
+    self_collision_sensor: str = ""  # "<name>_force" felt by self-collisions; "": none
+    imu_lin_vel_sensor: str = "robot/imu_lin_vel"
+    imu_ang_vel_sensor: str = "robot/imu_ang_vel"
+    angmom_sensor: str = "robot/root_angmom"
+    # action: a joint position target, action * scale + default position, the scale action_scale * effort
+    # limit / stiffness of the joint's actuator (mjlab's GO1_ACTION_SCALE, G1_ACTION_SCALE)
+    action_scale: float = 0.25
+    soft_joint_limit_factor: float = 0.9
+    # the posture reward's std of each joint (regular expressions over joint names, as mjlab's config writes them)
+    posture_std_standing: tuple[tuple[str, float], ...] = ()
+    posture_std_walking: tuple[tuple[str, float], ...] = ()
+    posture_std_running: tuple[tuple[str, float], ...] = ()
+    decimation: int = 4
+    episode_length_s: float = 20.0
+    # MuJoCo Warp's contact and constraint room per world
+    nconmax: int = 32
+    njmax: int = 300
+    contact_sensor_maxmatch: int = 64
+    # velocity command
+    lin_vel_x: tuple[float, float] = (-1.0, 1.0)
+    lin_vel_y: tuple[float, float] = (-1.0, 1.0)
+    ang_vel_z: tuple[float, float] = (-0.5, 0.5)
+    heading: tuple[float, float] = (-math.pi, math.pi)
+    resampling_time: tuple[float, float] = (3.0, 8.0)
+    rel_standing_envs: float = 0.1
+    rel_heading_envs: float = 0.3
+    rel_forward_envs: float = 0.2
+    heading_control_stiffness: float = 0.5
+    # mjlab's command curriculum: from env step `step` on, the ranges given (None: unchanged) replace the earlier
+    command_stages: tuple = ((5000 * 24, (-1.5, 2.0), None, (-0.7, 0.7)), (10000 * 24, (-2.0, 3.0), None, None))
+    # rewards
+    reward_weights: tuple[tuple[str, float], ...] = field(default_factory=_weights)
+    tracking_std_linear: float = math.sqrt(0.25)
+    tracking_std_angular: float = math.sqrt(0.5)
+    upright_std: float = math.sqrt(0.2)
+    walking_threshold: float = 0.05
+    running_threshold: float = 1.5
+    air_time_range: tuple[float, float] = (0.05, 0.5)
+    air_time_command: float = 0.5
+    clearance_height: float = 0.1
+    clearance_command: float = 0.05
+    swing_height: float = 0.1
+    swing_command: float = 0.05
+    slip_command: float = 0.05
+    landing_command: float = 0.05
+    self_collision_force: float = 10.0
+    # termination: the base tilted further than this from upright
+    fall_angle: float = math.radians(70.0)
+    # observation noise on the policy's terms, uniform in [-x, x] (mjlab's play mode turns it off)
+    observation_noise: bool = True
+    noise_lin_vel: float = 0.5
+    noise_ang_vel: float = 0.2
+    noise_gravity: float = 0.05
+    noise_joint_pos: float = 0.01
+    noise_joint_vel: float = 1.5
+    # events: the reset pose's offset, pushes, the randomisation drawn when the env is built
+    reset_x: tuple[float, float] = (-0.5, 0.5)
+    reset_y: tuple[float, float] = (-0.5, 0.5)
+    reset_z: tuple[float, float] = (0.01, 0.05)
+    reset_yaw: tuple[float, float] = (-3.14, 3.14)
+    joint_position_offset: tuple[float, float] = (0.0, 0.0)
+    joint_velocity: tuple[float, float] = (0.0, 0.0)
+    pushes: bool = True
+    push_interval: tuple[float, float] = (1.0, 3.0)
+    # velocity added by a push: x, y, z [m/s], roll, pitch, yaw rate [rad/s]
+    push_velocity: tuple = ((-0.5, 0.5), (-0.5, 0.5), (-0.4, 0.4), (-0.52, 0.52), (-0.52, 0.52), (-0.78, 0.78))
+    randomize: bool = True
+    # (axis, low, high, distribution): 0 sliding, 1 torsional, 2 rolling; one draw per world for all foot geoms
+    foot_friction: tuple = ((0, 0.3, 1.2, "uniform"),)
+    com_offset: tuple = ((-0.025, 0.025), (-0.025, 0.025), (-0.03, 0.03))
+    encoder_bias: tuple[float, float] = (-0.015, 0.015)
+
+    # fields that describe the task rather than configure it
+    OWN: ClassVar[tuple[str, ...]] = ("name", "mirrors")
+
+    @property
+    def episode_length(self) -> int:
+        """Control steps to the time limit (mjlab: ceil(episode_length_s / step dt))."""
+        return math.ceil(self.episode_length_s / (self.decimation * self.timestep))
+
+    @property
+    def timestep(self) -> float:
+        return 0.005  # the scene's option (checked against the compiled model when an env is built)
+
+    @property
+    def scene_path(self) -> str:
+        return self.scene_file if os.sep in self.scene_file else os.path.join(ASSETS, self.scene_file)
+
+    def weights(self) -> dict[str, float]:
+        return dict(self.reward_weights)
+
+    # ------------------------------------------------------------------ keyword arguments
+    @classmethod
+    def argument_names(cls) -> list[str]:
+        return [f.name for f in fields(cls) if f.name not in cls.OWN]
+
+    def replace(self, **changes) -> LeggedTask:
+        """A copy with constructor keywords changed; ``reward_weights`` may name only the terms it changes."""
+        unknown = sorted(set(changes) - {f.name for f in fields(self)})
+        if unknown:
+            raise ValueError(f"{self.name} has no argument(s) {unknown}: it takes {self.argument_names()}")
+        if "reward_weights" in changes:
+            given = dict(changes["reward_weights"])
+            wrong = sorted(set(given) - set(TERM_NAMES))
+            if wrong:
+                raise ValueError(f"{self.name}: reward_weights names no term {wrong}: its terms are {list(TERM_NAMES)}")
+            changes["reward_weights"] = tuple({**self.weights(), **given}.items())
+        for name, value in changes.items():
+            if isinstance(getattr(self, name), tuple) and isinstance(value, list):
+                changes[name] = tuple(tuple(v) if isinstance(v, list) else v for v in value)
+        out = replace(self, **changes)
+        out.validate()
+        return out
+
+    def validate(self) -> None:
+        def fail(name, why):
+            raise ValueError(f"{self.name}: {name}={getattr(self, name)!r} {why}")
+
+        ranges = ("lin_vel_x", "lin_vel_y", "ang_vel_z", "heading", "resampling_time", "air_time_range", "reset_x",
+                  "reset_y", "reset_z", "reset_yaw", "joint_position_offset", "joint_velocity", "push_interval",
+                  "encoder_bias")
+        for name in ranges:
+            if not _is_range(getattr(self, name)):
+                fail(name, "must be a (low, high) pair of finite numbers with low <= high, e.g. (-1.0, 1.0)")
+        for name in ("push_velocity", "com_offset"):
+            value, size = getattr(self, name), 6 if name == "push_velocity" else 3
+            if not (isinstance(value, tuple) and len(value) == size and all(_is_range(v) for v in value)):
+                fail(name, f"must be {size} (low, high) pairs with low <= high")
+        if self.push_interval[0] <= 0:
+            fail("push_interval", "must be positive seconds between pushes, e.g. (1.0, 3.0); pushes=False turns them off")
+        if self.resampling_time[0] <= 0:
+            fail("resampling_time", "must be positive seconds, e.g. (3.0, 8.0)")
+        for name in ("decimation", "nconmax", "njmax", "contact_sensor_maxmatch"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int) or v < 1:
+                fail(name, "must be a positive integer")
+        positive = ("episode_length_s", "tracking_std_linear", "tracking_std_angular", "upright_std", "clearance_height",
+                    "swing_height", "action_scale", "soft_joint_limit_factor", "fall_angle")
+        non_negative = ("rel_standing_envs", "rel_heading_envs", "rel_forward_envs", "heading_control_stiffness",
+                        "walking_threshold", "running_threshold", "air_time_command", "clearance_command",
+                        "swing_command", "slip_command", "landing_command", "self_collision_force", "noise_lin_vel",
+                        "noise_ang_vel", "noise_gravity", "noise_joint_pos", "noise_joint_vel")
+        for name in positive + non_negative:
+            v = getattr(self, name)
+            ok = _is_number(v) and (v > 0 if name in positive else v >= 0)
+            if not ok:
+                fail(name, "must be a positive number" if name in positive else "must be 0 or a positive number")
+        for name in ("rel_standing_envs", "rel_heading_envs", "rel_forward_envs"):
+            if getattr(self, name) > 1:
+                fail(name, "is a share of the worlds, in [0, 1]")
+        weights = self.weights()
+        if sorted(weights) != sorted(TERM_NAMES) or not all(_is_number(w) for w in weights.values()):
+            fail("reward_weights", f"must give a finite weight to each of {list(TERM_NAMES)}")
+        for stage in self.command_stages:
+            if not (isinstance(stage, tuple) and len(stage) == 4 and isinstance(stage[0], int) and stage[0] >= 0
+                    and all(r is None or _is_range(r) for r in stage[1:])):
+                fail("command_stages", "must hold (step, lin_vel_x, lin_vel_y, ang_vel_z) with ranges or None")
+        for axis in self.foot_friction:
+            if not (isinstance(axis, tuple) and len(axis) == 4 and axis[0] in (0, 1, 2) and _is_range(axis[1:3])
+                    and axis[1] > 0 and axis[3] in ("uniform", "log_uniform")):
+                fail("foot_friction", "must hold (axis 0-2, low > 0, high, 'uniform' or 'log_uniform') entries")
+        for name in ("posture_std_standing", "posture_std_walking", "posture_std_running"):
+            if not all(isinstance(k, str) and _is_number(v) and v > 0 for k, v in getattr(self, name)):
+                fail(name, "must map joint-name patterns to positive stds")
+
+    def to_dict(self) -> dict:
+        return {f.name: getattr(self, f.name) for f in fields(self)}
+
+
+def _is_number(v) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def _is_range(v) -> bool:
+    return isinstance(v, tuple) and len(v) == 2 and all(_is_number(x) for x in v) and v[0] <= v[1]

@@ -1,0 +1,44 @@
+"""Unitree G1 (29 joints) on flat ground, following a velocity command: mjlab's ``Mjlab-Velocity-Flat-Unitree-G1``
+(``unitree_g1_flat_env_cfg``, mjlab 1.6.0).
+
+The G1 of MuJoCo Menagerie as mjlab's asset zoo configures it (every collision geom on, self-collisions
+included, seven capsules a foot with condim 3), its knees-bent keyframe, the torso's centre of mass offset, a
+penalty on the torso's roll and pitch rates, on the whole body's angular momentum and on self-collisions.
+"""
+
+from dataclasses import dataclass
+
+from warpgym.tasks.legged.base import LeggedTask, _weights
+
+SIDES = ("left", "right")
+
+
+@dataclass(frozen=True)
+class G1VelocityFlat(LeggedTask):
+    name: str = "G1VelocityFlat-v0"
+    mirrors: str = "Mjlab-Velocity-Flat-Unitree-G1"
+    scene_file: str = "g1_velocity_flat.xml"
+    root_body: str = "robot/pelvis"
+    upright_body: str = "robot/torso_link"
+    angvel_body: str = "robot/torso_link"
+    com_body: str = "robot/torso_link"
+    foot_geoms: tuple = tuple(f"robot/{s}_foot{i}_collision" for s in SIDES for i in range(1, 8))
+    foot_sites: tuple = tuple(f"robot/{s}_foot" for s in SIDES)
+    foot_sensors: tuple = tuple(f"feet_ground_contact_{s}_ankle_roll_link" for s in SIDES)
+    self_collision_sensor: str = "self_collision_pelvis"
+    # mjlab's rationale: knees and hip pitch loosest for the stride, hip roll and yaw tighter against sway, ankle
+    # roll tight for balance, the waist tight to keep the torso upright, the arms free to swing
+    posture_std_standing: tuple = ((".*", 0.05),)
+    posture_std_walking: tuple = (
+        (r".*hip_pitch.*", 0.3), (r".*hip_roll.*", 0.15), (r".*hip_yaw.*", 0.15), (r".*knee.*", 0.35),
+        (r".*ankle_pitch.*", 0.25), (r".*ankle_roll.*", 0.1), (r".*waist_yaw.*", 0.2), (r".*waist_roll.*", 0.08),
+        (r".*waist_pitch.*", 0.1), (r".*shoulder_pitch.*", 0.15), (r".*shoulder_roll.*", 0.15),
+        (r".*shoulder_yaw.*", 0.1), (r".*elbow.*", 0.15), (r".*wrist.*", 0.3))
+    posture_std_running: tuple = (
+        (r".*hip_pitch.*", 0.5), (r".*hip_roll.*", 0.2), (r".*hip_yaw.*", 0.2), (r".*knee.*", 0.6),
+        (r".*ankle_pitch.*", 0.35), (r".*ankle_roll.*", 0.15), (r".*waist_yaw.*", 0.3), (r".*waist_roll.*", 0.08),
+        (r".*waist_pitch.*", 0.2), (r".*shoulder_pitch.*", 0.5), (r".*shoulder_roll.*", 0.2),
+        (r".*shoulder_yaw.*", 0.15), (r".*elbow.*", 0.35), (r".*wrist.*", 0.3))
+    nconmax: int = 48
+    reward_weights: tuple = _weights(body_ang_vel=-0.05, angular_momentum=-0.02, self_collisions=-1.0)
+    foot_friction: tuple = ((0, 0.3, 1.2, "uniform"),)

@@ -1,0 +1,225 @@
+"""A legged task's names resolved in MuJoCo's compile of its scene: the indices, defaults and per-joint numbers
+the kernels read (``RobotIndex``), each name checked, with the scene's own names in the error when one is not
+there."""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from warpgym.tasks.legged.base import LeggedTask
+
+
+@dataclass
+class RobotIndex:
+    root_body: int
+    upright_body: int
+    angvel_body: int
+    com_body: int
+    root_qpos: int
+    root_dof: int
+    joint_names: list[str]  # the actuated joints, in the model's order (mjlab's: the entity's)
+    joint_qpos: np.ndarray
+    joint_dof: np.ndarray
+    default_root: np.ndarray  # (7,)
+    default_joint_pos: np.ndarray
+    soft_lo: np.ndarray
+    soft_hi: np.ndarray
+    std_standing: np.ndarray
+    std_walking: np.ndarray
+    std_running: np.ndarray
+    joint_actuator: np.ndarray  # (J,) the actuator of each joint
+    action_scale: np.ndarray  # (J,)
+    foot_geoms: np.ndarray
+    foot_site: np.ndarray
+    foot_body: np.ndarray
+    foot_found: np.ndarray
+    foot_force: np.ndarray
+    imu_lin_vel: int
+    imu_ang_vel: int
+    angmom: int
+    collision_force: int
+
+
+def _names(mjm, kind) -> list[str]:
+    import mujoco  # noqa: PLC0415
+
+    obj = {"body": mujoco.mjtObj.mjOBJ_BODY, "site": mujoco.mjtObj.mjOBJ_SITE, "geom": mujoco.mjtObj.mjOBJ_GEOM,
+           "sensor": mujoco.mjtObj.mjOBJ_SENSOR, "joint": mujoco.mjtObj.mjOBJ_JOINT}[kind]
+    count = {"body": mjm.nbody, "site": mjm.nsite, "geom": mjm.ngeom, "sensor": mjm.nsensor, "joint": mjm.njnt}[kind]
+    return [mujoco.mj_id2name(mjm, obj, i) or "" for i in range(count)]
+
+
+def _find(task: LeggedTask, mjm, kind: str, field: str, name: str) -> int:
+    names = _names(mjm, kind)
+    if name not in names:
+        known = [n for n in names if n]
+        raise ValueError(f"{task.name}: {field}={getattr(task, field)!r}: the scene ({task.scene_file}) has no {kind} "
+                         f"{name!r}; its {kind}s are {known}")
+    return names.index(name)
+
+
+def _per_joint(task: LeggedTask, field: str, joints: list[str]) -> np.ndarray:
+    """A value per joint from (pattern, value) pairs, each pattern matched in full against the joint's name
+    without its entity prefix, once per joint (mjlab's resolve_matching_names_values)."""
+    out = np.full(len(joints), np.nan)
+    pairs = getattr(task, field)
+    for j, joint in enumerate(joints):
+        short = joint.rsplit("/", 1)[-1]
+        hits = [(p, v) for p, v in pairs if re.fullmatch(p, short)]
+        if len(hits) > 1:
+            raise ValueError(f"{task.name}: {field}: joint {short!r} matches more than one pattern "
+                             f"{[p for p, _ in hits]}; make the patterns exclusive")
+        if hits:
+            out[j] = hits[0][1]
+    missing = [joints[j].rsplit('/', 1)[-1] for j in np.flatnonzero(np.isnan(out))]
+    if missing:
+        raise ValueError(f"{task.name}: {field} gives no std for joint(s) {missing}: add a pattern that matches them")
+    return out.astype(np.float32)
+
+
+def resolve(task: LeggedTask, mjm) -> RobotIndex:
+    import mujoco  # noqa: PLC0415
+
+    if abs(float(mjm.opt.timestep) - task.timestep) > 1e-12:
+        raise ValueError(f"{task.name}: the scene's timestep is {mjm.opt.timestep}, the task's {task.timestep}")
+    root = _find(task, mjm, "body", "root_body", task.root_body)
+    free = [j for j in range(mjm.njnt) if int(mjm.jnt_type[j]) == int(mujoco.mjtJoint.mjJNT_FREE) and mjm.jnt_bodyid[j] == root]
+    if not free:
+        raise ValueError(f"{task.name}: root_body={task.root_body!r} has no free joint: name the robot's floating base")
+    hinges = [j for j in range(mjm.njnt) if int(mjm.jnt_type[j]) in (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))]
+    joint_names = [_names(mjm, "joint")[j] for j in hinges]
+    joint_qpos = np.array([mjm.jnt_qposadr[j] for j in hinges], np.int32)
+    joint_dof = np.array([mjm.jnt_dofadr[j] for j in hinges], np.int32)
+    keys = [mujoco.mj_id2name(mjm, mujoco.mjtObj.mjOBJ_KEY, k) for k in range(mjm.nkey)]
+    key_qpos = mjm.key_qpos[keys.index("init_state")] if "init_state" in keys else mjm.qpos0
+    root_qpos, root_dof = int(mjm.jnt_qposadr[free[0]]), int(mjm.jnt_dofadr[free[0]])
+    default_joint_pos = key_qpos[joint_qpos].astype(np.float32)
+    rng = mjm.jnt_range[hinges].astype(np.float64)
+    limited = mjm.jnt_limited[hinges].astype(bool)
+    mean, half = rng.mean(axis=1), 0.5 * (rng[:, 1] - rng[:, 0]) * task.soft_joint_limit_factor
+    soft_lo = np.where(limited, mean - half, -np.inf).astype(np.float32)
+    soft_hi = np.where(limited, mean + half, np.inf).astype(np.float32)
+
+    # the action has an entry per actuated joint in the model's joint order (mjlab's find_joints_by_actuator_names),
+    # whatever order the actuators are declared in
+    joint_actuator = np.full(len(hinges), -1, np.int32)
+    for a in range(mjm.nu):
+        if int(mjm.actuator_trntype[a]) != int(mujoco.mjtTrn.mjTRN_JOINT) or int(mjm.actuator_trnid[a, 0]) not in hinges:
+            raise ValueError(f"{task.name}: actuator {a} does not drive one of the robot's joints")
+        joint_actuator[hinges.index(int(mjm.actuator_trnid[a, 0]))] = a
+    if (joint_actuator < 0).any() or mjm.nu != len(hinges):
+        raise ValueError(f"{task.name}: every joint needs one position actuator ({mjm.nu} actuators, {len(hinges)} joints)")
+    # mjlab's action scale: 0.25 * effort limit / stiffness of the joint's position actuator
+    a = joint_actuator
+    action_scale = (task.action_scale * mjm.actuator_forcerange[a, 1] / mjm.actuator_gainprm[a, 0]).astype(np.float32)
+
+    def sensor(field, name):
+        return int(mjm.sensor_adr[_find(task, mjm, "sensor", field, name)])
+
+    sites = np.array([_find(task, mjm, "site", "foot_sites", s) for s in task.foot_sites], np.int32)
+    if len(task.foot_sensors) != len(sites):
+        raise ValueError(f"{task.name}: foot_sensors names {len(task.foot_sensors)} feet, foot_sites {len(sites)}: "
+                         "give one contact sensor per foot site")
+    return RobotIndex(
+        root_body=root, upright_body=_find(task, mjm, "body", "upright_body", task.upright_body),
+        angvel_body=_find(task, mjm, "body", "angvel_body", task.angvel_body),
+        com_body=_find(task, mjm, "body", "com_body", task.com_body), root_qpos=root_qpos, root_dof=root_dof,
+        joint_names=joint_names, joint_qpos=joint_qpos, joint_dof=joint_dof,
+        default_root=key_qpos[root_qpos:root_qpos + 7].astype(np.float32), default_joint_pos=default_joint_pos,
+        soft_lo=soft_lo, soft_hi=soft_hi,
+        std_standing=_per_joint(task, "posture_std_standing", joint_names),
+        std_walking=_per_joint(task, "posture_std_walking", joint_names),
+        std_running=_per_joint(task, "posture_std_running", joint_names),
+        joint_actuator=joint_actuator, action_scale=action_scale,
+        foot_geoms=np.array([_find(task, mjm, "geom", "foot_geoms", g) for g in task.foot_geoms], np.int32),
+        foot_site=sites, foot_body=mjm.site_bodyid[sites].astype(np.int32),
+        foot_found=np.array([sensor("foot_sensors", s + "_found") for s in task.foot_sensors], np.int32),
+        foot_force=np.array([sensor("foot_sensors", s + "_force") for s in task.foot_sensors], np.int32),
+        imu_lin_vel=sensor("imu_lin_vel_sensor", task.imu_lin_vel_sensor),
+        imu_ang_vel=sensor("imu_ang_vel_sensor", task.imu_ang_vel_sensor),
+        angmom=sensor("angmom_sensor", task.angmom_sensor),
+        collision_force=sensor("self_collision_sensor", task.self_collision_sensor + "_force")
+        if task.self_collision_sensor else -1,
+    )
+
+
+def kernel_structs(task: LeggedTask, idx: RobotIndex, device: str):
+    """The kernels' view of the task: ``LeggedParams``, ``LeggedRobot`` and the startup ``Randomization``."""
+    import warp as wp  # noqa: PLC0415
+
+    from kernels.legged.params import LeggedParams, LeggedRobot  # noqa: PLC0415
+    from kernels.legged.resets import Randomization  # noqa: PLC0415
+    from warpgym.tasks.legged.base import TERM_NAMES  # noqa: PLC0415
+
+    def arr(values, dtype=float):
+        return wp.array(np.asarray(values, np.int32 if dtype == wp.int32 else np.float32), dtype=dtype, device=device)
+
+    p = LeggedParams()
+    p.physics_dt = task.timestep
+    p.dt = task.timestep * task.decimation
+    p.episode_length = task.episode_length
+    ranges = [(0, task.lin_vel_x, task.lin_vel_y, task.ang_vel_z)]
+    for step, x, y, z in sorted(task.command_stages, key=lambda s: s[0]):
+        last = ranges[-1]
+        ranges.append((step, x or last[1], y or last[2], z or last[3]))
+    p.stage_steps = arr([s[0] for s in ranges], wp.int32)
+    p.stage_ranges = wp.array(np.array([[*s[1], *s[2], *s[3]] for s in ranges], np.float32), dtype=float, device=device)
+    p.heading_lo, p.heading_hi = task.heading
+    p.resample_lo, p.resample_hi = task.resampling_time
+    p.rel_standing, p.rel_heading, p.rel_forward = task.rel_standing_envs, task.rel_heading_envs, task.rel_forward_envs
+    p.heading_stiffness = task.heading_control_stiffness
+    p.forward_min = 0.3  # mjlab's forward-only worlds walk at least this fast [m/s]
+    p.max_command_steps = task.resampling_time[1] / p.dt
+    weights = task.weights()
+    p.weights = arr([weights[n] for n in TERM_NAMES])
+    p.lin_var, p.ang_var = task.tracking_std_linear ** 2, task.tracking_std_angular ** 2
+    p.upright_var = task.upright_std ** 2
+    p.walking_threshold, p.running_threshold = task.walking_threshold, task.running_threshold
+    p.air_min, p.air_max = task.air_time_range
+    p.air_command = task.air_time_command
+    p.clearance_height, p.clearance_command = task.clearance_height, task.clearance_command
+    p.swing_height, p.swing_command = task.swing_height, task.swing_command
+    p.slip_command, p.landing_command = task.slip_command, task.landing_command
+    p.collision_force = task.self_collision_force
+    p.limit_angle = task.fall_angle
+    on = 1.0 if task.observation_noise else 0.0
+    p.noise_lin_vel, p.noise_ang_vel = on * task.noise_lin_vel, on * task.noise_ang_vel
+    p.noise_gravity, p.noise_joint_pos = on * task.noise_gravity, on * task.noise_joint_pos
+    p.noise_joint_vel = on * task.noise_joint_vel
+    # no pushes: the timer starts beyond any episode
+    p.push_interval_lo, p.push_interval_hi = task.push_interval if task.pushes else (1e30, 1e30)
+    p.push_lo = arr([r[0] for r in task.push_velocity])
+    p.push_hi = arr([r[1] for r in task.push_velocity])
+    p.reset_lo = arr([task.reset_x[0], task.reset_y[0], task.reset_z[0], task.reset_yaw[0]])
+    p.reset_hi = arr([task.reset_x[1], task.reset_y[1], task.reset_z[1], task.reset_yaw[1]])
+    p.joint_pos_offset_lo, p.joint_pos_offset_hi = task.joint_position_offset
+    p.joint_vel_lo, p.joint_vel_hi = task.joint_velocity
+
+    r = LeggedRobot()
+    r.root_body, r.upright_body, r.angvel_body = idx.root_body, idx.upright_body, idx.angvel_body
+    r.root_qpos, r.root_dof = idx.root_qpos, idx.root_dof
+    r.joint_qpos, r.joint_dof = arr(idx.joint_qpos, wp.int32), arr(idx.joint_dof, wp.int32)
+    r.default_root, r.default_joint_pos = arr(idx.default_root), arr(idx.default_joint_pos)
+    r.soft_lo, r.soft_hi = arr(idx.soft_lo), arr(idx.soft_hi)
+    r.std_standing, r.std_walking, r.std_running = arr(idx.std_standing), arr(idx.std_walking), arr(idx.std_running)
+    r.joint_actuator = arr(idx.joint_actuator, wp.int32)
+    r.action_scale = arr(idx.action_scale)
+    r.foot_site, r.foot_body = arr(idx.foot_site, wp.int32), arr(idx.foot_body, wp.int32)
+    r.foot_found, r.foot_force = arr(idx.foot_found, wp.int32), arr(idx.foot_force, wp.int32)
+    r.imu_lin_vel, r.imu_ang_vel, r.angmom = idx.imu_lin_vel, idx.imu_ang_vel, idx.angmom
+    r.collision_force = idx.collision_force
+
+    rz = Randomization()
+    axes = task.foot_friction if task.randomize else ()
+    rz.foot_geoms = arr(idx.foot_geoms, wp.int32)
+    rz.friction_axis = arr([a[0] for a in axes], wp.int32)
+    rz.friction_lo, rz.friction_hi = arr([a[1] for a in axes]), arr([a[2] for a in axes])
+    rz.friction_log = arr([int(a[3] == "log_uniform") for a in axes], wp.int32)
+    rz.com_body = idx.com_body
+    com = task.com_offset if task.randomize else ((0.0, 0.0),) * 3
+    rz.com_lo, rz.com_hi = wp.vec3(*[c[0] for c in com]), wp.vec3(*[c[1] for c in com])
+    rz.bias_lo, rz.bias_hi = task.encoder_bias if task.randomize else (0.0, 0.0)
+    return p, r, rz
