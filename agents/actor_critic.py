@@ -1,4 +1,6 @@
-"""Gaussian actor-critic: two MLPs and a state-independent log standard deviation."""
+"""Gaussian actor-critic: two MLPs and a state-independent log standard deviation. The critic may see an
+observation of its own (``num_critic_obs``: an asymmetric actor-critic, as rsl_rl's "critic" group): every method
+that gives a value then takes it, and falls back to the policy's observation when there is none."""
 
 from __future__ import annotations
 
@@ -21,34 +23,36 @@ def mlp(sizes: list[int], activation: str) -> nn.Sequential:
 
 class ActorCritic(nn.Module):
     def __init__(self, num_obs: int, num_actions: int, net_dims=(256, 128, 64), activation: str = "elu",
-                 init_noise_std: float = 1.0):
+                 init_noise_std: float = 1.0, num_critic_obs: int = 0):
         super().__init__()
         self.actor = mlp([num_obs, *net_dims, num_actions], activation)
-        self.critic = mlp([num_obs, *net_dims, 1], activation)
+        self.critic = mlp([num_critic_obs or num_obs, *net_dims, 1], activation)
         self.log_std = nn.Parameter(torch.full((num_actions,), math.log(init_noise_std)))
         # A small last actor layer starts the policy near zero mean, so early actions are mostly noise.
         nn.init.normal_(self.actor[-1].weight, std=0.01)
         nn.init.zeros_(self.actor[-1].bias)
 
-    def act(self, obs: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor]:
+    def act(self, obs: torch.Tensor, critic_obs: torch.Tensor | None = None):
         """Sample actions; return (actions, log_prob, value, mean)."""
         mean = self.actor(obs)
         std = self.log_std.exp()
         actions = mean + std * torch.randn_like(mean)
-        return actions, gaussian_log_prob(actions, mean, self.log_std), self.critic(obs).squeeze(-1), mean
+        value = self.value(obs if critic_obs is None else critic_obs)
+        return actions, gaussian_log_prob(actions, mean, self.log_std), value, mean
 
     def act_deterministic(self, obs: torch.Tensor) -> torch.Tensor:
         return self.actor(obs)
 
-    def value(self, obs: torch.Tensor) -> torch.Tensor:
-        return self.critic(obs).squeeze(-1)
+    def value(self, critic_obs: torch.Tensor) -> torch.Tensor:
+        """The value of the critic's observation (the policy's, for a symmetric actor-critic)."""
+        return self.critic(critic_obs).squeeze(-1)
 
-    def evaluate(self, obs: torch.Tensor, actions: torch.Tensor):
+    def evaluate(self, obs: torch.Tensor, actions: torch.Tensor, critic_obs: torch.Tensor | None = None):
         """(log_prob of actions, entropy, value, mean) under the current parameters."""
         mean = self.actor(obs)
         log_prob = gaussian_log_prob(actions, mean, self.log_std)
         entropy = (0.5 + 0.5 * math.log(2 * math.pi) + self.log_std).sum().expand(obs.shape[0])
-        return log_prob, entropy, self.critic(obs).squeeze(-1), mean
+        return log_prob, entropy, self.value(obs if critic_obs is None else critic_obs), mean
 
 
 def gaussian_log_prob(x: torch.Tensor, mean: torch.Tensor, log_std: torch.Tensor) -> torch.Tensor:

@@ -166,7 +166,8 @@ def policy_from_checkpoint(ckpt: dict, num_obs: int, num_actions: int, device: t
     have = (ckpt["spec"]["num_obs"], ckpt["spec"]["num_actions"])
     if have != (num_obs, num_actions):
         raise ValueError(f"checkpoint is for obs/action sizes {have}, the env has {(num_obs, num_actions)}")
-    policy = ActorCritic(num_obs, num_actions, tuple(cfg["net_dims"]), cfg["activation"]).to(device)
+    policy = ActorCritic(num_obs, num_actions, tuple(cfg["net_dims"]), cfg["activation"],
+                         num_critic_obs=ckpt["spec"].get("num_critic_obs", 0)).to(device)
     policy.load_state_dict(ckpt["policy"])
     if not cfg["normalize_obs"]:
         return policy, lambda obs: obs

@@ -85,12 +85,15 @@ def capture_rollout(capture: str, step: Callable[[], None], finish: Callable[[],
 
 class Collector:
     """Fills ``storage`` with rollouts of ``env`` drawn by ``policy`` (always this object: a captured
-    graph reads its weights by address). The normaliser is frozen during a rollout."""
+    graph reads its weights by address). The normalisers are frozen during a rollout. Where the storage keeps a
+    critic observation (an asymmetric actor-critic), values are taken of the env's ``info["critic_obs"]``,
+    normalised by ``normalize_critic``."""
 
     def __init__(self, env, cfg: Config, policy: ActorCritic, normalize: Callable[[torch.Tensor], torch.Tensor],
                  storage: RolloutStorage, episodes: EpisodeTracker, device: torch.device, capture: str,
-                 print_fn=print):
+                 print_fn=print, normalize_critic: Callable[[torch.Tensor], torch.Tensor] | None = None):
         self.env, self.cfg, self.policy, self.normalize = env, cfg, policy, normalize
+        self.normalize_critic = normalize_critic
         self.storage, self.episodes, self.device, self.capture = storage, episodes, device, capture
         self.print = print_fn
         self.graph = None  # a CUDAGraph or StepGraphs, once captured
@@ -103,14 +106,20 @@ class Collector:
         self.eager_rollouts = 0
         self.step_index = torch.zeros(1, dtype=torch.long, device=device)
         self.last_raw_obs: torch.Tensor | None = None  # the env's latest observation, not yet acted on
+        self.last_raw_critic: torch.Tensor | None = None  # ... and the critic's (asymmetric actor-critic)
         # non-finite observation or reward entries that reached the rollout (agents.protocol's faults)
         self.nonfinite = torch.zeros((), dtype=torch.int64, device=device)
 
-    def start(self) -> torch.Tensor:
-        """Reset the env; its first observations."""
-        obs, _ = self.env.reset()
+    def start(self, stagger: bool = False) -> tuple[torch.Tensor, torch.Tensor | None]:
+        """Reset the env (``stagger``: with its episodes' elapsed steps spread, ``stagger_episodes``); its first
+        observations, the policy's and the critic's (None when the critic reads the policy's)."""
+        obs, info = self.env.reset()
+        if stagger:
+            self.env.stagger_episodes()
         self.last_raw_obs = obs.clone()
-        return obs
+        if self.storage.critic_obs is not None:
+            self.last_raw_critic = _critic_of(info, self.env).clone()
+        return self.last_raw_obs, self.last_raw_critic
 
     def rollout(self, timer: PhaseTimer) -> None:
         """One rollout of the storage's horizon (this process's steps): replayed, captured (the second) or eager."""
@@ -156,7 +165,12 @@ class Collector:
         s, t, raw = self.storage, self.step_index, self.last_raw_obs
         s.raw_obs.index_copy_(0, t, raw[None])
         obs = self.normalize(raw)
-        actions, log_prob, value, mean = self.policy.act(obs)
+        critic = None
+        if s.critic_obs is not None:
+            s.raw_critic_obs.index_copy_(0, t, self.last_raw_critic[None])
+            critic = self.normalize_critic(self.last_raw_critic)
+            s.critic_obs.index_copy_(0, t, critic[None])
+        actions, log_prob, value, mean = self.policy.act(obs, critic)
         timer.lap("collect: policy inference")
         next_obs, reward, terminated, truncated, info = self.env.step(actions)
         timer.lap("collect: env step (physics + task kernels)")
@@ -168,6 +182,9 @@ class Collector:
                                 (s.final_obs, info["final_obs"])):
             buffer.index_copy_(0, t, value_t.to(buffer.dtype)[None])
         self.episodes.record(t, reward, done, info)
+        if s.critic_obs is not None:
+            s.final_critic_obs.index_copy_(0, t, info["final_critic_obs"][None])
+            self.last_raw_critic.copy_(info["critic_obs"])
         raw.copy_(next_obs)  # last: with normalize_obs off, obs is this very buffer
         t += 1
         timer.lap("collect: storage and statistics")
@@ -175,14 +192,29 @@ class Collector:
     def finish(self, timer: PhaseTimer) -> None:
         """Truncated episodes bootstrapped from their final observation's value, in one batched pass; GAE."""
         cfg, s = self.cfg, self.storage
-        last_values = self.policy.value(self.normalize(self.last_raw_obs))
-        final_values = self.policy.value(self.normalize(s.final_obs.flatten(0, 1))).view_as(s.rewards)
+        if s.critic_obs is None:
+            last_values = self.policy.value(self.normalize(self.last_raw_obs))
+            final_values = self.policy.value(self.normalize(s.final_obs.flatten(0, 1))).view_as(s.rewards)
+        else:
+            last_values = self.policy.value(self.normalize_critic(self.last_raw_critic))
+            final_values = self.policy.value(self.normalize_critic(s.final_critic_obs.flatten(0, 1))).view_as(s.rewards)
         rewards = s.rewards * cfg.reward_scale + cfg.gamma * final_values * s.truncated
         adv, ret = compute_gae(rewards, s.values, s.dones, last_values, cfg.gamma, cfg.lambda_gae)
         s.advantages.copy_(adv)
         s.returns.copy_(ret)
         # once per rollout, over its whole buffer: cheaper than a check per step
         self.nonfinite += (~torch.isfinite(s.raw_obs)).sum() + (~torch.isfinite(s.rewards)).sum()
+        if s.critic_obs is not None:
+            self.nonfinite += (~torch.isfinite(s.raw_critic_obs)).sum()
         self.episodes.end_rollout(s.dones)
         self.step_index.zero_()
         timer.lap("bootstrap, GAE")
+
+
+def _critic_of(info: dict, env) -> torch.Tensor:
+    """The critic's observation in a reset's or step's info (agents.protocol), or a clear error."""
+    critic = info.get("critic_obs") if isinstance(info, dict) else None
+    if critic is None:
+        raise TypeError(f"{type(env).__name__} declares num_critic_obs but its reset() info has no 'critic_obs': "
+                        "return the critic's observation there (agents.protocol)")
+    return critic

@@ -51,6 +51,15 @@ PRESETS.update({
     "HumanoidStandup-v5": dict(_SUITE, net_dims=(400, 200, 100), reward_scale=0.001),
 })
 
+# The legged velocity tasks: mjlab's rsl_rl settings (its rl_cfg.py for the Go1 and the G1: 512-256-128 ELU actor
+# and critic, both observations normalised, 24 steps a rollout, 5 epochs of 4 mini-batches, an adaptive learning
+# rate from 1e-3 under a KL target of 0.01, an entropy bonus of 0.01, no action bound) and rsl_rl's staggered start
+_LEGGED = dict(net_dims=(512, 256, 128), horizon_len=24, minibatch_size=24576, repeat_times=5, learning_rate=1e-3,
+               desired_kl=0.01, entropy_coef=0.01, gamma=0.99, lambda_gae=0.95, clip_ratio=0.2, value_clip=0.2,
+               value_coef=1.0, max_grad_norm=1.0, bounds_coef=0.0, reward_scale=1.0, stagger_episodes=True,
+               eval_gap=60.0)
+PRESETS.update({"Go1VelocityFlat-v0": _LEGGED, "G1VelocityFlat-v0": _LEGGED})
+
 
 # Fields renamed since configs and checkpoints were first saved: the old name is still read (Config.renamed)
 RENAMED = {"batch_size": "minibatch_size"}
@@ -114,6 +123,9 @@ class Config:
     # stop once a logged value reaches a number, "KEY=VALUE" (e.g. "eval/speed=9.5", "eval/return=5850"): the
     # first row whose KEY is at least VALUE ends the run as its time limit would (rl_games' score_to_win)
     target: str = ""
+    # start training with every env's elapsed steps drawn over its time limit (rsl_rl's init_at_random_ep_len, which
+    # mjlab trains with), where the env offers it (agents.protocol's stagger_episodes)
+    stagger_episodes: bool = False
 
     seed: int = 0
     eval_gap: float = 30.0
@@ -175,7 +187,7 @@ class Config:
             if not (_is_number(v) and v >= 0):
                 raise ValueError(f"{name}={v!r} must be 0 or a positive number, e.g. {name}={getattr(Config, name)}")
         for name in ("overlap", "compile_update", "normalize_obs", "tf32", "keep_checkpoints", "anneal_lr",
-                     "eval_background"):
+                     "eval_background", "stagger_episodes"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name}={getattr(self, name)!r} must be True or False")
         data_parallel.check_mode(self.multi_gpu)

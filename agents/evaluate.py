@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import torch
 
+from agents.rollout import extra_keys
+
 
 def reward_terms(info: dict, n: int) -> list[str]:
     """The per-step reward terms an env reports in ``info`` (agents.protocol: Gymnasium's ``reward_*``
@@ -26,15 +28,20 @@ class EpisodeTally:
         self.out_speed = torch.zeros(n, device=device)
         self.names: list[str] | None = None  # the env's reward terms, known at its first step
         self.terms = torch.zeros(0, n, device=device)
+        self.extra: list[str] = []  # the env's further per-episode statistics (agents.protocol), at its end
+        self.out_extra = torch.zeros(0, n, device=device)
 
     def reset(self) -> None:
-        for t in (self.t, self.finished, self.ret, self.length, self.out_ret, self.out_len, self.out_speed, self.terms):
+        for t in (self.t, self.finished, self.ret, self.length, self.out_ret, self.out_len, self.out_speed, self.terms,
+                  self.out_extra):
             t.zero_()
 
     def add(self, reward: torch.Tensor, terminated: torch.Tensor, truncated: torch.Tensor, info: dict) -> None:
         if self.names is None:
             self.names = reward_terms(info, self.n)
             self.terms = torch.zeros(len(self.names), self.n, device=self.ret.device)
+            self.extra = extra_keys(info.get("episode", {}))
+            self.out_extra = torch.zeros(len(self.extra), self.n, device=self.ret.device)
         live = ~self.finished & (self.t < self.max_steps)
         self.ret.add_(reward * live)
         if self.names:  # an episode's terms stop with it, as its return does
@@ -43,6 +50,9 @@ class EpisodeTally:
         ended = (terminated | truncated) & live
         torch.where(ended, self.ret, self.out_ret, out=self.out_ret)
         torch.where(ended, self.length, self.out_len, out=self.out_len)
+        if self.extra:
+            stats = torch.stack([info["episode"][k].float() for k in self.extra])
+            torch.where(ended, stats, self.out_extra, out=self.out_extra)
         speed = info.get("episode", {}).get("s")
         if speed is not None:
             torch.where(ended, speed, self.out_speed, out=self.out_speed)
@@ -54,17 +64,21 @@ class EpisodeTally:
         self.t.add_(1)
 
     def means(self) -> torch.Tensor:
-        """Return, length, speed and each term, averaged over the envs, as one device tensor (no host read);
-        an episode still running at ``max_steps`` counts with what it has so far."""
+        """Return, length, speed, each term and each further statistic, averaged over the envs, as one device tensor
+        (no host read); an episode still running at ``max_steps`` counts with what it has so far, and with 0 for the
+        statistics an env reports at an episode's end."""
         ret = torch.where(self.finished, self.out_ret, self.ret)
         length = torch.where(self.finished, self.out_len, self.length)
-        return torch.cat([torch.stack([ret.mean(), length.mean(), self.out_speed.mean()]), self.terms.mean(dim=1)])
+        return torch.cat([torch.stack([ret.mean(), length.mean(), self.out_speed.mean()]), self.terms.mean(dim=1),
+                          self.out_extra.mean(dim=1)])
 
     def row(self, means: list[float]) -> dict:
         """``means()`` read to the host, as the row's ``eval/...`` entries."""
         r, ln, s = means[:3]
+        k = 3 + len(self.names or [])
         return {"eval/return": r, "eval/length": ln, "eval/speed": s,
-                **{f"eval/{k}": v for k, v in zip(self.names or [], means[3:])}}
+                **{f"eval/{name}": v for name, v in zip(self.names or [], means[3:k])},
+                **{f"eval/{name}": v for name, v in zip(self.extra, means[k:])}}
 
 
 @torch.no_grad()

@@ -32,7 +32,9 @@ class RolloutPipeline:
     def __init__(self, policy: ActorCritic, storage: RolloutStorage, device: torch.device):
         self.behaviour = copy.deepcopy(policy).requires_grad_(False)
         # only what PPO reads: raw and final observations would double the rollout's largest buffers
-        self.trained = SimpleNamespace(**{f: torch.empty_like(getattr(storage, f)) for f in TRAINED_FIELDS})
+        self.fields = TRAINED_FIELDS + (("critic_obs",) if storage.critic_obs is not None else ())
+        self.trained = SimpleNamespace(**{"critic_obs": None,
+                                          **{f: torch.empty_like(getattr(storage, f)) for f in self.fields}})
         self.trained_log_std = torch.zeros_like(policy.log_std.detach())  # the noise it was drawn with
         self.stream = torch.cuda.Stream(device) if device.type == "cuda" else None
         self.pending = False  # a collected rollout that PPO has not learnt from yet
@@ -44,7 +46,7 @@ class RolloutPipeline:
 
     def hand_over(self, collected: RolloutStorage, log_std: torch.Tensor) -> None:
         """Rollout ``collected`` becomes the one PPO learns from next (device copies, no host wait)."""
-        torch._foreach_copy_([getattr(self.trained, f) for f in TRAINED_FIELDS],
-                             [getattr(collected, f) for f in TRAINED_FIELDS])
+        torch._foreach_copy_([getattr(self.trained, f) for f in self.fields],
+                             [getattr(collected, f) for f in self.fields])
         self.trained_log_std.copy_(log_std)
         self.pending = True

@@ -108,6 +108,8 @@ class PPO:
             "means": storage.means.flatten(0, 1), "returns": storage.returns.flatten(0, 1),
             "adv": torch.zeros_like(storage.advantages.flatten(0, 1)),
         }
+        if getattr(storage, "critic_obs", None) is not None:  # an asymmetric actor-critic
+            b["critic_obs"] = storage.critic_obs.flatten(0, 1)
         # the proximal policy: the behaviour policy's own buffers, unless the rollout lags an update
         b["prox_log_probs"] = torch.empty_like(b["log_probs"]) if lagged else b["log_probs"]
         b["prox_means"] = torch.empty_like(b["means"]) if lagged else b["means"]
@@ -125,7 +127,8 @@ class PPO:
     def _losses(self, idx: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         """The mini-batch ``idx``'s loss, and its terms: surrogate, value, entropy, KL, bounds (detached)."""
         cfg, policy, b = self.cfg, self.policy, self._batch
-        log_prob, entropy, values, mean = policy.evaluate(b["obs"][idx], b["actions"][idx])
+        critic = b["critic_obs"][idx] if "critic_obs" in b else None
+        log_prob, entropy, values, mean = policy.evaluate(b["obs"][idx], b["actions"][idx], critic)
         kl = gaussian_kl(b["prox_means"][idx], self._prox_log_std, mean, policy.log_std).mean().detach()
         surr = surrogate_loss(log_prob, b["prox_log_probs"][idx], b["adv"][idx], cfg.clip_ratio,
                               b["log_probs"][idx] if self._lagged else None)

@@ -12,6 +12,14 @@ parts of the reward as tensors of one value per env under Gymnasium's ``reward_*
 keys of ``info``, whose episode sums the evaluation logs beside the return. The learner computes no
 speed of its own: it averages the env's.
 
+Optional, for an asymmetric actor-critic: ``num_critic_obs``, the width of a second observation that the critic
+sees instead of the policy's (privileged state, no noise). ``reset()``'s info then holds ``info["critic_obs"]``,
+every step's info ``info["critic_obs"]`` and ``info["final_critic_obs"]`` (masked like ``final_obs``).
+``info["episode"]`` may carry further per-episode statistics beside ``r``, ``l`` and ``s`` (a tracking error,
+say), each a tensor of one value per env read where ``_r`` is set: training logs their means as
+``episode/<key>`` and evaluation as ``eval/<key>``. ``stagger_episodes()``, when the env has it, resets every env
+with its elapsed steps drawn uniformly over the time limit (``Config.stagger_episodes``).
+
 Optional: ``fault_counters() -> {name: device tensor}``, running totals of things that should
 never happen (NaN actions, physics blow-ups, dropped constraints), with ``FAULT_HELP = {name: text}``.
 The runner logs them in every row (``faults/<name>``, summed over processes) and warns once per
@@ -42,6 +50,7 @@ class EnvSpec:
     device: torch.device
     max_episode_steps: int
     graph_capturable: bool = False
+    num_critic_obs: int = 0  # 0: the critic sees the policy's observation
 
 
 def _size(env, attr: str, space: str) -> int:
@@ -64,6 +73,9 @@ def env_spec(env) -> EnvSpec:
     steps = getattr(env, "max_episode_steps", None)
     if steps is None:
         steps = getattr(getattr(env, "task", None), "episode_length", 1000)
+    critic = getattr(env, "num_critic_obs", 0) or 0
+    if isinstance(critic, bool) or not isinstance(critic, int) or critic < 0:
+        raise TypeError(f"{type(env).__name__}.num_critic_obs={critic!r}: give the critic observation's width, or 0")
     return EnvSpec(int(env.num_envs), _size(env, "num_obs", "single_observation_space"),
                    _size(env, "num_actions", "single_action_space"), torch.device(device), int(steps),
-                   bool(getattr(env, "graph_capturable", False)))
+                   bool(getattr(env, "graph_capturable", False)), int(critic))

@@ -52,13 +52,20 @@ class OnPolicyRunner:
             # TF32 matmuls: the policy's layers run on tensor cores; PPO does not notice the precision
             torch.backends.cuda.matmul.allow_tf32 = True
         self.policy = ActorCritic(spec.num_obs, spec.num_actions, cfg.net_dims, cfg.activation,
-                                  cfg.init_noise_std).to(self.device)
+                                  cfg.init_noise_std, spec.num_critic_obs).to(self.device)
         self.normalizer = RunningMeanStd(spec.num_obs, cfg.obs_clip, until=cfg.normalize_until).to(self.device)
+        # an asymmetric actor-critic's critic observation has statistics of its own (rsl_rl's critic normaliser)
+        self.critic_normalizer = (RunningMeanStd(spec.num_critic_obs, cfg.obs_clip, until=cfg.normalize_until)
+                                  .to(self.device) if spec.num_critic_obs else None)
+        if cfg.stagger_episodes and not callable(getattr(env, "stagger_episodes", None)):
+            raise ValueError(f"stagger_episodes=True: {type(env).__name__} has no stagger_episodes(); train it with "
+                             "stagger_episodes=False")
         # every process starts from rank 0's weights, then explores with its own noise
-        self.workers.broadcast_(list(self.policy.parameters()) + list(self.normalizer.buffers()))
+        self.workers.broadcast_(list(self.policy.parameters()) + list(self._normalizer_buffers()))
         torch.manual_seed(self.rank_seed(0))
         self.ppo = PPO(self.policy, cfg, self.device, cuda_graph=cuda_graph, workers=self.workers)
-        self.storage = RolloutStorage(self.horizon, spec.num_envs, spec.num_obs, spec.num_actions, self.device)
+        self.storage = RolloutStorage(self.horizon, spec.num_envs, spec.num_obs, spec.num_actions, self.device,
+                                      spec.num_critic_obs)
         self.episodes = EpisodeTracker(self.horizon, spec.num_envs, self.device)
         self.pipeline = RolloutPipeline(self.policy, self.storage, self.device) if cfg.overlap else None
         main = self.workers.is_main
@@ -94,7 +101,8 @@ class OnPolicyRunner:
         # outside the graph, since across processes it all-reduces.
         capturable = cuda_graph and self.device.type == "cuda" and spec.graph_capturable
         self.collector = Collector(env, cfg, self.acting_policy, self.normalize, self.storage, self.episodes,
-                                   self.device, rollout_graph if capturable else "off", self.print)
+                                   self.device, rollout_graph if capturable else "off", self.print,
+                                   self.normalize_critic)
         if self.background is not None:  # its steps go one beside each of the rollout's (agents.background_eval)
             self.collector.beside = self.background.beside
         # and the learner's own: non-finite observation or reward entries that reached the rollout
@@ -117,6 +125,13 @@ class OnPolicyRunner:
     def normalize(self, obs: torch.Tensor) -> torch.Tensor:
         return self.normalizer(obs) if self.cfg.normalize_obs else obs
 
+    def normalize_critic(self, critic_obs: torch.Tensor) -> torch.Tensor:
+        return self.critic_normalizer(critic_obs) if self.cfg.normalize_obs else critic_obs
+
+    def _normalizer_buffers(self) -> list[torch.Tensor]:
+        both = [self.normalizer] + ([self.critic_normalizer] if self.critic_normalizer is not None else [])
+        return [b for n in both for b in n.buffers()]
+
     def elapsed(self) -> float:
         return self.elapsed_before + time.time() - self.start_time
 
@@ -130,7 +145,10 @@ class OnPolicyRunner:
         """One rollout of this process's ``horizon`` steps (agents.collect), then the observation normaliser
         learns from it."""
         if self.collector.last_raw_obs is None:
-            self.normalizer.update(self.collector.start(), self.workers)
+            obs, critic = self.collector.start(self.cfg.stagger_episodes)
+            self.normalizer.update(obs, self.workers)
+            if critic is not None:
+                self.critic_normalizer.update(critic, self.workers)
         self.timer.start()
         self._old_log_std = self.acting_policy.log_std.detach().clone()  # the noise the rollout is drawn with
         self.collector.rollout(self.timer)
@@ -140,6 +158,8 @@ class OnPolicyRunner:
     def _learn_normalizer(self) -> None:
         if self.cfg.normalize_obs:
             self.normalizer.update(self.storage.raw_obs.flatten(0, 1), self.workers)
+            if self.critic_normalizer is not None:
+                self.critic_normalizer.update(self.storage.raw_critic_obs.flatten(0, 1), self.workers)
         self.clock.mark("normalizer")
         self.timer.lap("normaliser update")
 
@@ -328,8 +348,8 @@ class OnPolicyRunner:
             row["memory/allocated_mib"] = torch.cuda.memory_allocated(self.device) / 2**20
             row["memory/reserved_mib"] = torch.cuda.memory_reserved(self.device) / 2**20
         row.update(dict(zip(keys, values[: len(keys)])))
-        episode_end = len(keys) + EpisodeTracker.SUMS
-        row.update(EpisodeTracker.summary(values[len(keys) : episode_end]))
+        episode_end = len(keys) + self.episodes.size
+        row.update(self.episodes.summary(values[len(keys) : episode_end]))
         for name, count in zip(self._faults, values[episode_end:-1]):
             row[f"faults/{name}"] = int(count)
             if count > 0 and name not in self._faults_reported:  # once per run: not a line per step
@@ -375,11 +395,13 @@ class OnPolicyRunner:
         return {
             "iteration": self.iteration, "samples": self.samples, "elapsed_s": self.elapsed(),
             "policy": self.policy.state_dict(), "normalizer": self.normalizer.state_dict(),
+            **({"critic_normalizer": self.critic_normalizer.state_dict()} if self.critic_normalizer is not None else {}),
             "optimizer": self.ppo.optimizer.state_dict(), "lr": self.ppo.lr.item(), "lr_free": self.ppo.lr_free.item(),
             "rng": rng_state(self.device), "config": self.cfg.to_dict(),
             # a resumed run's summary speaks of the whole run: the marks kept and the resumes before this one
             "kept": list(self.kept), "resumes": list(self.resumes),
-            "spec": {"num_obs": self.spec.num_obs, "num_actions": self.spec.num_actions},
+            "spec": {"num_obs": self.spec.num_obs, "num_actions": self.spec.num_actions,
+                     "num_critic_obs": self.spec.num_critic_obs},
         }
 
     def save(self, path: str | None = None) -> str:
@@ -412,12 +434,15 @@ class OnPolicyRunner:
         processes may resume a run; every process but rank 0 draws new exploration noise."""
         data = read_checkpoint_bytes(path) if self.workers.is_main else None
         ckpt = load_bytes(self.workers.broadcast_bytes(data, self.device), path, self.device)
-        want = (self.spec.num_obs, self.spec.num_actions)
-        have = (ckpt["spec"]["num_obs"], ckpt["spec"]["num_actions"])
+        want = (self.spec.num_obs, self.spec.num_actions, self.spec.num_critic_obs)
+        have = (ckpt["spec"]["num_obs"], ckpt["spec"]["num_actions"], ckpt["spec"].get("num_critic_obs", 0))
         if want != have:
-            raise ValueError(f"checkpoint {path} is for obs/action sizes {have}, this env has {want}: pick its task")
+            raise ValueError(f"checkpoint {path} is for obs/action/critic-obs sizes {have}, this env has {want}: "
+                             "pick its task")
         self.policy.load_state_dict(ckpt["policy"])
         self.normalizer.load_state_dict(ckpt["normalizer"])
+        if self.critic_normalizer is not None:
+            self.critic_normalizer.load_state_dict(ckpt["critic_normalizer"])
         if resume:
             self.ppo.optimizer.load_state_dict(ckpt["optimizer"])
             self.ppo.lr.fill_(ckpt["lr"])

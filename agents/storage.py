@@ -6,7 +6,8 @@ import torch
 
 
 class RolloutStorage:
-    def __init__(self, horizon: int, num_envs: int, num_obs: int, num_actions: int, device: torch.device):
+    def __init__(self, horizon: int, num_envs: int, num_obs: int, num_actions: int, device: torch.device,
+                 num_critic_obs: int = 0):
         self.horizon, self.num_envs = horizon, num_envs
         t, n = horizon, num_envs
 
@@ -16,6 +17,12 @@ class RolloutStorage:
         self.obs = z(t, n, num_obs)  # normalised, as the policy saw them
         self.raw_obs = z(t, n, num_obs)  # as the env returned them; the normaliser learns from these
         self.final_obs = z(t, n, num_obs)  # raw last observation of episodes that ended at step t
+        # the critic's own observation (an asymmetric actor-critic), kept as the policy's is; None: the critic
+        # reads the policy's
+        asym = num_critic_obs > 0
+        self.critic_obs = z(t, n, num_critic_obs) if asym else None
+        self.raw_critic_obs = z(t, n, num_critic_obs) if asym else None
+        self.final_critic_obs = z(t, n, num_critic_obs) if asym else None
         self.truncated = z(t, n)
         self.actions = z(t, n, num_actions)
         self.log_probs = z(t, n)

@@ -6,6 +6,7 @@ import gymnasium as gym
 import numpy as np
 import torch
 
+from warpgym.envs.legged import LeggedVecEnv
 from warpgym.envs.locomotion import LocomotionVecEnv
 from warpgym.envs.suite import SuiteVecEnv
 
@@ -37,7 +38,7 @@ class LocomotionEnv(gym.Env):
         # the vector env has already started the next episode; report the one that ended
         out = info["final_obs"][0] if done else obs[0]
         extra = {key: float(value[0]) for key, value in info.items()
-                 if isinstance(value, torch.Tensor) and key.startswith(("reward_", "x_", "y_"))}
+                 if isinstance(value, torch.Tensor) and value.dim() == 1 and key.startswith(("reward_", "x_", "y_"))}
         extra.update(nan_actions=int(info["nan_actions"][0]), diverged=bool(info["diverged"][0]))
         if done:
             extra["episode"] = {key: float(v[0]) for key, v in info["episode"].items() if not key.startswith("_")}
@@ -61,3 +62,22 @@ class SuiteEnv(LocomotionEnv):
 
     def __init__(self, task="Hopper-v5", device: str = "cpu", seed: int = 0, render_mode=None, **kwargs):
         super().__init__(task, device, seed, render_mode, **kwargs)
+
+
+class LeggedEnv(LocomotionEnv):
+    """One world of a legged velocity task (``gym.make("warpgym/Go1VelocityFlat-v0")``): numpy in and out, the
+    reward terms in ``info``, the critic's observation in ``info["critic_obs"]``."""
+
+    vec_class = LeggedVecEnv
+    metadata = LeggedVecEnv.metadata
+
+    def __init__(self, task="Go1VelocityFlat-v0", device: str = "cpu", seed: int = 0, render_mode=None, **kwargs):
+        super().__init__(task, device, seed, render_mode, **kwargs)
+
+    def step(self, action):
+        obs, reward, terminated, truncated, extra = super().step(action)
+        info = self._vec.info
+        key = "final_critic_obs" if terminated or truncated else "critic_obs"
+        extra["critic_obs"] = info[key][0].cpu().numpy().copy()
+        extra["command"] = info["command"][0].cpu().numpy().copy()
+        return obs, reward, terminated, truncated, extra
