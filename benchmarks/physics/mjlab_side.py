@@ -11,7 +11,6 @@ commands:
 - ``reference OUT.npz``: transitions of mjlab's own env on the CPU, with everything warpgym needs to start
   from the same state (tests/test_legged_judge.py steps warpgym's env from it and compares).
 - ``speed``: mjlab's env stepped with random actions, env-steps per second (benchmarks/learning/mjlab_side_by_side.py).
-- ``scalars RUN_DIR``: the scalars of an mjlab training run's TensorBoard log, as JSON.
 """
 
 from __future__ import annotations
@@ -143,7 +142,7 @@ MODEL_FIELDS = (
     "jnt_type", "jnt_range", "jnt_limited", "jnt_stiffness", "jnt_solref", "jnt_solimp", "qpos0",
     "dof_damping", "dof_armature", "dof_frictionloss", "actuator_gainprm", "actuator_biasprm", "actuator_gaintype",
     "actuator_biastype", "actuator_forcerange", "actuator_forcelimited", "actuator_ctrllimited", "actuator_trnid",
-    "sensor_type", "sensor_adr", "sensor_dim", "sensor_objid", "sensor_refid", "key_qpos",
+    "sensor_type", "sensor_adr", "sensor_dim", "sensor_objtype", "sensor_reftype", "key_qpos",
     "site_pos", "site_bodyid",
 )
 GEOM_FIELDS = ("geom_type", "geom_size", "geom_pos", "geom_quat", "geom_friction", "geom_solref", "geom_solimp",
@@ -165,12 +164,38 @@ def model_fields(mjm) -> dict:
     names = [mujoco.mj_id2name(mjm, mujoco.mjtObj.mjOBJ_GEOM, i) or "" for i in range(mjm.ngeom)]
     keep = [i for i, n in enumerate(names) if n]
     out["geom_names"] = np.array([names[i] for i in keep])
+    # the sensors' objects by name: the geom ids differ where the visual meshes are left out
+    out["sensor_objects"] = np.array([[mujoco.mj_id2name(mjm, int(mjm.sensor_objtype[i]), int(mjm.sensor_objid[i])) or "",
+                                       mujoco.mj_id2name(mjm, int(mjm.sensor_reftype[i]), int(mjm.sensor_refid[i])) or ""]
+                                      for i in range(mjm.nsensor)])
     for name in GEOM_FIELDS:
         out["geom/" + name] = np.asarray(getattr(mjm, name))[keep].copy()
     return out
 
 
-def reference(path: str, task: str, num_envs: int, warmup: int, steps: int, seed: int) -> None:
+def edges(env) -> None:
+    """A last transition with the rare cases in it: world 0 tipped 80 degrees about its x axis (it falls), world 1
+    one step short of the time limit, world 2 with a knee past its soft limit."""
+    import math
+
+    data, robot = env.sim.data, env.scene["robot"]
+    q = data.qpos[0, 3:7].clone()
+    c, s = math.cos(math.radians(40.0)), math.sin(math.radians(40.0))
+    data.qpos[0, 3:7] = torch_tensor([q[0] * c - q[1] * s, q[0] * s + q[1] * c, q[2] * c + q[3] * s, q[3] * c - q[2] * s])
+    env.episode_length_buf[1] = env.max_episode_length - 1
+    limits = robot.data.soft_joint_pos_limits[2]
+    data.qpos[2, 7 + 2] = limits[2, 1] + 0.09
+    data.qvel[2, 6 + 2] = 5.0  # moving on outward: still past the soft limit after the step
+
+
+def torch_tensor(values):
+    import torch
+
+    return torch.stack([torch.as_tensor(v) for v in values])
+
+
+def reference(path: str, task: str, num_envs: int, warmup: int, steps: int, seed: int, action_std: float = 0.4,
+              dist_envs: int = 256, resamples: int = 16) -> None:
     """``steps`` transitions of mjlab's env on the CPU (observation noise off), each from a state reached by
     ``warmup`` steps of random actions after the one before: the state before, the action, and what came out.
     The compared steps draw nothing: their command and push timers are moved past the step first."""
@@ -198,13 +223,15 @@ def reference(path: str, task: str, num_envs: int, warmup: int, steps: int, seed
             record.setdefault(prefix + key, []).append(value)
 
     env.reset()
-    for _ in range(steps):
+    for k in range(steps):
         for _ in range(warmup):
-            env.step(0.3 * torch.randn(num_envs, nu, generator=gen))
+            env.step(action_std * torch.randn(num_envs, nu, generator=gen))
+        if k == steps - 1:
+            edges(env)
         cmd.time_left[:] = 100.0
         env.event_manager._interval_term_time_left[0][:] = 100.0
         add("before/", snapshot(env, foot_geoms))
-        action = 0.3 * torch.randn(num_envs, nu, generator=gen)
+        action = action_std * torch.randn(num_envs, nu, generator=gen)
         obs, reward, terminated, time_outs, _ = env.step(action)
         # mjlab's contact sensor caches what its rewards read after the last physics step, and only a reset (of
         # any world) clears that cache before the observation: the critic's contacts and forces come from the last
@@ -222,9 +249,81 @@ def reference(path: str, task: str, num_envs: int, warmup: int, steps: int, seed
     arrays.update(model_fields(env.sim.mj_model))
     arrays["term_names"] = np.array(names)
     arrays["foot_geoms"] = np.array(foot_geoms)
-    np.savez_compressed(path, **arrays)
     env.close()
-    print(f"{theirs}: {steps} transitions of {num_envs} worlds -> {path}")
+    arrays.update(distributions(theirs, dist_envs, resamples, seed, foot_geoms))
+    np.savez_compressed(path, **arrays)
+    print(f"{theirs}: {steps} transitions of {num_envs} worlds, draws of {dist_envs} -> {path}")
+
+
+def distributions(task_id: str, num_envs: int, resamples: int, seed: int, foot_geoms: list[str]) -> dict:
+    """What mjlab draws, for a statistical comparison: the startup randomisation of ``num_envs`` worlds, the push
+    timers a reset draws, and ``resamples`` draws of every world's command (its _resample, before steering)."""
+    import numpy as np
+
+    from mjlab.envs import ManagerBasedRlEnv
+
+    cfg = _env_cfg(task_id, num_envs)
+    cfg.seed = seed + 1
+    env = ManagerBasedRlEnv(cfg, device="cpu")
+    env.reset()
+    state = snapshot(env, foot_geoms)
+    cmd, _, _, _ = _parts(env)
+    ids = torch_arange(num_envs)
+    draws: dict[str, list] = {}
+    for _ in range(resamples):
+        cmd._resample(ids)
+        for key, value in (("command", cmd.vel_command_b), ("heading_target", cmd.heading_target),
+                           ("heading", cmd.is_heading_env), ("standing", cmd.is_standing_env),
+                           ("forward", cmd.is_forward_env), ("time_left", cmd.time_left)):
+            draws.setdefault(key, []).append(_np(value).astype(np.float32))
+    out = {"dist/" + k: np.concatenate(v) for k, v in draws.items()}
+    out.update({"dist/foot_friction": state["foot_friction"], "dist/body_ipos": state["body_ipos"],
+                "dist/encoder_bias": state["encoder_bias"], "dist/push_time_left": state["push_time_left"],
+                "dist/qpos": state["qpos"]})
+    env.close()
+    return out
+
+
+def torch_arange(n: int):
+    import torch
+
+    return torch.arange(n, dtype=torch.long)
+
+
+# ---------------------------------------------------------------------------------------------------- speed
+def speed(task: str, sizes: list[int], steps: int, warmup: int, repeats: int, out: str) -> None:
+    """mjlab's env stepped with uniform random actions in [-1, 1] on cuda:0: env-steps per second of each size, each
+    repeat ``steps`` steps after ``warmup``, timed between two device synchronisations."""
+    import torch
+
+    from mjlab.envs import ManagerBasedRlEnv
+
+    rows = []
+    for n in sizes:
+        start = time.perf_counter()
+        env = ManagerBasedRlEnv(_env_cfg(TASKS[task], n), device="cuda:0")
+        env.reset()
+        built = time.perf_counter() - start
+        nu = env.action_manager.total_action_dim
+        rates = []
+        for _ in range(repeats):
+            for _ in range(warmup):
+                env.step(torch.rand(n, nu, device="cuda:0") * 2 - 1)
+            torch.cuda.synchronize()
+            t = time.perf_counter()
+            for _ in range(steps):
+                env.step(torch.rand(n, nu, device="cuda:0") * 2 - 1)
+            torch.cuda.synchronize()
+            rates.append(n * steps / (time.perf_counter() - t))
+        env.close()
+        del env
+        torch.cuda.empty_cache()
+        rows.append({"num_envs": n, "env_steps_per_s": rates, "build_s": built})
+        print(f"mjlab {TASKS[task]} x {n}: {sorted(rates)[len(rates) // 2] / 1e3:.0f} k env-steps/s (build {built:.0f} s)",
+              flush=True)
+    with open(out, "w") as f:
+        json.dump({"framework": "mjlab", "mjlab": _version(), "task": task, "mirrors": TASKS[task], "steps": steps,
+                   "warmup": warmup, "rows": rows, "device": torch.cuda.get_device_name(0)}, f, indent=1)
 
 
 # ---------------------------------------------------------------------------------------------------- main
@@ -240,11 +339,24 @@ def main(argv=None) -> None:
     r.add_argument("--warmup", type=int, default=25)
     r.add_argument("--steps", type=int, default=4)
     r.add_argument("--seed", type=int, default=0)
+    r.add_argument("--action-std", type=float, default=0.4)
+    r.add_argument("--dist-envs", type=int, default=256)
+    r.add_argument("--resamples", type=int, default=16)
+    sp = sub.add_parser("speed", help="mjlab's env with random actions on cuda:0, env-steps/s, as JSON into OUT")
+    sp.add_argument("out")
+    sp.add_argument("--task", choices=list(TASKS), required=True)
+    sp.add_argument("--num-envs", type=int, nargs="+", default=[4096, 8192])
+    sp.add_argument("--steps", type=int, default=200)
+    sp.add_argument("--warmup", type=int, default=20)
+    sp.add_argument("--repeats", type=int, default=3)
     args = p.parse_args(argv)
-    if args.command == "export":
+    if args.command == "speed":
+        speed(args.task, args.num_envs, args.steps, args.warmup, args.repeats, args.out)
+    elif args.command == "export":
         export(args.folder)
     elif args.command == "reference":
-        reference(args.out, args.task, args.envs, args.warmup, args.steps, args.seed)
+        reference(args.out, args.task, args.envs, args.warmup, args.steps, args.seed, args.action_std, args.dist_envs,
+                  args.resamples)
 
 
 if __name__ == "__main__":

@@ -150,6 +150,10 @@ def parser() -> CommandParser:
     ap.add_argument("--robots", nargs="+", default=["ant", "humanoid"], choices=sorted(TASK_OF_ROBOT))
     ap.add_argument("--tasks", nargs="+", default=None, metavar="NAME-v5",
                     help="Gymnasium's MuJoCo tasks instead of the robots: MuJoCo Warp's step against the task's")
+    ap.add_argument("--legged", nargs="+", default=None, metavar="NAME-v0",
+                    help="the legged velocity tasks instead (Go1VelocityFlat-v0, G1VelocityFlat-v0): the env's step "
+                         "with random actions, as benchmarks/learning/mjlab_side_by_side.py times mjlab's")
+    ap.add_argument("--warmup", type=positive_int(20), default=20, help="--legged: steps before each timing")
     ap.add_argument("--num-envs", nargs="+", type=positive_int(4096), default=[1024, 4096, 16384])
     ap.add_argument("--device", default=None)
     ap.add_argument("--steps", type=positive_int(200), default=200, help="steps per timing")
@@ -175,6 +179,14 @@ def main(argv=None) -> int:
         Physics.from_dict(physics)
     except ValueError as e:
         ap.error(f"--physics: {e}")
+    if args.legged:
+        from warpgym.tasks.legged import get_legged_task  # noqa: PLC0415
+
+        try:
+            for name in args.legged:
+                get_legged_task(name)
+        except ValueError as e:
+            ap.error(f"--legged: {e}")
     if args.tasks:
         from warpgym.tasks.suite import get_suite_task  # noqa: PLC0415
 
@@ -186,6 +198,8 @@ def main(argv=None) -> int:
     device = resolve_device(args.device)
     gpu = torch.cuda.get_device_name(torch.device(device)) if device.startswith("cuda") else platform.processor()
 
+    if args.legged:
+        return bench_legged(args, device, gpu, argv)
     if args.tasks:
         return bench_suite(args, device, gpu, argv)
     rows = []
@@ -217,7 +231,28 @@ def save_results(args, device, gpu, argv, rows) -> None:
                 "mathdx_solver": bool(wp.config.enable_mathdx_solver),
                 "command": " ".join([os.path.basename(sys.argv[0])] + (argv if argv is not None else sys.argv[1:]))}
         os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
-        write_json(args.out, {"meta": meta, "results": rows})
+        write_json(args.out, {"meta": meta, "results": rows, "rows": rows})
+
+
+def bench_legged(args, device, gpu, argv) -> int:
+    from warpgym.cli.bench_legged import bench_legged_task  # noqa: PLC0415
+
+    rows = []
+    for name in args.legged:
+        for n in args.num_envs:
+            for njmax in args.njmax:
+                r = bench_legged_task(name, n, device, args.steps, args.warmup, args.repeats, gpu_memory_used, njmax)
+                rows.append(r)
+                print(json.dumps(r), flush=True)
+    print(f"\n{gpu}, {args.steps} steps after {args.warmup} x {args.repeats} repeats, median env-steps/s")
+    print("| task | envs | njmax | MuJoCo Warp (steps + forward) | warpgym env | env/MuJoCo Warp |")
+    print("|---|---:|---:|---:|---:|---:|")
+    for r in rows:
+        env, phys = (sorted(r[k])[len(r[k]) // 2] for k in ("env_steps_per_s", "mjwarp_steps_per_s"))
+        print(f"| {r['task']} | {r['num_envs']} | {r['njmax']} | {phys / 1e6:.3f}M | {env / 1e6:.3f}M | {env / phys:.3f} |")
+    if args.out:
+        save_results(args, device, gpu, argv, rows)
+    return 0
 
 
 def bench_suite(args, device, gpu, argv) -> int:

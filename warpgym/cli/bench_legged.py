@@ -1,0 +1,78 @@
+"""Throughput of the legged velocity tasks (``warpgym bench --legged Go1VelocityFlat-v0 ...``), in env-steps per
+second, two loops on one model of ``num_envs`` worlds:
+  env     ``LeggedVecEnv.step`` with uniform random actions in [-1, 1], drawn each step as mjlab's bare-step
+          measurement draws them (benchmarks/physics/mjlab_side.py ``speed``): actions in, ``decimation`` physics
+          steps, rewards, terminations, pushes, resets, the forward pass, commands and both observations, one graph;
+  mjwarp  MuJoCo Warp's own step ``decimation`` times and one forward pass, graph-captured, from the env's states:
+          the physics every step of the task needs, nothing else (the ceiling warpgym's step can reach).
+"""
+
+from __future__ import annotations
+
+import time
+
+import torch
+import warp as wp
+
+from warpgym.envs.legged import LeggedVecEnv
+from warpgym.sim.mjw_internals import mujoco_contact_frames
+
+
+def physics_loop(env: LeggedVecEnv):
+    """MuJoCo Warp's steps of one control step and its forward pass, captured once."""
+    import mujoco_warp  # noqa: PLC0415
+
+    sim = env.sim
+
+    def steps():
+        with wp.ScopedDevice(sim.device), mujoco_contact_frames():
+            for _ in range(sim.frame_skip):
+                mujoco_warp.step(sim.m, sim.d)
+            mujoco_warp.forward(sim.m, sim.d)
+
+    graph = sim.capture(steps)
+    return steps if graph is None else (lambda: wp.capture_launch(graph))
+
+
+def _timed(fn, steps: int, device: str) -> float:
+    if device.startswith("cuda"):
+        torch.cuda.synchronize(torch.device(device))
+    t = time.perf_counter()
+    for _ in range(steps):
+        fn()
+    if device.startswith("cuda"):
+        torch.cuda.synchronize(torch.device(device))
+    return time.perf_counter() - t
+
+
+def bench_legged_task(task: str, num_envs: int, device: str, steps: int, warmup: int, repeats: int,
+                      memory_used, njmax: int | None = None) -> dict:
+    """``njmax``: constraint rows per world MuJoCo Warp makes room for (default: the task's, mjlab's 300)."""
+    before = memory_used(device)
+    start = time.perf_counter()
+    env = LeggedVecEnv(task, num_envs=num_envs, device=device, seed=0, **({"njmax": njmax} if njmax else {}))
+    env.reset(seed=0)
+    built = time.perf_counter() - start
+    mem = memory_used(device) - before
+    def env_step():
+        env.step(torch.rand(num_envs, env.num_actions, device=env.device) * 2 - 1)
+
+    rates, physics = [], []
+    raw = None
+    d = env.sim.d
+    for _ in range(repeats):
+        for _ in range(warmup):
+            env_step()
+        # the physics alone from the same states as the env's timing that follows
+        start = [a.numpy().copy() for a in (d.qpos, d.qvel, d.qacc_warmstart, d.ctrl)]
+        raw = raw or physics_loop(env)
+        raw()
+        physics.append(num_envs * steps / _timed(raw, steps, device))
+        for a, value in zip((d.qpos, d.qvel, d.qacc_warmstart, d.ctrl), start):
+            a.assign(value)
+        rates.append(num_envs * steps / _timed(env_step, steps, device))
+    faults = {name: int(v) for name, v in env.fault_counters().items()}
+    load = env.sim.solver_load()
+    env.close()
+    return {"task": task, "num_envs": num_envs, "njmax": env.task.njmax, "env_steps_per_s": rates, "mjwarp_steps_per_s": physics, "build_s": built,
+            "gpu_mem_mib": mem / 2**20, "faults": faults, "solver_load": load}
