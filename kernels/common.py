@@ -35,6 +35,18 @@ def resets_world(force_all: int, out: StepOutputs, w: int):
 
 
 @wp.func
+def state_is_finite(qpos: wp.array2d[float], qvel: wp.array2d[float], w: int):
+    """Whether world ``w``'s MuJoCo state (qpos, qvel) is finite: a world whose physics blew up is ended and reset."""
+    for i in range(qpos.shape[1]):
+        if not wp.isfinite(qpos[w, i]):
+            return False
+    for i in range(qvel.shape[1]):
+        if not wp.isfinite(qvel[w, i]):
+            return False
+    return True
+
+
+@wp.func
 def env_rng(rng_state: wp.array[wp.int32], env: int):
     # fresh noise per (seed, step, env) from device counters, so a replayed graph draws new numbers
     step_rng = wp.rand_init(rng_state[0], rng_state[1])

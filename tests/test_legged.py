@@ -153,3 +153,23 @@ def test_the_command_curriculum_widens_the_ranges_at_its_steps():
     # the last stage: x in [-2, 3] and a yaw rate in [-0.7, 0.7]
     assert late[:, 0].max() > 2.0 and late[:, 0].min() < -1.5 and 0.5 < late[:, 2].abs().max() <= 0.7
     assert math.isclose(env.task.episode_length_s, 20.0)
+
+
+def test_a_clip_draws_the_robot_where_it_stands():
+    """``warpgym play RUN --gif`` of a legged task draws its scene's collision geometry (the file has no visual
+    meshes): the robot fills part of the frame, and a crouched pose draws another picture."""
+    import numpy as np
+
+    from warpgym.media.render import LeggedView
+    from warpgym.tasks.legged.model import resolve
+
+    task = LEGGED["Go1VelocityFlat-v0"]
+    view = LeggedView(task, 160, 120)
+    idx = resolve(task, view.model)
+    qpos = view.model.key_qpos[0].copy()
+    standing = view.render(qpos)
+    qpos[idx.joint_qpos] += 0.5
+    crouched = view.render(qpos)
+    view.close()
+    assert standing.shape == (120, 160, 3) and standing.std() > 10
+    assert np.abs(standing.astype(int) - crouched.astype(int)).mean() > 1.0

@@ -11,24 +11,13 @@ control step); a term of weight 0 is skipped, as mjlab skips it; a value that is
 
 import warp as wp
 
-from kernels.common import StepOutputs
+from kernels.common import StepOutputs, state_is_finite
 from kernels.legged.frames import angular_velocity, point_velocity, projected_gravity, rotate_inverse, root_velocity_b, sensor3
 from kernels.legged.observations import write_observation
 from kernels.legged.params import LeggedEpisodes, LeggedParams, LeggedRobot, LeggedState, MjLegged, Term
 from kernels.legged.random import FINAL_OBSERVATION, PUSH, stream
 
 wp.set_module_options({"enable_backward": False})
-
-
-@wp.func
-def state_is_finite(d: MjLegged, w: int):
-    for i in range(d.qpos.shape[1]):
-        if not wp.isfinite(d.qpos[w, i]):
-            return False
-    for i in range(d.qvel.shape[1]):
-        if not wp.isfinite(d.qvel[w, i]):
-            return False
-    return True
 
 
 @wp.kernel
@@ -190,7 +179,7 @@ def legged_step(p: LeggedParams, r: LeggedRobot, rng_state: wp.array[wp.int32], 
 
     # A state that is no longer finite ends the episode with reward 0 and is reset (mjlab would go on stepping
     # it); info["diverged"] flags it
-    diverged = not state_is_finite(d, w)
+    diverged = not state_is_finite(d.qpos, d.qvel, w)
     if diverged:
         reward = 0.0
         for k in range(p.weights.shape[0]):

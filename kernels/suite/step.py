@@ -12,7 +12,7 @@ actuator, constraint and contact forces.
 
 import warp as wp
 
-from kernels.common import StepOutputs
+from kernels.common import StepOutputs, state_is_finite
 from kernels.suite.params import (
     CONTACT_CLIPPED_COST,
     CONTACT_CLIPPED_FORCES,
@@ -197,17 +197,6 @@ def is_healthy(p: GymParams, d: MjView, w: int):
 
 
 @wp.func
-def state_is_finite(d: MjView, w: int):
-    for i in range(d.qpos.shape[1]):
-        if not wp.isfinite(d.qpos[w, i]):
-            return False
-    for i in range(d.qvel.shape[1]):
-        if not wp.isfinite(d.qvel[w, i]):
-            return False
-    return True
-
-
-@wp.func
 def sum_squares(a: wp.array2d[float], w: int):
     total = float(0.0)
     for i in range(a.shape[1]):
@@ -291,7 +280,7 @@ def gym_step(p: GymParams, d: MjView, ep: GymEpisodes, out: StepOutputs):
 
     # A state that is no longer finite ends the episode with reward 0 (Gymnasium would go on
     # returning NaN); info["diverged"] flags it and the observation it ended on reads 0.
-    diverged = not state_is_finite(d, w)
+    diverged = not state_is_finite(d.qpos, d.qvel, w)
     if diverged:
         reward = 0.0
         terminated = True

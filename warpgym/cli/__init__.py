@@ -19,7 +19,7 @@ COMMANDS = {  # subcommand: (module, what it does)
     "sim2sim": ("sim2sim", "replay a checkpoint in warpgym and in native MuJoCo, at the training step and finer"),
     "train-with": ("train_with", "train with another learner through its adapter (rsl_rl, skrl, rl_games, sb3, rllib)"),
     "bench": ("bench", "env-steps per second of the simulation layers"),
-    "eval": ("eval", "score a suite task's policy in Gymnasium's own env beside warpgym's"),
+    "eval": ("eval", "score a policy where its task is judged (Gymnasium's env, native MuJoCo) beside warpgym's env"),
 }
 
 

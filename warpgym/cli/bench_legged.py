@@ -12,26 +12,9 @@ from __future__ import annotations
 import time
 
 import torch
-import warp as wp
 
+from warpgym.cli.bench_suite import mujoco_warp_loop
 from warpgym.envs.legged import LeggedVecEnv
-from warpgym.sim.mjw_internals import mujoco_contact_frames
-
-
-def physics_loop(env: LeggedVecEnv):
-    """MuJoCo Warp's steps of one control step and its forward pass, captured once."""
-    import mujoco_warp  # noqa: PLC0415
-
-    sim = env.sim
-
-    def steps():
-        with wp.ScopedDevice(sim.device), mujoco_contact_frames():
-            for _ in range(sim.frame_skip):
-                mujoco_warp.step(sim.m, sim.d)
-            mujoco_warp.forward(sim.m, sim.d)
-
-    graph = sim.capture(steps)
-    return steps if graph is None else (lambda: wp.capture_launch(graph))
 
 
 def _timed(fn, steps: int, device: str) -> float:
@@ -65,7 +48,7 @@ def bench_legged_task(task: str, num_envs: int, device: str, steps: int, warmup:
             env_step()
         # the physics alone from the same states as the env's timing that follows
         start = [a.numpy().copy() for a in (d.qpos, d.qvel, d.qacc_warmstart, d.ctrl)]
-        raw = raw or physics_loop(env)
+        raw = raw or mujoco_warp_loop(env, forward=True)
         raw()
         physics.append(num_envs * steps / _timed(raw, steps, device))
         for a, value in zip((d.qpos, d.qvel, d.qacc_warmstart, d.ctrl), start):

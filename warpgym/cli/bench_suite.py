@@ -16,8 +16,9 @@ from warpgym.envs.suite import SuiteVecEnv
 from warpgym.sim.mjw_internals import mujoco_contact_frames
 
 
-def mujoco_warp_loop(env: SuiteVecEnv):
-    """MuJoCo Warp's step alone on the env's data, ``frame_skip`` times per call, captured once."""
+def mujoco_warp_loop(env, forward: bool = False):
+    """MuJoCo Warp's step alone on the env's data, ``frame_skip`` times per call (and a forward pass after them with
+    ``forward``, as the legged tasks' step has), captured once."""
     import mujoco_warp  # noqa: PLC0415
 
     sim = env.sim
@@ -26,6 +27,8 @@ def mujoco_warp_loop(env: SuiteVecEnv):
         with wp.ScopedDevice(sim.device), mujoco_contact_frames():
             for _ in range(sim.frame_skip):
                 mujoco_warp.step(sim.m, sim.d)
+            if forward:
+                mujoco_warp.forward(sim.m, sim.d)
 
     graph = sim.capture(steps)
     return steps if graph is None else (lambda: wp.capture_launch(graph))

@@ -1,5 +1,7 @@
 """Score a trained policy where its task is judged: Gymnasium's own env for Gymnasium's MuJoCo tasks, where
-papers report; native MuJoCo for warpgym's Ant and Humanoid (``warpgym sim2sim``'s replay, which this runs).
+papers report; native MuJoCo for warpgym's Ant and Humanoid (``warpgym sim2sim``'s replay, which this runs) and
+for the legged tasks (warpgym.native_legged: a fixed schedule of commands, tracking errors and falls beside the
+same episodes in warpgym's env).
 
     warpgym eval runs/Hopper-v5-20261125-120000                  # 10 episodes x seeds 0 1 2, on the CPU
     warpgym eval RUN/checkpoint-1200.pt --episodes 20 --seeds 0 --json OUT.json
@@ -132,6 +134,50 @@ def in_native_mujoco(args, episode_length: int) -> int:
                          *(["--out", args.json] if args.json else [])])
 
 
+def legged_in_native_mujoco(args, ckpt: dict, name: str, device: str) -> int:
+    """A legged policy over warpgym.native_legged's schedule of commands, ``--episodes`` x the seeds' count
+    episodes in native MuJoCo and in warpgym's env: their tracking errors side by side, and the falls."""
+    import torch  # noqa: PLC0415
+
+    from agents.checkpoint import policy_from_checkpoint  # noqa: PLC0415
+    from warpgym.cli import write_json  # noqa: PLC0415
+    from warpgym.native_legged import native_episodes, warpgym_episodes  # noqa: PLC0415
+    from warpgym.tasks.legged import get_legged_task  # noqa: PLC0415
+
+    gym_only = [flag for flag, given in (("--nudge", args.nudge), ("--normalizer-from", args.normalizer_from),
+                                         ("--env-version 4", args.env_version == 4)) if given]
+    if gym_only:
+        parser().error(f"{', '.join(gym_only)}: Gymnasium's env only; {args.checkpoint} holds a policy of {name}, "
+                       "scored in native MuJoCo: drop it")
+    task = get_legged_task(name)
+    spec = ckpt["spec"]
+    policy, normalize = policy_from_checkpoint(ckpt, spec["num_obs"], spec["num_actions"], torch.device(device))
+    episodes = args.episodes * len(args.seeds)
+
+    @torch.no_grad()
+    def batch(obs):
+        return policy.act_deterministic(normalize(obs.to(device)))
+
+    @torch.no_grad()
+    def one(obs):
+        return batch(torch.as_tensor(obs)[None])[0].cpu().numpy()
+
+    native = native_episodes(task, one, episodes)
+    ours = warpgym_episodes(task, batch, episodes, device)
+    out = {"task": name, "checkpoint": args.checkpoint, "native": native.to_dict(), "warpgym": ours.to_dict(),
+           "error_xy_ratio": native.error_xy / max(ours.error_xy, 1e-9),
+           "error_yaw_ratio": native.error_yaw / max(ours.error_yaw, 1e-9)}
+    print(f"{name}, {episodes} episodes of {task.episode_length_s:g} s over a fixed schedule of commands:")
+    print("| | tracking error xy [m/s] | yaw [rad/s] | falls |")
+    print("|---|---|---|---|")
+    for label, t in (("native MuJoCo", native), ("warpgym", ours)):
+        print(f"| {label} | {t.error_xy:.3f} | {t.error_yaw:.3f} | {t.falls} of {t.episodes} |")
+    print(f"native / warpgym: {out['error_xy_ratio']:.3f} (xy), {out['error_yaw_ratio']:.3f} (yaw)")
+    if args.json:
+        write_json(args.json, out)
+    return 0
+
+
 def main(argv=None) -> int:
     args = parse_args(argv)
     import numpy as np  # noqa: PLC0415
@@ -161,6 +207,8 @@ def main(argv=None) -> int:
         entry = task_entry(name)
     except ValueError as e:
         parser().error(f"{path}: {e}")
+    if entry.family == "legged":
+        return legged_in_native_mujoco(args, ckpt, name, device)
     if entry.scored_in == "native MuJoCo":
         return in_native_mujoco(args, int(env_args.get("max_episode_steps") or entry.episode_length))
     if args.env_version == 4 and SUITE[name].v4_observation is None:

@@ -215,6 +215,18 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
         if self.sim.device != "cpu":
             wp.synchronize_device(self.sim.device)
 
+    def observe(self):
+        """MuJoCo's forward pass and both observations of the state as it is (one written by ``write_state``,
+        say), without a step or any draw: the policy's observation, and the critic's in the info."""
+        def run():
+            self.sim.forward()
+            wp.launch(observe, dim=self.num_envs, inputs=[self.params, self.robot, self._rng_state, self._mj,
+                                                          self._state, self._out.obs, self._critic],
+                      device=self.sim.device)
+
+        self.sim.launch(None, run)
+        return self.obs, {"critic_obs": self.info["critic_obs"]}
+
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         obs, info = super().reset(seed=seed, options=options)
         return obs, {"critic_obs": self.info["critic_obs"]}

@@ -308,3 +308,50 @@ class SuiteView:
             self._env.close()
             atexit.unregister(self._at_exit)
             self._env = None
+
+
+class LeggedView:
+    """Draws one world of a legged task from MuJoCo's qpos: the scene file as MuJoCo compiles it, its collision
+    geometry shown (the file holds no visual meshes), the camera following the base from behind and above."""
+
+    def __init__(self, task, width: int = 640, height: int = 480):
+        import mujoco  # noqa: PLC0415
+
+        RobotRenderer.check_size(width, height)
+        self._mj = mujoco
+        self.task, self.width, self.height = task, width, height
+        self.model = mujoco.MjModel.from_xml_path(task.scene_path)
+        self.data = mujoco.MjData(self.model)
+        self.root = self.model.body(task.root_body).id
+        tall = self.model.body_subtreemass[self.root] > 20.0  # a humanoid rather than a quadruped
+        self._context = _gl_context(width, height)
+        self._scene = mujoco.MjvScene(self.model, maxgeom=1000)
+        self._option = mujoco.MjvOption()
+        self._option.geomgroup[3] = 1  # the collision geoms: what the robot is made of in this scene
+        self._perturb = mujoco.MjvPerturb()
+        self._cam = mujoco.MjvCamera()
+        self._cam.type = mujoco.mjtCamera.mjCAMERA_FREE
+        self._cam.distance, self._cam.elevation = (3.0 if tall else 1.6), -15.0
+        self._gpu = mujoco.MjrContext(self.model, mujoco.mjtFontScale.mjFONTSCALE_150)
+        mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN, self._gpu)
+        self._rect = mujoco.MjrRect(0, 0, width, height)
+
+    def render(self, qpos: np.ndarray) -> np.ndarray:
+        mj = self._mj
+        self.data.qpos[:] = qpos
+        mj.mj_kinematics(self.model, self.data)
+        self._context.make_current()
+        cam = self._cam
+        cam.lookat[:] = self.data.xpos[self.root]
+        # behind the base, as its heading turns
+        x = self.data.xmat[self.root].reshape(3, 3)[:, 0]
+        cam.azimuth = math.degrees(math.atan2(x[1], x[0])) + 150.0
+        for _ in range(2):  # the first scene of a context draws a few levels off: twice
+            mj.mjv_updateScene(self.model, self.data, self._option, self._perturb, cam, mj.mjtCatBit.mjCAT_ALL,
+                               self._scene)
+            mj.mjr_render(self._rect, self._scene, self._gpu)
+        pixels = np.empty((self.height, self.width, 3), np.uint8)
+        mj.mjr_readPixels(pixels, None, self._rect, self._gpu)
+        return np.flipud(pixels).copy()
+
+    close = RobotRenderer.close

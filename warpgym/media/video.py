@@ -252,3 +252,21 @@ def draw_suite_clip(env, states: dict, outputs: dict[str, dict], width: int, hei
     shown = states["dof_pos"].shape[0] - 1
     print(f"clip: {shown} steps ({shown * env.sim.dt:.1f} s) of the first world")
     return render_suite_clip(env.task, states, outputs, env.sim.dt, width, height), {}
+
+
+def draw_legged_clip(env, states: dict, outputs: dict[str, dict], width: int, height: int) -> tuple[dict, dict]:
+    """A clip of a legged task (its first world, MuJoCo's renderer of the scene), in real time: (path -> frames,
+    {})."""
+    from warpgym.media.render import LeggedView  # noqa: PLC0415
+
+    qpos = np.asarray(states["dof_pos"])
+    shown = qpos.shape[0] - 1
+    print(f"clip: {shown} steps ({shown * env.sim.dt:.1f} s) of the first world")
+    plans = {path: suite_strides(env.sim.dt, int(opt["fps"]), path.lower().endswith(".gif")) for path, opt in outputs.items()}
+    writers = [VideoWriter(path, plans[path][1], opt.get("width"), plans[path][2]) for path, opt in outputs.items()]
+    view = LeggedView(env.task, width, height)
+    try:
+        return _write_clip(writers, {p: plan[0] for p, plan in plans.items()}, qpos.shape[0],
+                           lambda t: view.render(np.asarray(qpos[t][0], dtype=np.float64))), {}
+    finally:
+        view.close()

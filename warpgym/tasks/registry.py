@@ -75,8 +75,8 @@ def _legged(name: str, episode_length: int) -> TaskEntry:
     return TaskEntry(name, "legged", f"warpgym/{name}", episode_length,
                      "warpgym.envs.legged:LeggedVecEnv", "warpgym.envs.single:LeggedEnv", (),
                      physics_flags=False, clip_keys=("dof_pos", "dof_vel"), clip_all_worlds=False,
-                     clip_drawer="warpgym.media.video:draw_suite_clip", training_clips=False,
-                     scored_in="warpgym's env", reports_speed=False, default_envs=(4096, 32),
+                     clip_drawer="warpgym.media.video:draw_legged_clip", training_clips=False,
+                     scored_in="native MuJoCo", reports_speed=False, default_envs=(4096, 32),
                      default_iterations=(1000, 30))
 
 

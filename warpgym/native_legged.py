@@ -1,0 +1,149 @@
+"""A legged velocity policy replayed in native MuJoCo (the scene file compiled by MuJoCo, stepped by ``mj_step`` in
+float64 on the CPU) beside the same episodes in warpgym's env, over a fixed schedule of commands: the sim-to-sim
+check of ``warpgym eval`` for the legged tasks.
+
+Both sides play the nominal robot (no randomisation, no pushes, no observation noise, no encoder bias), from the
+same starts (the keyframe pose turned to a yaw of its own per episode), the same commands (each held
+``hold`` seconds, in turn), for the task's episode length. Tracking errors are mjlab's: the base's planar speed and
+yaw rate against the command, from the base's own velocity in its frame, averaged over every step. A fall is the
+base tilted past the task's limit.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from warpgym.tasks.legged import LeggedTask
+from warpgym.tasks.legged.model import resolve
+
+# vx, vy [m/s], yaw rate [rad/s]: forward, a turn while walking, sideways, backward, turning in place, standing
+SCHEDULE = ((1.0, 0.0, 0.0), (0.6, 0.0, 0.4), (0.0, 0.5, 0.0), (-0.6, 0.0, 0.0), (0.0, 0.0, -0.5), (0.0, 0.0, 0.0))
+HOLD = 3.0  # seconds each command is held
+
+
+@dataclass
+class Tracking:
+    error_xy: float  # mean |command - velocity| in the base's plane [m/s]
+    error_yaw: float  # mean |command - yaw rate| [rad/s]
+    falls: int
+    episodes: int
+
+    def to_dict(self) -> dict:
+        return dict(vars(self))
+
+
+def commands(steps: int, dt: float, schedule=SCHEDULE, hold: float = HOLD) -> np.ndarray:
+    """The command of every control step, (steps, 3)."""
+    per = max(1, round(hold / dt))
+    return np.array([schedule[(t // per) % len(schedule)] for t in range(steps)], np.float32)
+
+
+def start_yaws(episodes: int) -> np.ndarray:
+    return np.array([2 * math.pi * e / episodes - math.pi for e in range(episodes)])
+
+
+def start_pose(idx, yaw: float) -> np.ndarray:
+    """The keyframe pose turned to ``yaw``."""
+    q = idx.default_root.astype(np.float64)
+    c, s = math.cos(0.5 * yaw), math.sin(0.5 * yaw)
+    w, x, y, z = q[3:7]
+    turned = [w * c - z * s, x * c + y * s, y * c - x * s, w * s + z * c]
+    return np.concatenate([q[:3], turned])
+
+
+def base_velocity(quat, lin_world, ang_body):
+    """The base's velocity in its own frame: the free joint's qvel holds the linear velocity in the world frame."""
+    w, x, y, z = quat
+    r = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                  [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                  [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+    return r.T @ np.asarray(lin_world), np.asarray(ang_body)
+
+
+def tilt(quat) -> float:
+    """The angle between the base's z axis and the world's."""
+    w, x, y, z = quat
+    return math.acos(max(-1.0, min(1.0, 1 - 2 * (x * x + y * y))))
+
+
+def native_episodes(task: LeggedTask, act, episodes: int) -> Tracking:
+    """``act``: a function from the policy's observation (numpy float32, (obs,)) to its action."""
+    import mujoco  # noqa: PLC0415
+
+    m = mujoco.MjModel.from_xml_path(task.scene_path)
+    d = mujoco.MjData(m)
+    idx = resolve(task, m)
+    steps, dt = task.episode_length, task.decimation * task.timestep
+    schedule = commands(steps, dt)
+    r, j = idx.root_qpos, idx.joint_qpos
+    errors, falls = [], 0
+    for yaw in start_yaws(episodes):
+        mujoco.mj_resetData(m, d)
+        d.qpos[r:r + 7] = start_pose(idx, yaw)
+        d.qpos[j] = idx.default_joint_pos
+        mujoco.mj_forward(m, d)
+        action = np.zeros(len(j), np.float32)
+        for t in range(steps):
+            cmd = schedule[t]
+            quat = d.xquat[idx.root_body]
+            gravity = base_velocity(quat, [0.0, 0.0, -1.0], [0.0, 0.0, 0.0])[0]
+            obs = np.concatenate([d.sensordata[idx.imu_lin_vel:idx.imu_lin_vel + 3],
+                                  d.sensordata[idx.imu_ang_vel:idx.imu_ang_vel + 3], gravity,
+                                  d.qpos[j] - idx.default_joint_pos, d.qvel[idx.joint_dof], action, cmd]).astype(np.float32)
+            action = np.asarray(act(obs), np.float32)
+            d.ctrl[idx.joint_actuator] = action * idx.action_scale + idx.default_joint_pos
+            for _ in range(task.decimation):
+                mujoco.mj_step(m, d)
+            mujoco.mj_forward(m, d)
+            lin, ang = base_velocity(d.qpos[r + 3:r + 7], d.qvel[idx.root_dof:idx.root_dof + 3],
+                                     d.qvel[idx.root_dof + 3:idx.root_dof + 6])
+            errors.append((math.hypot(cmd[0] - lin[0], cmd[1] - lin[1]), abs(cmd[2] - ang[2])))
+            if tilt(d.qpos[r + 3:r + 7]) > task.fall_angle:
+                falls += 1
+                break
+    e = np.array(errors)
+    return Tracking(float(e[:, 0].mean()), float(e[:, 1].mean()), falls, episodes)
+
+
+def warpgym_episodes(task: LeggedTask, act, episodes: int, device: str = "cpu") -> Tracking:
+    """The same episodes in warpgym's env, one world each; ``act`` maps a batch of observations (torch) to
+    actions."""
+    import torch  # noqa: PLC0415
+
+    from warpgym.envs.legged import LeggedVecEnv  # noqa: PLC0415
+
+    env = LeggedVecEnv(task, num_envs=episodes, device=device, seed=0, randomize=False, pushes=False,
+                       observation_noise=False, rel_standing_envs=0.0, rel_heading_envs=0.0, rel_forward_envs=0.0,
+                       resampling_time=(1e6, 1e6))
+    idx = env.index
+    steps, dt = task.episode_length, task.decimation * task.timestep
+    schedule = torch.as_tensor(commands(steps, dt), device=env.device)
+    obs, _ = env.reset(seed=0)
+    qpos = env.state()["qpos"]
+    r = idx.root_qpos
+    for e, yaw in enumerate(start_yaws(episodes)):
+        qpos[e, r:r + 7] = torch.as_tensor(start_pose(idx, yaw))
+        qpos[e, torch.as_tensor(idx.joint_qpos).long()] = torch.as_tensor(idx.default_joint_pos)
+    env.write_state({"qpos": qpos, "qvel": torch.zeros_like(env.state()["qvel"]), "command": schedule[0].expand(episodes, 3),
+                     "length": torch.zeros(episodes, dtype=torch.int32)})
+    obs, _ = env.observe()
+    alive = torch.ones(episodes, dtype=torch.bool, device=env.device)
+    errors, falls = [], 0
+    for t in range(steps):
+        env.write_state({"command": schedule[t].expand(episodes, 3)})
+        obs, reward, terminated, truncated, info = env.step(act(obs))
+        q, v = env.sim.dof_pos, env.sim.dof_vel
+        for w in torch.nonzero(alive).flatten().tolist():
+            lin, ang = base_velocity(q[w, r + 3:r + 7].tolist(), v[w, idx.root_dof:idx.root_dof + 3].tolist(),
+                                     v[w, idx.root_dof + 3:idx.root_dof + 6].tolist())
+            cmd = schedule[t].tolist()
+            errors.append((math.hypot(cmd[0] - lin[0], cmd[1] - lin[1]), abs(cmd[2] - ang[2])))
+        fell = terminated & alive
+        falls += int(fell.sum())
+        alive &= ~terminated
+    env.close()
+    e = np.array(errors)
+    return Tracking(float(e[:, 0].mean()), float(e[:, 1].mean()), falls, episodes)
