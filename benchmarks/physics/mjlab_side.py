@@ -215,7 +215,6 @@ def reference(path: str, task: str, num_envs: int, warmup: int, steps: int, seed
     cmd, _, _, _ = _parts(env)
     nu = env.action_manager.total_action_dim
     names = list(env.reward_manager._term_names)
-    weights = np.array([env.reward_manager.get_term_cfg(n).weight for n in names])
     record: dict[str, list] = {}
 
     def add(prefix, values):

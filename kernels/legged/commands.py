@@ -78,5 +78,5 @@ def update_commands(p: LeggedParams, r: LeggedRobot, force_all: int, rng_state: 
     if force_all == 0 and not done[w]:
         st.command_time_left[w] = st.command_time_left[w] - p.dt
     if st.command_time_left[w] <= 0.0:
-        rng = draw_command(p, st, w, stream(rng_state, w, COMMAND))
+        draw_command(p, st, w, stream(rng_state, w, COMMAND))
     steer_command(p, d, r, st, w)
