@@ -113,9 +113,7 @@ class Collector:
     def start(self, stagger: bool = False) -> tuple[torch.Tensor, torch.Tensor | None]:
         """Reset the env (``stagger``: with its episodes' elapsed steps spread, ``stagger_episodes``); its first
         observations, the policy's and the critic's (None when the critic reads the policy's)."""
-        obs, info = self.env.reset()
-        if stagger:
-            self.env.stagger_episodes()
+        obs, info = self.env.stagger_episodes() if stagger else self.env.reset()
         self.last_raw_obs = obs.clone()
         if self.storage.critic_obs is not None:
             self.last_raw_critic = _critic_of(info, self.env).clone()

@@ -17,8 +17,9 @@ sees instead of the policy's (privileged state, no noise). ``reset()``'s info th
 every step's info ``info["critic_obs"]`` and ``info["final_critic_obs"]`` (masked like ``final_obs``).
 ``info["episode"]`` may carry further per-episode statistics beside ``r``, ``l`` and ``s`` (a tracking error,
 say), each a tensor of one value per env read where ``_r`` is set: training logs their means as
-``episode/<key>`` and evaluation as ``eval/<key>``. ``stagger_episodes()``, when the env has it, resets every env
-with its elapsed steps drawn uniformly over the time limit (``Config.stagger_episodes``).
+``episode/<key>`` and evaluation as ``eval/<key>``. ``stagger_episodes() -> (obs, info)``, when the env has it,
+resets every env as ``reset()`` does, with its elapsed steps drawn uniformly over the time limit
+(``Config.stagger_episodes``).
 
 Optional: ``fault_counters() -> {name: device tensor}``, running totals of things that should
 never happen (NaN actions, physics blow-ups, dropped constraints), with ``FAULT_HELP = {name: text}``.

@@ -47,10 +47,16 @@ def state_is_finite(qpos: wp.array2d[float], qvel: wp.array2d[float], w: int):
 
 
 @wp.func
-def env_rng(rng_state: wp.array[wp.int32], env: int):
-    # fresh noise per (seed, step, env) from device counters, so a replayed graph draws new numbers
+def stream(rng_state: wp.array[wp.int32], env: int, purpose: int):
+    """Fresh random numbers per (seed, step, env) from device counters, so that a replayed graph draws new ones;
+    one stream per ``purpose``, so that two kernels of one step never draw the same numbers for an env."""
     step_rng = wp.rand_init(rng_state[0], rng_state[1])
-    return wp.rand_init(wp.randi(step_rng), env)
+    return wp.rand_init(wp.randi(step_rng) + purpose * 7919, env)
+
+
+@wp.func
+def env_rng(rng_state: wp.array[wp.int32], env: int):
+    return stream(rng_state, env, 0)
 
 
 @wp.kernel

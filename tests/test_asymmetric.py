@@ -26,8 +26,10 @@ class HiddenPositionMass(PointMassVecEnv):
         return full[:, 2:].clone(), {"critic_obs": full.clone()}
 
     def stagger_episodes(self):
+        obs, info = self.reset()
         self.staggered += 1
         self.t = torch.randint(0, self.max_episode_steps, (self.num_envs,), dtype=torch.int32, generator=self.gen)
+        return obs, info
 
     def step(self, actions):
         full, reward, terminated, truncated, info = super().step(actions)

@@ -108,7 +108,8 @@ def test_a_seed_decides_every_draw():
 
 
 def test_staggered_starts_spread_the_time_limits(go1):
-    go1.stagger_episodes()
+    obs, info = go1.stagger_episodes()
+    assert obs.shape == (4, 48) and info["critic_obs"].shape == (4, 72)
     lengths = go1.episode_steps.tolist()
     assert len(set(lengths)) > 1 and all(0 <= n < 1000 for n in lengths)
     go1.reset()

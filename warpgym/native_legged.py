@@ -131,19 +131,30 @@ def warpgym_episodes(task: LeggedTask, act, episodes: int, device: str = "cpu") 
                      "length": torch.zeros(episodes, dtype=torch.int32)})
     obs, _ = env.observe()
     alive = torch.ones(episodes, dtype=torch.bool, device=env.device)
-    errors, falls = [], 0
+    root_dof = idx.root_dof
+    sums = torch.zeros(2, dtype=torch.float64, device=env.device)
+    counted = torch.zeros(episodes, dtype=torch.long, device=env.device)  # device tensors: no host read per step
+    falls = torch.zeros(episodes, dtype=torch.long, device=env.device)
     for t in range(steps):
         env.write_state({"command": schedule[t].expand(episodes, 3)})
         obs, reward, terminated, truncated, info = env.step(act(obs))
         q, v = env.sim.dof_pos, env.sim.dof_vel
-        for w in torch.nonzero(alive).flatten().tolist():
-            lin, ang = base_velocity(q[w, r + 3:r + 7].tolist(), v[w, idx.root_dof:idx.root_dof + 3].tolist(),
-                                     v[w, idx.root_dof + 3:idx.root_dof + 6].tolist())
-            cmd = schedule[t].tolist()
-            errors.append((math.hypot(cmd[0] - lin[0], cmd[1] - lin[1]), abs(cmd[2] - ang[2])))
-        fell = terminated & alive
-        falls += int(fell.sum())
+        lin = rotate_to_base(q[:, r + 3:r + 7], v[:, root_dof:root_dof + 3])
+        error_xy = torch.linalg.norm(schedule[t, :2] - lin[:, :2], dim=1)
+        error_yaw = (schedule[t, 2] - v[:, root_dof + 5]).abs()
+        sums += torch.stack([(error_xy * alive).sum(), (error_yaw * alive).sum()]).double()
+        counted += alive
+        falls += terminated & alive
         alive &= ~terminated
     env.close()
-    e = np.array(errors)
-    return Tracking(float(e[:, 0].mean()), float(e[:, 1].mean()), falls, episodes)
+    n = float(counted.sum())
+    return Tracking(float(sums[0]) / n, float(sums[1]) / n, int(falls.sum()), episodes)
+
+
+def rotate_to_base(quat, lin_world):
+    """World-frame vectors (N, 3) in the frames of unit quaternions (N, 4), (w, x, y, z): batched ``base_velocity``."""
+    import torch  # noqa: PLC0415
+
+    w, xyz = quat[:, :1], quat[:, 1:]
+    t = 2.0 * torch.linalg.cross(xyz, lin_world)
+    return lin_world - w * t + torch.linalg.cross(xyz, t)

@@ -314,8 +314,11 @@ def pack(out: str, folder: str) -> None:
             models = sorted(glob.glob(os.path.join(task_dir, "**", "model_*.pt"), recursive=True),
                             key=lambda p: int(p.rsplit("_", 1)[1][:-3]))
             if models:
-                # rsl_rl's own checkpoint (its pickled dictionary, written by mjlab's run on this machine)
-                model = torch.load(models[-1], map_location="cpu", weights_only=False)
+                try:  # rsl_rl's checkpoint: tensors and plain values, read without running code
+                    model = torch.load(models[-1], map_location="cpu", weights_only=True)
+                except Exception as e:  # noqa: BLE001  (torch reports a refused file as any of several types)
+                    print(f"left out {models[-1]}: not read as tensors and plain values ({e})")
+                    continue
                 tmp = models[-1] + ".packed"
                 torch.save({k: v for k, v in model.items() if "optimizer" not in k}, tmp)
                 tar.add(tmp, arcname=os.path.relpath(models[-1], base))

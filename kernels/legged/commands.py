@@ -4,9 +4,10 @@ world's command held at zero); and mjlab's tracking errors, summed over the epis
 
 import warp as wp
 
+from kernels.common import stream
 from kernels.legged.frames import heading, root_velocity_b
 from kernels.legged.params import FORWARD, HEADING, STANDING, LeggedEpisodes, LeggedParams, LeggedRobot, LeggedState, MjLegged
-from kernels.legged.random import COMMAND, stream
+from kernels.legged.random import COMMAND
 from kernels.math import wrap_angle
 
 wp.set_module_options({"enable_backward": False})

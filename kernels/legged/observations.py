@@ -11,9 +11,10 @@ height clamped into that range, which is what ``foot_height`` computes.
 
 import warp as wp
 
+from kernels.common import stream
 from kernels.legged.frames import projected_gravity, sensor3
 from kernels.legged.params import LeggedParams, LeggedRobot, LeggedState, MjLegged
-from kernels.legged.random import OBSERVATION, stream
+from kernels.legged.random import OBSERVATION
 
 wp.set_module_options({"enable_backward": False})
 

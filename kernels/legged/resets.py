@@ -10,10 +10,10 @@ swing heights' peaks are not reset: mjlab's swing-height term keeps them across 
 
 import warp as wp
 
-from kernels.common import StepOutputs, resets_world
+from kernels.common import StepOutputs, resets_world, stream
 from kernels.legged.commands import draw_command
 from kernels.legged.params import LeggedEpisodes, LeggedParams, LeggedRobot, LeggedState, MjLegged
-from kernels.legged.random import RESET, STARTUP, stream
+from kernels.legged.random import RESET, STARTUP
 
 wp.set_module_options({"enable_backward": False})
 

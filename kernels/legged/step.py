@@ -11,11 +11,11 @@ control step); a term of weight 0 is skipped, as mjlab skips it; a value that is
 
 import warp as wp
 
-from kernels.common import StepOutputs, state_is_finite
+from kernels.common import StepOutputs, state_is_finite, stream
 from kernels.legged.frames import angular_velocity, point_velocity, projected_gravity, rotate_inverse, root_velocity_b, sensor3
 from kernels.legged.observations import write_observation
 from kernels.legged.params import LeggedEpisodes, LeggedParams, LeggedRobot, LeggedState, MjLegged, Term
-from kernels.legged.random import FINAL_OBSERVATION, PUSH, stream
+from kernels.legged.random import FINAL_OBSERVATION, PUSH
 
 wp.set_module_options({"enable_backward": False})
 
@@ -64,9 +64,10 @@ def feet_terms(p: LeggedParams, r: LeggedRobot, d: MjLegged, st: LeggedState, w:
     total = float(0.0)
     for f in range(r.foot_site.shape[0]):
         contact = d.sensordata[w, r.foot_found[f]] > 0.0
-        site = d.site_xpos[w, r.foot_site[f]]
-        v = point_velocity(d, w, r.foot_body[f], r.root_body, site)
         h = st.foot_height[w, f]
+        v = wp.vec3(0.0)
+        if term == Term.foot_clearance or term == Term.foot_slip:
+            v = point_velocity(d, w, r.foot_body[f], r.root_body, d.site_xpos[w, r.foot_site[f]])
         if term == Term.air_time:
             t = st.air_time[w, f]
             if t > p.air_min and t < p.air_max:

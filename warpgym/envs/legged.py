@@ -210,9 +210,13 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
             if tuple(value.shape) != tuple(view.shape):
                 raise ValueError(f"write_state: {key} has shape {tuple(value.shape)}, this env's is {tuple(view.shape)}")
             view.copy_(value.to(view.dtype))
+        cuda = self.sim.device != "cpu"
         if "body_ipos" in state:
+            if cuda:  # the writes above are torch's, on its stream; set_const runs on Warp's
+                torch.cuda.synchronize(self.device)
             self.sim.set_const()
-        if self.sim.device != "cpu":
+        if cuda:  # not a hot path: the state is whole before anything reads it, on either stream
+            torch.cuda.synchronize(self.device)
             wp.synchronize_device(self.sim.device)
 
     def observe(self):
@@ -231,15 +235,16 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
         obs, info = super().reset(seed=seed, options=options)
         return obs, {"critic_obs": self.info["critic_obs"]}
 
-    def stagger_episodes(self) -> None:
-        """Draw each world's elapsed steps uniformly in [0, max_episode_steps) and reset every world (rsl_rl's
+    def stagger_episodes(self):
+        """Reset every world with its elapsed steps drawn uniformly in [0, max_episode_steps) (rsl_rl's
         ``init_at_random_ep_len``, which mjlab's training uses): the time limits then fall apart rather than all
-        at once."""
+        at once. Returns the first observations, as ``reset()`` does."""
         self._stagger = 1
         try:
             self._reset_all()
         finally:
             self._stagger = 0
+        return self.obs, {"critic_obs": self.info["critic_obs"]}
 
     def __repr__(self) -> str:
         return f"LeggedVecEnv({self.task.name}, num_envs={self.num_envs}, device={self.sim.device!r})"
