@@ -82,6 +82,22 @@ def test_train_command_under_torchrun_on_the_cpu(tmp_path):
     assert len(rows) == 2 and '"samples": 64' in rows[1]  # 2 processes x 4 envs x 4 steps x 2 iterations
 
 
+def test_a_legged_task_trains_under_torchrun_with_its_critic_statistics_shared(tmp_path):
+    """The default mode on a legged task: each process its own worlds, one policy, and both normalisers (the
+    policy's observation and the critic's own) counting every process's samples."""
+    run = tmp_path / "go1"
+    done = torchrun("-m", "warpgym", "train", "--task", "Go1VelocityFlat-v0", "--device", "cpu", "--num-envs", "4",
+                    "--max-iterations", "2", "--horizon-len", "4", "--no-eval", "--no-plots", "--run-dir", str(run))
+    assert "x 2 processes, 4 envs each (--multi-gpu grow-kl: 8 in all" in done.stdout
+    ckpt = load(str(run / "checkpoint.pt"), torch.device("cpu"))
+    assert ckpt["spec"]["num_critic_obs"] == 72
+    # 2 processes x 4 envs x (the first observation + 2 iterations x 4 steps)
+    samples = 2 * 4 * (1 + 2 * 4)
+    assert round(float(ckpt["normalizer"]["count"])) == samples
+    assert round(float(ckpt["critic_normalizer"]["count"])) == samples
+    assert ckpt["critic_normalizer"]["mean"].shape == (72,)
+
+
 def test_a_suite_task_trained_by_torchrun_is_scored_in_gymnasiums_env(tmp_path):
     """torchrun -m warpgym train on one of Gymnasium's tasks, its checkpoint played by warpgym eval in
     gymnasium.make's env from the same starts as in warpgym's: the returns agree."""

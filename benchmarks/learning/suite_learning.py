@@ -263,23 +263,22 @@ def shown(row: str, marked: set[str]) -> str:
 
 
 def readme_table(runs: list[dict], marked: set[str] = frozenset()) -> str:
-    """The README's table: each task's return in Gymnasium's env at its last mark (each seed's and their mean),
-    the published figure, the minutes to it by the training's evaluations and by the kept policies' scores in
-    Gymnasium's env (``marks_at``); the ``marked`` rows (made on another card) get a ‡."""
-    lines = ["| task | return in `gymnasium.make`'s env after 10 min (3 for the four small tasks), mean (each seed) | "
-             "published figure | minutes to it, each seed | kept policy at it in `gymnasium.make`, first mark |",
-             "|---|---|---|---|---|"]
+    """The README's table: each task's return in Gymnasium's env at its last mark (the mean of the seeds and their
+    range), the published figure, and each seed's minutes to it by the training's evaluations (``minutes_to``); the
+    ``marked`` rows (made on another card) get a ‡."""
+    lines = ["| task | return in `gymnasium.make` after 10 min: mean (range) | published | minutes to it, each seed |",
+             "|---|---|---|---|"]
     for task, rs in by_task_of(runs).items():
         last = rs[0]["marks_s"][-1]
         each = [s["gymnasium_return"] for r in rs for s in r["scored"] if abs(s["mark_s"] - last) < 1e-6]
         digits = 0 if each and abs(_mean(each)) >= 100 else 1
         ref = REFERENCE[rs[0]["task"]]
-        score = (f"**{_mean(each):.{digits}f}** ({', '.join(f'{v:.{digits}f}' for v in each)})" if each
+        score = (f"**{_mean(each):.{digits}f}** ({min(each):.{digits}f} to {max(each):.{digits}f})" if each
                  else "not scored yet (`--score OUT`)")  # a --no-score run, scored later on any machine
+        short = "" if last >= 600 else f" at {last / 60:g} min"  # the small tasks' budget
         source, version = REFERENCE_SOURCE[rs[0]["task"]], REFERENCE_VERSION[rs[0]["task"]]
-        judged = marks_at(rs, ref) if all(r["scored"] for r in rs) else "-"
-        lines.append(f"| {shown(task, marked)} | {score} | {ref} ({source}, {version}) | "
-                     f"{minutes_to(rs, ref)} | {judged} |")
+        lines.append(f"| {shown(task, marked)} | {score}{short} | {ref:g} ({source}, {version}) | "
+                     f"{minutes_to(rs, ref)} |")
     return "\n".join(lines)
 
 
@@ -389,6 +388,8 @@ def report(folders: list[str], figure: str | None = None) -> int:
             print(card_note(gpu, other))
         print("\nThe README's table:\n")
         print(readme_table(runs, marked=set(other)))
+        if other:
+            print("\n" + card_note(gpu, other))
         rows = within(runs, 180.0)
         print(f"\nAt the figure in Gymnasium's env by the 3-minute mark in every seed: {len(rows)} of "
               f"{len(by_task_of(runs))} rows ({', '.join(rows) or 'none'})")

@@ -11,6 +11,9 @@ commands:
 - ``reference OUT.npz``: transitions of mjlab's own env on the CPU, with everything warpgym needs to start
   from the same state (tests/test_legged_judge.py steps warpgym's env from it and compares).
 - ``speed``: mjlab's env stepped with random actions, env-steps per second (benchmarks/learning/mjlab_side_by_side.py).
+- ``returns CKPT``: a warpgym checkpoint's deterministic policy in mjlab's own env as it trains (noise, pushes and
+  randomisation on), the return of each world's first episode (benchmarks/physics/legged_returns.py). The policy
+  runs through ``agents``, the learner package, which imports nothing of warpgym.
 """
 
 from __future__ import annotations
@@ -325,6 +328,44 @@ def speed(task: str, sizes: list[int], steps: int, warmup: int, repeats: int, ou
                    "warmup": warmup, "rows": rows, "device": torch.cuda.get_device_name(0)}, f, indent=1)
 
 
+# ---------------------------------------------------------------------------------------------------- returns
+def returns(checkpoint: str, task: str, num_envs: int, seed: int, out: str) -> None:
+    """Each world's first episode under the checkpoint's mean action in mjlab's env on the CPU: its return (the sum
+    of the env's rewards, as rsl_rl counts them), its length and whether it fell, as JSON into ``out``."""
+    import torch
+
+    from agents.checkpoint import load, policy_from_checkpoint
+    from mjlab.envs import ManagerBasedRlEnv
+
+    ckpt = load(checkpoint, torch.device("cpu"))
+    spec = ckpt["spec"]
+    cfg = _env_cfg(TASKS[task], num_envs)
+    cfg.seed = seed
+    env = ManagerBasedRlEnv(cfg, device="cpu")
+    policy, normalize = policy_from_checkpoint(ckpt, spec["num_obs"], spec["num_actions"], torch.device("cpu"))
+    obs, _ = env.reset()
+    total = torch.zeros(num_envs, dtype=torch.float64)
+    length = torch.zeros(num_envs, dtype=torch.long)
+    fell = torch.zeros(num_envs, dtype=torch.bool)
+    alive = torch.ones(num_envs, dtype=torch.bool)
+    started = time.perf_counter()
+    with torch.no_grad():
+        for _ in range(int(env.max_episode_length)):
+            obs, reward, terminated, truncated, _ = env.step(policy.act_deterministic(normalize(obs["actor"])))
+            total += reward.double() * alive
+            length += alive
+            fell |= terminated & alive
+            alive &= ~(terminated | truncated)
+            if not alive.any():
+                break
+    env.close()
+    with open(out, "w") as f:
+        json.dump({"framework": "mjlab", "mjlab": _version(), "task": task, "mirrors": TASKS[task], "seed": seed,
+                   "returns": total.tolist(), "lengths": length.tolist(), "fell": fell.tolist(),
+                   "seconds": time.perf_counter() - started}, f)
+    print(f"mjlab {TASKS[task]} x {num_envs}: mean return {float(total.mean()):.2f}, {int(fell.sum())} fell", flush=True)
+
+
 # ---------------------------------------------------------------------------------------------------- main
 def main(argv=None) -> None:
     p = argparse.ArgumentParser(prog="python -m benchmarks.physics.mjlab_side", description=__doc__.split("\n\n")[0])
@@ -348,8 +389,16 @@ def main(argv=None) -> None:
     sp.add_argument("--steps", type=int, default=200)
     sp.add_argument("--warmup", type=int, default=20)
     sp.add_argument("--repeats", type=int, default=3)
+    rt = sub.add_parser("returns", help="a warpgym policy in mjlab's env on the CPU, first-episode returns as JSON")
+    rt.add_argument("checkpoint")
+    rt.add_argument("out")
+    rt.add_argument("--task", choices=list(TASKS), required=True)
+    rt.add_argument("--num-envs", type=int, default=64)
+    rt.add_argument("--seed", type=int, default=0)
     args = p.parse_args(argv)
-    if args.command == "speed":
+    if args.command == "returns":
+        returns(args.checkpoint, args.task, args.num_envs, args.seed, args.out)
+    elif args.command == "speed":
         speed(args.task, args.num_envs, args.steps, args.warmup, args.repeats, args.out)
     elif args.command == "export":
         export(args.folder)

@@ -109,9 +109,10 @@ def main(argv=None) -> int:
     result = evaluate(env, policy, normalize, steps, recorder)
     result = {"task": task, "checkpoint": path, "iteration": ckpt["iteration"], "samples": ckpt["samples"],
               "episodes": n, **result}
+    # a legged task's robots follow a command in any direction: no forward speed to report
+    speed = "" if entry.family == "legged" else f", forward speed {result['eval/speed']:.2f} m/s"
     print(f"{task}, policy of iteration {ckpt['iteration']}, {n} episodes of the deterministic policy: "
-          f"return {result['eval/return']:.1f}, forward speed {result['eval/speed']:.2f} m/s, "
-          f"length {result['eval/length']:.0f} steps (means)")
+          f"return {result['eval/return']:.1f}{speed}, length {result['eval/length']:.0f} steps (means)")
     if filming:
         outputs = {}
         if args.video:

@@ -3,7 +3,7 @@
     warpgym train --task Ant                       # GPU: 8192 envs; CPU: 64 envs, a 1-minute demo
     warpgym train --task Humanoid --time-limit 300
     warpgym train --resume runs/Ant-20261122-120000 --max-iterations 800
-    torchrun --nproc_per_node=4 -m warpgym train --task Ant  # 4 GPUs, one policy, the 8192 Ants divided among them
+    torchrun --nproc_per_node=4 -m warpgym train --task Ant  # 4 GPUs, one policy, 8192 Ants on each (grow-kl)
 
 A run directory holds config.json, metrics.jsonl/.csv, tensorboard/, checkpoint.pt (written
 atomically every --save-gap iterations and at the end), summary.json, and the two plots

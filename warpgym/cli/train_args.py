@@ -15,10 +15,12 @@ TASK_NAMES = {t.lower(): t for t in task_names()}
 def parser(description: str | None = None) -> CommandParser:
     """`warpgym train`'s flags, each number with its range and a value that works (warpgym.cli.flags)."""
     ap = CommandParser(prog="warpgym train", description=description)
-    ap.add_argument("--task", default=None, help="Ant (default), Humanoid, or one of Gymnasium's MuJoCo tasks "
-                                                 "(InvertedPendulum-v5 ... HumanoidStandup-v5)")
+    ap.add_argument("--task", default=None, help="Ant (default), Humanoid, one of Gymnasium's MuJoCo tasks "
+                                                 "(InvertedPendulum-v5 ... HumanoidStandup-v5) or a legged task "
+                                                 "(Go1VelocityFlat-v0, G1VelocityFlat-v0)")
     ap.add_argument("--num-envs", type=positive_int(4096), default=None,
-                    help="default on a GPU: 8192 (Ant), 4096 (Humanoid); 64 on the CPU")
+                    help="default: the task's preset on a GPU (8192 for the Ant, 4096 for the Humanoid and "
+                         "the legged tasks), fewer on the CPU")
     ap.add_argument("--device", default=None, help="default: cuda:0 when present, else cpu")
     ap.add_argument("--seed", type=non_negative_int(0), default=0)
     ap.add_argument("--max-iterations", type=positive_int(500), default=None)

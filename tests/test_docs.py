@@ -1,0 +1,124 @@
+"""The docs say only what is true of the code: every path, module, command flag and link they name exists, the
+generated CLI reference matches the parsers, and their Python examples run (on the CPU, at a few envs)."""
+
+import os
+import re
+import subprocess
+import sys
+
+import pytest
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+# The reference pages and the README. The lab log (docs/history.md) records paths and flags of its day and is
+# read as history; docs/benchmarks.md is checked for links only until its rewrite (its commands name flags of
+# the scripts of each row's day).
+PAGES = ["README.md", "CONTRIBUTING.md", "docs/guide.md", "docs/tasks.md", "docs/tensor_api.md", "docs/cli.md"]
+ALL_PAGES = PAGES + ["docs/benchmarks.md", "docs/history.md"]
+TOPS = ("warpgym", "agents", "kernels", "benchmarks", "scripts", "tests", "docs", ".ci", "shared")
+PATH = re.compile(r"(?<![\w/.$~-])((?:%s)/[\w./*-]*[\w*])" % "|".join(re.escape(t) for t in TOPS))
+PLACEHOLDER = re.compile(r"[A-Z]{2,}|<|\*|\.\.\.")  # RUN, OUT, <task>, globs: not a path of the repository
+MODULE = re.compile(r"python -m ((?:warpgym|benchmarks|agents)(?:\.\w+)*)")
+COMMAND = re.compile(r"\bwarpgym (train-with|train|play|plot|sim2sim|bench|eval)\b([^`|;&\n]*)")
+SCRIPT_FLAGS = re.compile(r"python -m ((?:benchmarks)(?:\.\w+)+)([^`|;&\n]*)")
+FLAG = re.compile(r"(?<![\w-])(--[a-z][\w-]*)")
+LINK = re.compile(r"\[[^\]]*\]\(([^)\s]+)\)|<img src=\"([^\"]+)\"")
+
+
+def read(page: str) -> str:
+    with open(os.path.join(ROOT, page)) as f:
+        return f.read()
+
+
+def module_exists(name: str) -> bool:
+    path = os.path.join(ROOT, *name.split("."))
+    return os.path.isfile(path + ".py") or os.path.isfile(os.path.join(path, "__init__.py"))
+
+
+def slug(heading: str) -> str:
+    """GitHub's anchor of a heading: lower case, punctuation dropped, spaces to hyphens."""
+    return re.sub(r"[^\w\- ]", "", heading.strip().lower()).replace(" ", "-")
+
+
+@pytest.mark.parametrize("page", PAGES)
+def test_every_path_and_module_a_page_names_exists(page):
+    text = read(page)
+    # warpgym/Hopper-v5 and the like are Gymnasium ids, not paths
+    missing = sorted({p for p in PATH.findall(text) if not PLACEHOLDER.search(p) and not re.match(r"warpgym/[A-Z]", p)
+                      and not os.path.exists(os.path.join(ROOT, p.rstrip(".")))})
+    missing += sorted({m for m in MODULE.findall(text) if not PLACEHOLDER.search(m) and not module_exists(m)})
+    assert not missing, f"{page} names what is not in the repository: {missing}"
+
+
+@pytest.fixture(scope="module")
+def command_flags():
+    from warpgym.cli.reference import command_parser
+
+    flags = {}
+    for name in ("train", "train-with", "play", "plot", "sim2sim", "bench", "eval"):
+        parser = command_parser(name)
+        flags[name] = {s for a in parser._actions for s in a.option_strings}
+    return flags
+
+
+@pytest.mark.parametrize("page", PAGES)
+def test_every_flag_of_a_command_a_page_shows_is_one_the_command_takes(page, command_flags):
+    text = read(page)
+    wrong = []
+    for name, rest in COMMAND.findall(text):
+        wrong += [f"warpgym {name} {f}" for f in FLAG.findall(rest) if f not in command_flags[name]]
+    for module, rest in SCRIPT_FLAGS.findall(text):
+        if not module_exists(module):
+            continue  # the path test names it
+        source = read(os.path.join(*module.split(".")) + ".py")
+        wrong += [f"python -m {module} {f}" for f in FLAG.findall(rest) if f'"{f}"' not in source]
+    assert not wrong, f"{page} shows flags its commands do not take: {sorted(set(wrong))}"
+
+
+@pytest.mark.parametrize("page", ALL_PAGES)
+def test_every_relative_link_and_image_of_a_page_resolves_with_its_anchor(page):
+    text = read(page)
+    broken = []
+    for target in (a or b for a, b in LINK.findall(text)):
+        if re.match(r"[a-z]+:", target):
+            continue  # an address outside the repository
+        path, _, anchor = target.partition("#")
+        file = os.path.normpath(os.path.join(ROOT, os.path.dirname(page), path)) if path else os.path.join(ROOT, page)
+        if not os.path.exists(file):
+            broken.append(target)
+        elif anchor and file.endswith(".md"):
+            with open(file) as f:
+                anchors = {slug(line.lstrip("#")) for line in f if line.startswith("#")}
+            if anchor not in anchors:
+                broken.append(target)
+    assert not broken, f"{page} links to what is not there: {broken}"
+
+
+def test_the_cli_reference_is_what_the_parsers_say():
+    from warpgym.cli.reference import render
+
+    assert read("docs/cli.md") == render(), "docs/cli.md is stale: python -m warpgym.cli.reference docs/cli.md"
+
+
+def python_blocks(page: str) -> list[str]:
+    return re.findall(r"```python\n(.*?)```", read(page), re.S)
+
+
+def run_on_the_cpu(code: str, tmp_path) -> None:
+    """``code`` as a reader would paste it, moved to the CPU at a few envs."""
+    code = code.replace('"cuda:0"', '"cpu"').replace("8192", "4").replace("4096", "4").replace("1024", "4")
+    script = tmp_path / "example.py"
+    script.write_text(code)
+    done = subprocess.run([sys.executable, str(script)], cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, code + "\n" + done.stderr[-3000:]
+
+
+def test_the_readmes_python_example_runs(tmp_path):
+    blocks = python_blocks("README.md")
+    assert len(blocks) == 1
+    run_on_the_cpu(blocks[0], tmp_path)
+
+
+def test_the_tensor_api_pages_first_example_runs_with_the_tasks_physics(tmp_path):
+    block = python_blocks("docs/tensor_api.md")[0]
+    assert "substeps=ANT.substeps" in block
+    run_on_the_cpu(block + "\nassert sim.substeps == 4 and sim.physics.armature == 0.1\n", tmp_path)

@@ -1,0 +1,70 @@
+"""The side-by-side benchmark's report: mjlab's target read from its own TensorBoard log at the mark, warpgym's
+time to it over smoothed rows, and the goals' verdicts (no mjlab, no GPU: the logs are written here)."""
+
+import json
+
+import pytest
+
+from benchmarks.learning import mjlab_side_by_side as sbs
+
+STARTED = 1_000_000.0
+
+
+def write_mjlab(folder, rows):
+    from torch.utils.tensorboard import SummaryWriter
+
+    writer = SummaryWriter(str(folder / "go1_velocity" / "run"))
+    for it, (t, ret, err) in enumerate(rows):
+        writer.add_scalar("Train/mean_reward", ret, it, walltime=STARTED + t)
+        writer.add_scalar("Metrics/twist/error_vel_xy", err, it, walltime=STARTED + t)
+        writer.add_scalar("Perf/total_fps", 100_000.0, it, walltime=STARTED + t)
+    writer.close()
+
+
+def write_ours(folder, rows):
+    folder.mkdir(parents=True)
+    with open(folder / "metrics.jsonl", "w") as f:
+        for it, (t, ret) in enumerate(rows):
+            f.write(json.dumps({"iteration": it, "time_s": t, "return": ret, "samples_per_s": 300_000.0,
+                                "episode/error_vel_xy": 0.5}) + "\n")
+
+
+@pytest.fixture
+def out(tmp_path):
+    task = "Go1VelocityFlat-v0"
+    (tmp_path / "jobs.json").write_text(json.dumps({
+        "jobs": [{"task": task, "framework": "mjlab", "started": STARTED}], "device": "GPU", "date": "2026-11-28",
+        "num_envs": 4096}))
+    # mjlab: return = t / 10 every 10 s up to 500 s
+    write_mjlab(tmp_path / f"mjlab-{task}", [(t, t / 10.0, 1.0) for t in range(10, 510, 10)])
+    # warpgym seed 0: return = t / 5, so it passes mjlab's 445-s return (43.0) at about 215 s
+    write_ours(tmp_path / f"warpgym-{task}-seed0", [(float(t), t / 5.0) for t in range(5, 300, 5)])
+    # seed 1 never gets there
+    write_ours(tmp_path / f"warpgym-{task}-seed1", [(float(t), 10.0) for t in range(5, 300, 5)])
+    return tmp_path
+
+
+def test_the_target_is_mjlabs_mean_return_in_the_window_before_the_mark(out):
+    summary = sbs.summarize(str(out), mark=445.0)
+    mj = summary["tasks"]["Go1VelocityFlat-v0"]["mjlab"]
+    # rows at 420, 430, 440 s lie in [415, 445]: returns 42, 43, 44
+    assert mj["at_mark"]["return"] == pytest.approx(43.0)
+    assert mj["at_mark"]["rows"] == 3
+    assert summary["mark_s"] == 445.0
+
+
+def test_warpgyms_time_is_its_first_smoothed_row_at_the_target_and_a_seed_short_of_it_is_not_reached(out):
+    runs = sbs.summarize(str(out), mark=445.0)["tasks"]["Go1VelocityFlat-v0"]["warpgym"]
+    # the mean of the rows at t - 10, t - 5 and t is (t - 5) / 5 >= 43 first at t = 220
+    assert runs[0]["reached"]["time_s"] == pytest.approx(220.0)
+    assert runs[1]["reached"] is None
+    table = sbs.table(sbs.summarize(str(out), mark=445.0))
+    # a quarter of 445 s is 111 s: 220 s is not met, and the table says which mark it judged
+    assert "220 (0.49x) not met" in table
+    assert "return at 445 s" in table and "not reached" in table
+
+
+def test_without_a_mark_the_15_minute_mark_is_the_target_and_a_run_that_ended_before_it_has_none(out):
+    summary = sbs.summarize(str(out))
+    assert summary["tasks"]["Go1VelocityFlat-v0"]["mjlab"]["at_mark"]["return"] is None
+    assert all(r["reached"] is None for r in summary["tasks"]["Go1VelocityFlat-v0"]["warpgym"])
