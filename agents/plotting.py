@@ -1,4 +1,5 @@
-"""The seed's two views of a run: episodic reward against wall-clock time and against samples."""
+"""Episodic reward against wall-clock time and against samples: the two views of a run ElegantRL's Isaac Gym
+tutorial draws."""
 
 from __future__ import annotations
 

@@ -122,3 +122,11 @@ def test_the_tensor_api_pages_first_example_runs_with_the_tasks_physics(tmp_path
     block = python_blocks("docs/tensor_api.md")[0]
     assert "substeps=ANT.substeps" in block
     run_on_the_cpu(block + "\nassert sim.substeps == 4 and sim.physics.armature == 0.1\n", tmp_path)
+
+
+def test_the_logs_table_of_moved_paths_points_at_paths_that_exist():
+    """docs/history.md keeps the paths of each entry's day; its table says where each went, and that must hold."""
+    text = read("docs/history.md")
+    table = text[text.index("| named here | now |"):].split("\n\n")[0]
+    now = [p for row in table.splitlines()[2:] for p in PATH.findall(row.split("|")[2])]
+    assert len(now) >= 10 and [p for p in now if not os.path.exists(os.path.join(ROOT, p))] == []

@@ -68,3 +68,17 @@ def test_without_a_mark_the_15_minute_mark_is_the_target_and_a_run_that_ended_be
     summary = sbs.summarize(str(out))
     assert summary["tasks"]["Go1VelocityFlat-v0"]["mjlab"]["at_mark"]["return"] is None
     assert all(r["reached"] is None for r in summary["tasks"]["Go1VelocityFlat-v0"]["warpgym"])
+
+
+def test_the_published_tables_are_what_the_report_prints_from_the_committed_summary():
+    """docs/benchmarks.md's two legged tables, row for row, as ``--report`` prints them from the summary it wrote."""
+    import os
+
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    with open(os.path.join(root, "docs", "bench", "legged", "side_by_side_2026-11-28.json")) as f:
+        summary = json.load(f)
+    with open(os.path.join(root, "docs", "benchmarks.md")) as f:
+        page = set(f.read().splitlines())
+    rows = [line for line in sbs.table(summary).splitlines() if line.startswith("| ")]
+    assert len(rows) == 2 + 2 + 2 * 4  # two headers, two speed rows, each task's mjlab row and 3 seeds
+    assert [r for r in rows if r not in page] == []

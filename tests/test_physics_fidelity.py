@@ -16,7 +16,8 @@ Today's default (3 substeps, 25 rad/s motors, armature 0.1) holds both seeds' 10
 default tests pick the committed policies trained with the task's physics, so they fail when a default
 changes without them.
 
-docs/tasks.md ("Physics settings") has the same replays at full length on the GPU and in native MuJoCo.
+docs/history.md ("Physics settings: the investigation") has the same replays at full length on the GPU and in native
+MuJoCo.
 """
 
 import os

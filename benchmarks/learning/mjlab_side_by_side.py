@@ -222,9 +222,13 @@ def speed_rows(out: str, task: str) -> list[dict]:
         path = os.path.join(out, f"speed-{name}-{task}.json")
         if os.path.isfile(path):
             with open(path) as f:
-                for r in json.load(f)["rows"]:
+                doc = json.load(f)
+                ceiling = {r["num_envs"]: statistics.median(r["mjwarp_steps_per_s"])
+                           for r in doc.get("results", []) if r.get("mjwarp_steps_per_s")}
+                for r in doc["rows"]:
                     rows.append({"framework": name, "num_envs": r["num_envs"],
-                                 "env_steps_per_s": statistics.median(r["env_steps_per_s"])})
+                                 "env_steps_per_s": statistics.median(r["env_steps_per_s"])}
+                                | ({"mjwarp_steps_per_s": ceiling[r["num_envs"]]} if r["num_envs"] in ceiling else {}))
     return rows
 
 
@@ -256,14 +260,18 @@ def fmt(x, spec=".0f", none="-"):
 
 def table(summary: dict) -> str:
     lines = [f"{summary['device']}, {summary['date']}, {summary['num_envs']} envs for training.", "",
-             "| task | envs | mjlab env-steps/s | warpgym env-steps/s | ratio (goal 5x) |", "|---|---|---|---|---|"]
+             "| task | envs | mjlab env-steps/s | warpgym env-steps/s | MuJoCo Warp's steps + forward alone | "
+             "warpgym / mjlab (goal 5x) |", "|---|---|---|---|---|---|"]
     for task, e in summary["tasks"].items():
-        by = {(r["framework"], r["num_envs"]): r["env_steps_per_s"] for r in e["speed"]}
+        by = {(r["framework"], r["num_envs"]): r for r in e["speed"]}
         for n in sorted({k[1] for k in by}):
-            m, o = by.get(("mjlab", n)), by.get(("warpgym", n))
+            m = by.get(("mjlab", n), {}).get("env_steps_per_s")
+            o = by.get(("warpgym", n), {}).get("env_steps_per_s")
+            c = by.get(("warpgym", n), {}).get("mjwarp_steps_per_s")
             ratio = o / m if m and o else None
-            met = "" if ratio is None else (" met" if ratio >= GOAL_SPEED else " not met")
-            lines.append(f"| {task} | {n} | {fmt(m and m / 1e3)} k | {fmt(o and o / 1e3)} k | {fmt(ratio, '.1f')}x{met} |")
+            met = "" if ratio is None else (", met" if ratio >= GOAL_SPEED else ", not met")
+            lines.append(f"| {task} | {n} | {fmt(m and m / 1e3)} k | {fmt(o and o / 1e3)} k | {fmt(c and c / 1e3)} k "
+                         f"| {fmt(ratio, '.1f')}x{met} |")
     at = "15 min" if summary.get("mark_s", MARK) == MARK else f"{summary['mark_s']:.0f} s"
     lines += ["", f"| task | framework | samples/s | return at {at} | error xy / yaw at {at} | time to mjlab's return at {at} "
               f"(goal <= {GOAL_TIME * summary.get('mark_s', MARK):.0f} s) | error xy / yaw there |", "|---|---|---|---|---|---|---|"]

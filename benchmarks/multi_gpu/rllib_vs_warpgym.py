@@ -1,4 +1,5 @@
-"""The seed's experiment: warpgym's PPO beside RLlib's PPO, the same robots, GPUs and wall-clock budget.
+"""warpgym's PPO beside RLlib's PPO, the same robots, GPUs and wall-clock budget: the experiment of ElegantRL's
+Isaac Gym tutorial.
 
     python -m benchmarks.multi_gpu.rllib_vs_warpgym --out OUT                                   # Ant, Humanoid x 1, 2 GPUs
     python -m benchmarks.multi_gpu.rllib_vs_warpgym --out OUT --tasks Ant --gpus 1 --seconds 60

@@ -1,7 +1,7 @@
 """The physics settings a robot is simulated with, beyond its MJCF: one definition that ``Sim``, the
 native MuJoCo twin (``warpgym.native``) and ``warpgym train --physics`` share.
 
-docs/tasks.md ("Physics settings") says which values were tried and why the defaults are what
+docs/history.md ("Physics settings: the investigation") says which values were tried and why the defaults are what
 they are.
 """
 
@@ -129,7 +129,8 @@ def exact_damping_scale(mujoco, model, timestep: float) -> tuple[np.ndarray, np.
     A step h of implicit Euler keeps 1 / (1 + h d / I) of a damped joint's speed, the continuous
     model exp(-h d / I) (I: the effective inertia of ``hinge_inverse_inertia``). With d scaled by
     (e^x - 1) / x, x = h d / I, the two agree, so the damping a policy meets does not depend on the
-    step; at the Humanoid's 1/180 s the factors are 1.06-1.84 (docs/tasks.md, "Physics settings")."""
+    step; at the Humanoid's 1/180 s the factors are 1.06-1.84 (docs/history.md, "Physics settings: the
+    investigation")."""
     dofs, inverse = hinge_inverse_inertia(mujoco, model)
     x = timestep * model.dof_damping[dofs] * inverse
     return dofs, np.where(x > 0, np.expm1(x) / np.where(x > 0, x, 1.0), 1.0)

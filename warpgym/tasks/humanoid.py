@@ -1,7 +1,7 @@
 """Isaac Gym's Humanoid (IsaacGymEnvs cfg/task/Humanoid.yaml): observation 108, action 21.
 
 The physics differs from Isaac Gym's in three ways, chosen from 10-minute runs of two seeds replayed at a
-4x finer step (docs/tasks.md, "Physics settings"):
+4x finer step (docs/history.md, "Physics settings: the investigation"):
 - 3 substeps of 8 solver iterations per 1/60 s step (1/180 s, the timestep nv_humanoid.xml declares),
   against Isaac Gym's 2: at 2 substeps PPO finds, within 3 minutes, gaits that draw speed from the step;
 - motors that slow with speed (``motor_speed=25``: torque falls to 0 at 25 rad/s at the full command, a
