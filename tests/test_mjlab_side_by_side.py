@@ -82,3 +82,25 @@ def test_the_published_tables_are_what_the_report_prints_from_the_committed_summ
     rows = [line for line in sbs.table(summary).splitlines() if line.startswith("| ")]
     assert len(rows) == 2 + 2 + 2 * 4  # two headers, two speed rows, each task's mjlab row and 3 seeds
     assert [r for r in rows if r not in page] == []
+
+
+def test_first_episodes_counts_each_worlds_first_episode_only():
+    """The counting both sides of benchmarks/physics/legged_returns.py share: rewards up to each world's first end,
+    a fall told from a time-out, nothing after it (the world's next episode) counted."""
+    import torch
+
+    from benchmarks.physics.first_episodes import first_episodes
+
+    ends = {0: (2, "fall"), 1: (4, "time"), 2: (3, "fall")}  # world: (the step its first episode ends, how)
+    t = {"now": 0}
+
+    def step(actions):
+        t["now"] += 1
+        terminated = torch.tensor([ends[w] == (t["now"], "fall") for w in range(3)])
+        truncated = torch.tensor([ends[w] == (t["now"], "time") for w in range(3)])
+        return actions, torch.full((3,), float(t["now"])), terminated, truncated, {}
+
+    got = first_episodes(step, lambda obs: obs, torch.zeros(3, 1), 3, max_steps=10)
+    assert got["returns"] == [1 + 2, 1 + 2 + 3 + 4, 1 + 2 + 3]
+    assert got["lengths"] == [2, 4, 3] and got["fell"] == [True, False, True]
+    assert t["now"] == 4  # stopped once every world had ended

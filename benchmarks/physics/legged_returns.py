@@ -20,6 +20,7 @@ import sys
 import tempfile
 
 from benchmarks.harness import ROOT, write_json
+from benchmarks.physics.first_episodes import first_episodes
 
 
 def warpgym_returns(ckpt: dict, num_envs: int, seed: int) -> dict:
@@ -35,21 +36,10 @@ def warpgym_returns(ckpt: dict, num_envs: int, seed: int) -> dict:
     policy, normalize = policy_from_checkpoint(ckpt, spec["num_obs"], spec["num_actions"], torch.device("cpu"))
     env = LeggedVecEnv(task, num_envs=num_envs, device="cpu", seed=seed)
     obs, _ = env.reset(seed=seed)
-    total = torch.zeros(num_envs, dtype=torch.float64)
-    length = torch.zeros(num_envs, dtype=torch.long)
-    fell = torch.zeros(num_envs, dtype=torch.bool)
-    alive = torch.ones(num_envs, dtype=torch.bool)
-    with torch.no_grad():
-        for _ in range(task.episode_length):
-            obs, reward, terminated, truncated, _ = env.step(policy.act_deterministic(normalize(obs)))
-            total += reward.double() * alive
-            length += alive
-            fell |= terminated & alive
-            alive &= ~(terminated | truncated)
-            if not alive.any():
-                break
+    episodes = first_episodes(env.step, lambda o: policy.act_deterministic(normalize(o)), obs, num_envs,
+                              task.episode_length)
     env.close()
-    return {"framework": "warpgym", "returns": total.tolist(), "lengths": length.tolist(), "fell": fell.tolist()}
+    return {"framework": "warpgym"} | episodes
 
 
 def stats(side: dict) -> dict:

@@ -335,6 +335,7 @@ def returns(checkpoint: str, task: str, num_envs: int, seed: int, out: str) -> N
     import torch
 
     from agents.checkpoint import load, policy_from_checkpoint
+    from benchmarks.physics.first_episodes import first_episodes
     from mjlab.envs import ManagerBasedRlEnv
 
     ckpt = load(checkpoint, torch.device("cpu"))
@@ -344,26 +345,15 @@ def returns(checkpoint: str, task: str, num_envs: int, seed: int, out: str) -> N
     env = ManagerBasedRlEnv(cfg, device="cpu")
     policy, normalize = policy_from_checkpoint(ckpt, spec["num_obs"], spec["num_actions"], torch.device("cpu"))
     obs, _ = env.reset()
-    total = torch.zeros(num_envs, dtype=torch.float64)
-    length = torch.zeros(num_envs, dtype=torch.long)
-    fell = torch.zeros(num_envs, dtype=torch.bool)
-    alive = torch.ones(num_envs, dtype=torch.bool)
     started = time.perf_counter()
-    with torch.no_grad():
-        for _ in range(int(env.max_episode_length)):
-            obs, reward, terminated, truncated, _ = env.step(policy.act_deterministic(normalize(obs["actor"])))
-            total += reward.double() * alive
-            length += alive
-            fell |= terminated & alive
-            alive &= ~(terminated | truncated)
-            if not alive.any():
-                break
+    episodes = first_episodes(env.step, lambda o: policy.act_deterministic(normalize(o["actor"])), obs, num_envs,
+                              int(env.max_episode_length))
     env.close()
     with open(out, "w") as f:
         json.dump({"framework": "mjlab", "mjlab": _version(), "task": task, "mirrors": TASKS[task], "seed": seed,
-                   "returns": total.tolist(), "lengths": length.tolist(), "fell": fell.tolist(),
-                   "seconds": time.perf_counter() - started}, f)
-    print(f"mjlab {TASKS[task]} x {num_envs}: mean return {float(total.mean()):.2f}, {int(fell.sum())} fell", flush=True)
+                   **episodes, "seconds": time.perf_counter() - started}, f)
+    print(f"mjlab {TASKS[task]} x {num_envs}: mean return {sum(episodes['returns']) / num_envs:.2f}, "
+          f"{sum(episodes['fell'])} fell", flush=True)
 
 
 # ---------------------------------------------------------------------------------------------------- main
