@@ -13,7 +13,7 @@ says it is there: neither stream waits for the other during the evaluation. One 
 holds the host: on an H200 the launch of a 32-step graph of MuJoCo Warp steps returned only once most of it had run
 (145-151 ms of its 158-164), so a chunk queued after the iteration mostly took turns with the next one (0.24-0.29 of
 it overlapped), while a graph of one env step returns in 0.2-0.5 ms and the steps woven one by one overlapped 0.85-0.88
-(benchmarks/speed/background_overlap.py; docs/benchmarks.md, "Walker2d-v5's evaluations"). Where the rollout has no
+(benchmarks/speed/background_overlap.py; docs/history.md, "Walker2d-v5's evaluations"). Where the rollout has no
 steps to weave into (captured whole), ``advance()`` queues ``STEPS_PER_ITERATION`` steps after the iteration. Its
 row is the one logged when the result is read, so the minutes it gives to a target are those at which the number
 was known; ``eval/policy_time_s`` says when its policy was taken.

@@ -10,7 +10,7 @@ runs eagerly and warms up every kernel the capture records. Two ways to capture 
 - ``"step"``: one env step (policy, env, storage writes) is captured once and replayed
   ``horizon_len`` times, then the bootstrap and GAE as a second graph. The capture records one
   step's launches: a MuJoCo Warp step launches hundreds of kernels per physics step, and recording
-  every step of a rollout costs seconds of each start (docs/benchmarks.md, "The step capture against the
+  every step of a rollout costs seconds of each start (docs/history.md, "The step capture against the
   whole rollout's").
 - ``"rollout"``: all ``horizon_len`` steps unrolled into one graph, replayed once.
 
@@ -99,7 +99,7 @@ class Collector:
         self.graph = None  # a CUDAGraph or StepGraphs, once captured
         # work of another stream's launched after each of the rollout's steps, eager or replayed (the background
         # evaluation's): a replay of a long graph of MuJoCo Warp steps holds the host until most of it has run, so
-        # work queued after it mostly runs after it, while one step's graph returns at once (docs/benchmarks.md,
+        # work queued after it mostly runs after it, while one step's graph returns at once (docs/history.md,
         # "Walker2d-v5's evaluations"). Never captured into the rollout's graphs; a rollout captured whole has no
         # steps to launch it between.
         self.beside: Callable[[], None] | None = None

@@ -113,7 +113,7 @@ class Config:
     # learnt one update after the weights that collected it (agents.overlap)
     overlap: bool = False
     # torch.compile the PPO mini-batch loss (forward and backward): fewer, fused kernels per step; the first
-    # update compiles it, seconds of a start (docs/benchmarks.md, "Compiled update")
+    # update compiles it, seconds of a start (docs/history.md, "Compiled update")
     compile_update: bool = False
     obs_clip: float = 5.0
     # how several processes (torchrun, one per GPU) divide the work: agents/data_parallel.py. "grow-kl": each

@@ -6,7 +6,7 @@ uses the decoupled objective of Hilton et al. (2021, "Batch size-invariance for 
 the clip and the KL that steers the learning rate are taken against the proximal policy (the weights at
 the start of this update), and each sample's term is weighted by proximal over behaviour probability.
 Clipped against the behaviour policy instead, the lag counts as KL of its own, holding the learning rate
-down (docs/benchmarks.md, "Overlapped update").
+down (docs/history.md, "Overlapped update").
 Without a lag the proximal policy is the behaviour policy and the weight is exactly 1.
 
 The learning rate lives in a device tensor that the optimizer reads, so adapting it per mini-batch

@@ -130,3 +130,31 @@ def test_the_logs_table_of_moved_paths_points_at_paths_that_exist():
     table = text[text.index("| named here | now |"):].split("\n\n")[0]
     now = [p for row in table.splitlines()[2:] for p in PATH.findall(row.split("|")[2])]
     assert len(now) >= 10 and [p for p in now if not os.path.exists(os.path.join(ROOT, p))] == []
+
+
+SECTION = re.compile(r'docs/(benchmarks|history|tasks|guide|tensor_api)\.md(?:, | \()"([^"]+)"')
+
+
+def titles(page: str) -> set[str]:
+    """A page's headings and the bold titles that open its paragraphs, whitespace folded."""
+    text = read(f"docs/{page}.md")
+    found = [line.lstrip("#").strip() for line in text.splitlines() if line.startswith("#")]
+    found += re.findall(r"^\*\*([^*]+)\*\*", text, re.M)
+    return {" ".join(t.split()) for t in found}
+
+
+def test_every_section_a_page_or_the_code_cites_by_name_is_on_that_page():
+    """``docs/benchmarks.md, "Overlapped update"`` and the like, in the docs and in comments: the named heading (or
+    bold title) is on the named page, so a section moved to the log cannot leave its citations behind."""
+    files = PAGES + ["docs/benchmarks.md", "docs/history.md"]
+    for top in ("warpgym", "agents", "kernels", "benchmarks", "scripts"):
+        for folder, _, names in os.walk(os.path.join(ROOT, top)):
+            files += [os.path.relpath(os.path.join(folder, n), ROOT) for n in names if n.endswith(".py")]
+    cache, stale = {}, []
+    for file in files:
+        for page, title in SECTION.findall(read(file)):
+            title = " ".join(title.split())
+            have = cache.setdefault(page, titles(page))
+            if not any(h.startswith(title) or title.startswith(h) for h in have):
+                stale.append(f"{file}: docs/{page}.md, \"{title}\"")
+    assert not stale, stale

@@ -1,6 +1,6 @@
 """Do the background evaluation's steps run beside the training's on a GPU? (``Config.eval_background``)
 
-Walker2d-v5's evaluation sweep (docs/benchmarks.md, "Walker2d-v5's evaluations") found every iteration 0.12 s longer
+Walker2d-v5's evaluation sweep (docs/history.md, "Walker2d-v5's evaluations") found every iteration 0.12 s longer
 with an evaluation beside it, on the training stream's own clock: about the evaluation chunk's own time, as if the
 two ran one after the other. This times, on one GPU, one task at its preset's envs and the learning table's 64
 evaluation envs, each the median of --repeats timings of --iterations, in one process:

@@ -1,6 +1,6 @@
 """Time a fresh machine's first training runs: empty Warp kernel cache, then warm, then a copied cache.
 
-    python -m benchmarks.speed.cold_start --out OUT                # the runs of docs/benchmarks.md, "Cold start"
+    python -m benchmarks.speed.cold_start --out OUT                # the runs of docs/history.md, "Cold start"
     python -m benchmarks.speed.cold_start --out OUT --profile-warm # and a warm start under cProfile
     python -m benchmarks.speed.cold_start --out OUT --env WARPGYM_LTO_PROCESSES=0 -- --no-mathdx
     python -m benchmarks.speed.cold_start --report OUT/cold_start.json
