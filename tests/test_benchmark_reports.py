@@ -1132,3 +1132,18 @@ def test_the_suite_gif_caption_gives_the_drawn_policies_scores_and_cards_from_th
         assert round(last["gymnasium_return"]) == score, task
         card = "H200" if "H200" in doc["meta"]["gpu"] else "H100"
         assert f"alt=\"Gymnasium's {task} trained for 10 minutes on one {card}\"" in readme, task
+
+
+def test_the_physics_tables_are_what_fidelity_prints_from_todays_defaults_runs(capsys):
+    """docs/benchmarks.md's "Physics at convergence" tables, row for row, as ``fidelity.py --report`` prints them
+    from the committed runs of today's defaults (the page's table was once edited by hand)."""
+    from benchmarks.physics import fidelity
+
+    root = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
+    runs = ["h100_ant_seed0_600s", "h100_ant_seed1_600s", "h100_ant_8192envs_seed0_300s",
+            "h100_humanoid_3x8_motor25_armature0.1_seed0_600s", "h100_humanoid_3x8_motor25_armature0.1_seed1_600s"]
+    assert fidelity.main(["--report", *(os.path.join(root, "docs", "bench", "fidelity", f"{r}.json") for r in runs)]) == 0
+    rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| ") and "---" not in line]
+    with open(os.path.join(root, "docs", "benchmarks.md")) as f:
+        page = set(f.read().splitlines())
+    assert len(rows) == 2 + 19 + 5 and [r for r in rows if r not in page] == []
