@@ -1147,3 +1147,18 @@ def test_the_physics_tables_are_what_fidelity_prints_from_todays_defaults_runs(c
     with open(os.path.join(root, "docs", "benchmarks.md")) as f:
         page = set(f.read().splitlines())
     assert len(rows) == 2 + 19 + 5 and [r for r in rows if r not in page] == []
+
+
+def test_the_suite_speed_table_is_what_suite_speed_prints_from_the_committed_runs(capsys):
+    """docs/benchmarks.md's suite speed table, header and rows, as ``suite_speed.py --report`` prints it (the page's
+    header once lost its last three columns to a hand edit)."""
+    from benchmarks.speed import suite_speed
+
+    root = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
+    bench = os.path.join(root, "docs", "bench")
+    suite_speed.main(["--report", os.path.join(bench, "suite_speed_h100_same_states.json"),
+                      os.path.join(bench, "suite_speed_h100_cpu.json")])
+    rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith("|")]
+    with open(os.path.join(root, "docs", "benchmarks.md")) as f:
+        page = set(f.read().splitlines())
+    assert len(rows) == 2 + 11 and [r for r in rows if r not in page] == []
