@@ -179,22 +179,15 @@ def main(argv=None) -> int:
         Physics.from_dict(physics)
     except ValueError as e:
         ap.error(f"--physics: {e}")
-    if args.legged:
-        from warpgym.tasks.legged import get_legged_task  # noqa: PLC0415
+    from warpgym.tasks.legged import get_legged_task  # noqa: PLC0415
+    from warpgym.tasks.suite import get_suite_task  # noqa: PLC0415
 
+    for flag, names, get in (("--legged", args.legged, get_legged_task), ("--tasks", args.tasks, get_suite_task)):
         try:
-            for name in args.legged:
-                get_legged_task(name)
+            for name in names or ():
+                get(name)
         except ValueError as e:
-            ap.error(f"--legged: {e}")
-    if args.tasks:
-        from warpgym.tasks.suite import get_suite_task  # noqa: PLC0415
-
-        try:
-            for name in args.tasks:
-                get_suite_task(name)
-        except ValueError as e:
-            ap.error(f"--tasks: {e}")
+            ap.error(f"{flag}: {e}")
     device = resolve_device(args.device)
     gpu = torch.cuda.get_device_name(torch.device(device)) if device.startswith("cuda") else platform.processor()
 
