@@ -70,18 +70,35 @@ def test_without_a_mark_the_15_minute_mark_is_the_target_and_a_run_that_ended_be
     assert all(r["reached"] is None for r in summary["tasks"]["Go1VelocityFlat-v0"]["warpgym"])
 
 
-def test_the_published_tables_are_what_the_report_prints_from_the_committed_summary():
-    """docs/benchmarks.md's two legged tables, row for row, as ``--report`` prints them from the summary it wrote."""
+@pytest.mark.parametrize("name, rows_expected", [
+    ("side_by_side_2026-11-28.json", 2 + 2 + 2 * 4),  # two headers, two speed rows, per task mjlab's row and 3 seeds
+    ("side_by_side_go1_15min_2026-11-28.json", 2 + 1 + 4),  # the Go1's 15-minute run: one speed row, mjlab, 3 seeds
+])
+def test_the_published_tables_are_what_the_report_prints_from_the_committed_summary(name, rows_expected):
+    """docs/benchmarks.md's legged tables, row for row, as ``--report`` prints them from the summaries it wrote."""
     import os
 
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    with open(os.path.join(root, "docs", "bench", "legged", "side_by_side_2026-11-28.json")) as f:
+    with open(os.path.join(root, "docs", "bench", "legged", name)) as f:
         summary = json.load(f)
     with open(os.path.join(root, "docs", "benchmarks.md")) as f:
         page = set(f.read().splitlines())
     rows = [line for line in sbs.table(summary).splitlines() if line.startswith("| ")]
-    assert len(rows) == 2 + 2 + 2 * 4  # two headers, two speed rows, each task's mjlab row and 3 seeds
+    assert len(rows) == rows_expected
     assert [r for r in rows if r not in page] == []
+
+
+def test_the_curves_are_thinned_to_one_point_per_interval_and_drawn(out, tmp_path):
+    summary = sbs.summarize(str(out))
+    mj = summary["tasks"]["Go1VelocityFlat-v0"]["mjlab"]["curve"]
+    # mjlab's rows every 10 s are all kept (CURVE_EVERY is 5 s); warpgym's every 5 s too, each [time, return]
+    assert [t for t, _ in mj] == [float(t) for t in range(10, 510, 10)]
+    ours = summary["tasks"]["Go1VelocityFlat-v0"]["warpgym"][0]["curve"]
+    assert ours[1] == [10.0, 2.0]
+    assert sbs.curve([{"time_s": t / 10, "return": 1.0} for t in range(100)], every=5.0) == [[0.0, 1.0], [5.0, 1.0]]
+    png = tmp_path / "fig.png"
+    sbs.draw(summary, str(png))
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
 def test_first_episodes_counts_each_worlds_first_episode_only():

@@ -13,7 +13,8 @@ Two measures, each both frameworks:
 
 Runs span several machine calls: ``--start`` measures the bare steps (both at once, each on its own GPU), then
 starts the trainings in sessions of their own (they outlive the call); ``--wait SECONDS`` waits for them; ``--report``
-writes ``summary.json`` and prints the table. A task needs two GPUs: mjlab on the first, warpgym on the second.
+writes ``summary.json`` (each run's curve in it) and prints the table, ``--figure PNG`` draws the curves. A task needs
+two GPUs: mjlab on the first, warpgym on the second.
 ``--pack DIR`` ends any call by writing what the runs have so far into DIR (the logs, metrics and mjlab's event
 files as ``runs.tar.gz``; the policies without optimiser state as ``policies.tar.gz``): a machine taken back between
 calls then loses only what came after. mjlab's packages for the GPU machine: benchmarks/learning/mjlab_stage.sh.
@@ -43,6 +44,7 @@ WINDOW = 30.0  # its rows in the last WINDOW seconds before the mark make its ta
 SMOOTH = 3  # warpgym's rows a return is averaged over before it is compared
 GOAL_SPEED = 5.0  # the issue's goals: 5x mjlab's env-steps/s, its 15-minute quality in a quarter of the time
 GOAL_TIME = 0.25
+CURVE_EVERY = 5.0  # seconds between the points of a run's curve kept in summary.json
 
 
 # ---------------------------------------------------------------------------------------------------- jobs
@@ -211,6 +213,15 @@ def first_reaching(rows: list[dict], target: float) -> dict | None:
     return None
 
 
+def curve(rows: list[dict], every: float = CURVE_EVERY) -> list[list[float]]:
+    """``[time_s, return]`` pairs at least ``every`` seconds apart: the figure's line, small enough to commit."""
+    out: list[list[float]] = []
+    for r in rows:
+        if r.get("return") is not None and (not out or r["time_s"] - out[-1][0] >= every):
+            out.append([round(r["time_s"], 1), round(r["return"], 3)])
+    return out
+
+
 def median_rate(rows: list[dict]) -> float | None:
     rates = [r["samples_per_s"] for r in rows[len(rows) // 5 :] if r.get("samples_per_s")]
     return statistics.median(rates) if rates else None
@@ -241,7 +252,8 @@ def summarize(out: str, mark: float = MARK) -> dict:
         mj = mjlab_scalars(os.path.join(out, f"mjlab-{task}"), mj_job["started"])
         entry = {"mirrors": MIRRORS[task], "speed": speed_rows(out, task),
                  "mjlab": {"rows": len(mj), "last_time_s": mj[-1]["time_s"] if mj else None,
-                           "samples_per_s_median": median_rate(mj), "at_mark": at_mark(mj, mark)}, "warpgym": []}
+                           "samples_per_s_median": median_rate(mj), "at_mark": at_mark(mj, mark), "curve": curve(mj)},
+                 "warpgym": []}
         target = entry["mjlab"]["at_mark"]["return"]
         for run_dir in sorted(glob.glob(os.path.join(out, f"warpgym-{task}-seed*"))):
             rows = ours_rows(run_dir)
@@ -249,7 +261,8 @@ def summarize(out: str, mark: float = MARK) -> dict:
             reached = first_reaching(rows, target) if target is not None else None
             entry["warpgym"].append({"seed": seed, "rows": len(rows), "last_time_s": rows[-1]["time_s"] if rows else None,
                                      "samples_per_s_median": median_rate(rows), "reached": reached,
-                                     "at_end": at_mark(rows, rows[-1]["time_s"]) if rows else None})
+                                     "at_end": at_mark(rows, rows[-1]["time_s"]) if rows else None,
+                                     "curve": curve(rows)})
         summary["tasks"][task] = entry
     return summary
 
@@ -293,6 +306,45 @@ def table(summary: dict) -> str:
                          f"{fmt(end.get('error_vel_xy'), '.3f')} / {fmt(end.get('error_vel_yaw'), '.3f')} at the end "
                          f"| {when}{met} | {err} |")
     return "\n".join(lines)
+
+
+def draw(summary: dict, path: str) -> None:
+    """Return against minutes since each process started, one panel per task: mjlab's run, warpgym's seeds, the
+    target (mjlab's return at the mark) dashed, the mark and a quarter of it dotted."""
+    import textwrap  # noqa: PLC0415
+
+    import matplotlib  # noqa: PLC0415
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt  # noqa: PLC0415
+
+    tasks = list(summary["tasks"])
+    mark = summary.get("mark_s", MARK)
+    fig, axes = plt.subplots(1, len(tasks), figsize=(5.0 * len(tasks), 3.4), squeeze=False)
+    for ax, task in zip(axes.flat, tasks):
+        e = summary["tasks"][task]
+        if e["mjlab"].get("curve"):
+            ax.plot(*zip(*[(t / 60.0, r) for t, r in e["mjlab"]["curve"]]), color="tab:orange", label="mjlab")
+        for i, run in enumerate(e["warpgym"]):
+            if run.get("curve"):
+                ax.plot(*zip(*[(t / 60.0, r) for t, r in run["curve"]]), color="tab:blue", alpha=0.8,
+                        label="warpgym (seeds)" if i == 0 else None)
+        target = e["mjlab"]["at_mark"]["return"]
+        if target is not None:
+            ax.axhline(target, color="gray", linestyle="--", linewidth=1)
+        for x in (mark, GOAL_TIME * mark):
+            ax.axvline(x / 60.0, color="gray", linestyle=":", linewidth=1)
+        ax.set_title(f"{task} ({e['mirrors']})", fontsize=9)
+        ax.set_xlabel("minutes since the process started", fontsize=8)
+        ax.set_ylabel("training return", fontsize=8)
+        ax.tick_params(labelsize=7)
+        ax.legend(fontsize=7, loc="lower right")
+    fig.suptitle(textwrap.fill(f"{summary['device']}, {summary['date']}, {summary['num_envs']} envs; dashed: mjlab's "
+                               f"return at {mark / 60.0:g} min; dotted: the mark and a quarter of it",
+                               width=60 * len(tasks)), fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
 
 
 def pack(out: str, folder: str) -> None:
@@ -354,12 +406,15 @@ def main(argv=None) -> int:
     ap.add_argument("--save-at", type=float, nargs="+", default=[120.0, 225.0, 300.0])
     ap.add_argument("--mark", type=float, default=MARK,
                     help="with --report: the time of mjlab's run whose return is the target (default its 15-minute mark)")
+    ap.add_argument("--figure", metavar="PNG", help="with --report: also draw return against time into PNG")
     ap.add_argument("--pack", metavar="DIR", help="at the end, write the runs so far into DIR (a machine call's $OUT)")
     args = ap.parse_args(argv)
     if args.report:
         summary = summarize(args.report, args.mark)
         write_json(os.path.join(args.report, "summary.json"), summary)
         print(table(summary))
+        if args.figure:
+            draw(summary, args.figure)
         return 0
     if not args.out:
         ap.error("--out is required (or --report OUT)")
