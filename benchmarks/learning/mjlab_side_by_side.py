@@ -393,7 +393,8 @@ def main(argv=None) -> int:
     ap.add_argument("--out", help="folder for the runs, logs and JSON")
     ap.add_argument("--start", action="store_true", help="measure the bare steps, then start the trainings")
     ap.add_argument("--wait", type=float, help="wait up to this many seconds for the trainings")
-    ap.add_argument("--report", metavar="OUT", help="summarise OUT: summary.json and the table")
+    ap.add_argument("--report", metavar="OUT", help="summarise OUT: summary.json and the table (or print the table "
+                    "of a summary.json again)")
     ap.add_argument("--tasks", nargs="+", default=["Go1VelocityFlat-v0"], choices=sorted(MIRRORS))
     ap.add_argument("--num-envs", type=int, default=4096)
     ap.add_argument("--speed-envs", type=int, nargs="*", default=[4096, 8192], help="bare-step sizes ([]: none)")
@@ -410,8 +411,12 @@ def main(argv=None) -> int:
     ap.add_argument("--pack", metavar="DIR", help="at the end, write the runs so far into DIR (a machine call's $OUT)")
     args = ap.parse_args(argv)
     if args.report:
-        summary = summarize(args.report, args.mark)
-        write_json(os.path.join(args.report, "summary.json"), summary)
+        if os.path.isfile(args.report):  # a summary.json written before: its table again (at its own mark)
+            with open(args.report) as f:
+                summary = json.load(f)
+        else:
+            summary = summarize(args.report, args.mark)
+            write_json(os.path.join(args.report, "summary.json"), summary)
         print(table(summary))
         if args.figure:
             draw(summary, args.figure)

@@ -1,0 +1,144 @@
+"""The docs' generated tables: each lies between two markers on its page and is what a benchmark's ``--report``
+prints from the committed JSON, word for word.
+
+    python -m benchmarks.doc_tables --check        # exit 1 and show the difference where a page and its JSON part
+    python -m benchmarks.doc_tables --write        # rewrite every block from its JSON
+
+A block on a page:
+
+    <!-- table: NAME -->
+    ...what BLOCKS[NAME] prints...
+    <!-- end table -->
+
+Each entry of BLOCKS names its page, the report's command (a module and its arguments, run in this process) and
+which of the printed paragraphs (the output split at blank lines) make the block; the command is written above
+the block on the page, so a reader can run it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import difflib
+import importlib
+import io
+import os
+import re
+import sys
+
+from benchmarks.harness import ROOT
+
+FIDELITY = [f"docs/bench/fidelity/{r}.json" for r in (
+    "h100_ant_seed0_600s", "h100_ant_seed1_600s", "h100_ant_8192envs_seed0_300s",
+    "h100_humanoid_3x8_motor25_armature0.1_seed0_600s", "h100_humanoid_3x8_motor25_armature0.1_seed1_600s")]
+SUITE_LEARNING = ["--report", "docs/bench/suite_learning", "docs/bench/suite_sb3"]
+
+
+def after(marker: str, count: int):
+    """The ``count`` paragraphs after the one that is ``marker``."""
+    def pick(paragraphs: list[str]) -> list[str]:
+        i = paragraphs.index(marker)
+        return paragraphs[i + 1 : i + 1 + count]
+    return pick
+
+
+def first(count: int, start: int = 0):
+    return lambda paragraphs: paragraphs[start : start + count]
+
+
+# name: (page, module, arguments, the paragraphs of its output that make the block)
+BLOCKS = {
+    "readme-learning": ("README.md", "benchmarks.learning.suite_learning", SUITE_LEARNING,
+                        after("The README's table:", 2)),
+    "suite-learning": ("docs/benchmarks.md", "benchmarks.learning.suite_learning", SUITE_LEARNING, first(2)),
+    "suite-speed": ("docs/benchmarks.md", "benchmarks.speed.suite_speed",
+                    ["--report", "docs/bench/suite_speed_h100_same_states.json", "docs/bench/suite_speed_h100_cpu.json"],
+                    first(1)),
+    "legged-go1-15min": ("docs/benchmarks.md", "benchmarks.learning.mjlab_side_by_side",
+                         ["--report", "docs/bench/legged/side_by_side_go1_15min_2026-11-28.json"], first(3)),
+    "legged-445s": ("docs/benchmarks.md", "benchmarks.learning.mjlab_side_by_side",
+                    ["--report", "docs/bench/legged/side_by_side_2026-11-28.json", "--mark", "445"], first(3)),
+    "physics": ("docs/benchmarks.md", "benchmarks.physics.fidelity", ["--report", *FIDELITY], first(2)),
+}
+
+BLOCK = re.compile(r"<!-- table: (?P<name>[\w-]+) -->\n(?P<body>.*?)<!-- end table -->", re.S)
+
+
+def printed(module: str, args: list[str]) -> str:
+    """What ``python -m module args`` prints, run here from the repository's root."""
+    out = io.StringIO()
+    cwd = os.getcwd()
+    try:
+        os.chdir(ROOT)
+        with contextlib.redirect_stdout(out):
+            code = importlib.import_module(module).main(list(args))
+    finally:
+        os.chdir(cwd)
+    if code not in (0, None):
+        raise SystemExit(f"python -m {module} {' '.join(args)} exited {code}")
+    return out.getvalue()
+
+
+def generate(name: str) -> str:
+    _, module, args, pick = BLOCKS[name]
+    paragraphs = [p.strip("\n") for p in re.split(r"\n\s*\n", printed(module, args)) if p.strip()]
+    return "\n\n".join(pick(paragraphs)) + "\n"
+
+
+def blocks_on(page: str) -> dict[str, str]:
+    with open(os.path.join(ROOT, page)) as f:
+        return {m["name"]: m["body"] for m in BLOCK.finditer(f.read())}
+
+
+def check() -> list[str]:
+    """One message for each block whose page and report part, and for each marker without a registered block."""
+    problems = []
+    pages = sorted({page for page, *_ in BLOCKS.values()})
+    found = {}
+    for page in pages:
+        for name, body in blocks_on(page).items():
+            found[name] = page
+            if name not in BLOCKS:
+                problems.append(f"{page}: a block named {name!r} that benchmarks/doc_tables.py does not know")
+                continue
+            want = generate(name)
+            if body != want:
+                diff = "".join(difflib.unified_diff(body.splitlines(True), want.splitlines(True), "page", "report"))
+                problems.append(f"{page}: block {name!r} differs from its report "
+                                f"(python -m benchmarks.doc_tables --write rewrites it):\n{diff}")
+    for name, (page, *_) in BLOCKS.items():
+        if found.get(name) != page:
+            problems.append(f"{page}: no block {name!r} (add its markers where the table belongs)")
+    return problems
+
+
+def write() -> None:
+    for page in sorted({page for page, *_ in BLOCKS.values()}):
+        path = os.path.join(ROOT, page)
+        with open(path) as f:
+            text = f.read()
+        new = BLOCK.sub(lambda m: f"<!-- table: {m['name']} -->\n{generate(m['name'])}<!-- end table -->"
+                        if m["name"] in BLOCKS else m.group(0), text)
+        if new != text:
+            with open(path, "w") as f:
+                f.write(new)
+            print(f"rewrote {page}")
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    mode = ap.add_mutually_exclusive_group(required=True)
+    mode.add_argument("--check", action="store_true", help="compare every block with its report")
+    mode.add_argument("--write", action="store_true", help="rewrite every block from its report")
+    args = ap.parse_args(argv)
+    if args.write:
+        write()
+        return 0
+    problems = check()
+    for p in problems:
+        print(p)
+    return 1 if problems else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
