@@ -31,6 +31,9 @@ from benchmarks.harness import ROOT
 FIDELITY = [f"docs/bench/fidelity/{r}.json" for r in (
     "h100_ant_seed0_600s", "h100_ant_seed1_600s", "h100_ant_8192envs_seed0_300s",
     "h100_humanoid_3x8_motor25_armature0.1_seed0_600s", "h100_humanoid_3x8_motor25_armature0.1_seed1_600s")]
+RLLIB = [f"docs/bench/rllib/h200_rllib_{r}.json" for r in (
+    "vs_warpgym_1gpu", "8runners_1gpu", "vs_warpgym_2gpu_warpgym", "vs_warpgym_2gpu_rllib", "vs_warpgym_2gpu_rllib_humanoid",
+    "vs_warpgym_4gpu_ant", "vs_warpgym_4gpu_humanoid")]
 SUITE_LEARNING = ["--report", "docs/bench/suite_learning", "docs/bench/suite_sb3"]
 
 
@@ -46,6 +49,15 @@ def first(count: int, start: int = 0):
     return lambda paragraphs: paragraphs[start : start + count]
 
 
+def last(count: int):
+    return lambda paragraphs: paragraphs[-count:]
+
+
+def scaling(folder: str, task: str) -> tuple:
+    return ("docs/benchmarks.md", "benchmarks.multi_gpu.scaling", ["--report", f"docs/bench/multi_gpu/{folder}", "--task", task],
+            first(2))
+
+
 # name: (page, module, arguments, the paragraphs of its output that make the block)
 BLOCKS = {
     "readme-learning": ("README.md", "benchmarks.learning.suite_learning", SUITE_LEARNING,
@@ -59,6 +71,17 @@ BLOCKS = {
     "legged-445s": ("docs/benchmarks.md", "benchmarks.learning.mjlab_side_by_side",
                     ["--report", "docs/bench/legged/side_by_side_2026-11-28.json", "--mark", "445"], first(3)),
     "physics": ("docs/benchmarks.md", "benchmarks.physics.fidelity", ["--report", *FIDELITY], first(2)),
+    "rllib": ("docs/benchmarks.md", "benchmarks.multi_gpu.rllib_vs_warpgym", ["--report", *RLLIB], first(2)),
+    "scaling-ant": scaling("grow_kl", "Ant"),
+    "scaling-humanoid": scaling("grow_kl", "Humanoid"),
+    "scaling-humanoid-v5": scaling("suite", "Humanoid-v5"),
+    "scaling-ant-v5": scaling("suite", "Ant-v5"),
+    "nodes": ("docs/benchmarks.md", "benchmarks.multi_gpu.nodes", ["--report", "docs/bench/multi_gpu/nodes/nodes-4.json"],
+              first(3)),
+    "exits-gpu": ("docs/benchmarks.md", "benchmarks.reliability.exits",
+                  ["--report", "docs/bench/gpu_exits.json", "docs/bench/reliability/gpu_exits_h200.json",
+                   "docs/bench/reliability/gpu_exits_h200x4_a.json", "docs/bench/reliability/gpu_exits_h200x4_b.json"],
+                  lambda paragraphs: ["```\n" + paragraphs[-1] + "\n```"]),
 }
 
 BLOCK = re.compile(r"<!-- table: (?P<name>[\w-]+) -->\n(?P<body>.*?)<!-- end table -->", re.S)
