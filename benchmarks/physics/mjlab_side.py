@@ -356,6 +356,43 @@ def returns(checkpoint: str, task: str, num_envs: int, seed: int, out: str) -> N
           f"{sum(episodes['fell'])} fell", flush=True)
 
 
+def terrain(out: str, seeds: list[int], points: int) -> None:
+    """mjlab's rough ground (``ROUGH_TERRAINS_CFG``) for each seed, compiled by MuJoCo: each patch's start and the
+    heights under ``points`` (x, y) drawn over the grid and its border, by MuJoCo's ray cast straight down, into
+    OUT (.npz). warpgym's generator is judged on it (tests/test_terrain.py)."""
+    from dataclasses import replace  # noqa: PLC0415
+
+    import mujoco  # noqa: PLC0415
+    import numpy as np  # noqa: PLC0415
+    from mjlab.terrains.config import ROUGH_TERRAINS_CFG  # noqa: PLC0415
+    from mjlab.terrains.terrain_generator import TerrainGenerator  # noqa: PLC0415
+
+    rng = np.random.default_rng(0)
+    arrays = {}
+    for seed in seeds:
+        gen = TerrainGenerator(replace(ROUGH_TERRAINS_CFG, seed=seed))
+        spec = mujoco.MjSpec()
+        gen.compile(spec)
+        mjm = spec.compile()
+        cfg = gen.cfg
+        half = np.array([cfg.num_rows * cfg.size[0], cfg.num_cols * cfg.size[1]]) / 2 + 1.0  # 1 m of the border too
+        xy = rng.uniform(-half, half, size=(points, 2))
+        data = mujoco.MjData(mjm)
+        mujoco.mj_forward(mjm, data)
+        z = np.full(points, np.nan)
+        geomid = np.zeros(1, dtype=np.int32)
+        for i, (x, y) in enumerate(xy):
+            dist = mujoco.mj_ray(mjm, data, np.array([x, y, 10.0]), np.array([0.0, 0.0, -1.0]), None, 1, -1, geomid)
+            if dist >= 0:
+                z[i] = 10.0 - dist
+        arrays[f"seed{seed}_points"] = xy
+        arrays[f"seed{seed}_heights"] = z
+        arrays[f"seed{seed}_origins"] = gen.terrain_origins
+        print(f"seed {seed}: {mjm.ngeom} geoms, {mjm.nhfield} heightfields, heights {np.nanmin(z):.3f} to "
+              f"{np.nanmax(z):.3f} m", flush=True)
+    np.savez_compressed(out, seeds=np.array(seeds), mjlab=np.array(_version()), **arrays)
+
+
 # ---------------------------------------------------------------------------------------------------- main
 def main(argv=None) -> None:
     p = argparse.ArgumentParser(prog="python -m benchmarks.physics.mjlab_side", description=__doc__.split("\n\n")[0])
@@ -385,8 +422,14 @@ def main(argv=None) -> None:
     rt.add_argument("--task", choices=list(TASKS), required=True)
     rt.add_argument("--num-envs", type=int, default=64)
     rt.add_argument("--seed", type=int, default=0)
+    tr = sub.add_parser("terrain", help="mjlab's rough ground for some seeds: starts and ray-cast heights (.npz)")
+    tr.add_argument("out")
+    tr.add_argument("--seeds", type=int, nargs="+", default=[0, 1])
+    tr.add_argument("--points", type=int, default=4000)
     args = p.parse_args(argv)
-    if args.command == "returns":
+    if args.command == "terrain":
+        terrain(args.out, args.seeds, args.points)
+    elif args.command == "returns":
         returns(args.checkpoint, args.task, args.num_envs, args.seed, args.out)
     elif args.command == "speed":
         speed(args.task, args.num_envs, args.steps, args.warmup, args.repeats, args.out)
