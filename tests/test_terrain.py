@@ -85,3 +85,28 @@ def test_kinds_are_drawn_by_their_proportions_and_difficulties_uniformly():
 def test_bad_settings_name_the_value_and_the_fix(make, message):
     with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")):
         make()
+
+
+def test_the_picture_colours_each_patch_by_its_kind_and_draws():
+    """warpgym.media.terrain_view: every geom of a patch takes its kind's colour, the border grey; the frame is
+    drawn where an OpenGL without a display exists (skipped where none does)."""
+    from dataclasses import replace
+
+    from warpgym.media import terrain_view as tv
+
+    ground = tr.generate(replace(tr.ROUGH, num_rows=2, num_cols=4), seed=1)
+    mjm = tv.compiled(ground)
+    at = 0
+    for r in range(2):
+        for c in range(4):
+            for _ in ground.patches[r][c].geoms:
+                np.testing.assert_allclose(mjm.geom_rgba[at, :3], tv.PALETTE[ground.kinds[r, c]], atol=1e-6)
+                at += 1
+    assert mjm.ngeom == at + 4 and np.allclose(mjm.geom_rgba[at:, :3], 0.25)
+    from warpgym.media.render import RendererUnavailable
+
+    try:
+        frame = tv.draw(ground, 64, 48)
+    except RendererUnavailable as e:
+        pytest.skip(str(e))
+    assert frame.shape == (48, 64, 3) and frame.std() > 5  # a picture, not a blank frame
