@@ -121,3 +121,14 @@ def test_first_episodes_counts_each_worlds_first_episode_only():
     assert got["returns"] == [1 + 2, 1 + 2 + 3 + 4, 1 + 2 + 3]
     assert got["lengths"] == [2, 4, 3] and got["fell"] == [True, False, True]
     assert t["now"] == 4  # stopped once every world had ended
+
+
+def test_a_summary_reports_at_its_own_mark_and_refuses_another(out, tmp_path, capsys):
+    summary = sbs.summarize(str(out), mark=445.0)
+    path = tmp_path / "summary.json"
+    path.write_text(json.dumps(summary))
+    assert sbs.main(["--report", str(path)]) == 0
+    assert "return at 445 s" in capsys.readouterr().out
+    with pytest.raises(SystemExit):
+        sbs.main(["--report", str(path), "--mark", "600"])
+    assert "summarised at 445 s" in capsys.readouterr().err

@@ -411,9 +411,12 @@ def main(argv=None) -> int:
     ap.add_argument("--pack", metavar="DIR", help="at the end, write the runs so far into DIR (a machine call's $OUT)")
     args = ap.parse_args(argv)
     if args.report:
-        if os.path.isfile(args.report):  # a summary.json written before: its table again (at its own mark)
+        if os.path.isfile(args.report):  # a summary.json written before: its table again, at the mark it was made at
             with open(args.report) as f:
                 summary = json.load(f)
+            if args.mark != MARK and args.mark != summary.get("mark_s", MARK):
+                ap.error(f"--mark {args.mark:g}: {args.report} was summarised at {summary.get('mark_s', MARK):g} s; "
+                         f"give its run folder to judge another mark")
         else:
             summary = summarize(args.report, args.mark)
             write_json(os.path.join(args.report, "summary.json"), summary)

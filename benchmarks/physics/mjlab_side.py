@@ -377,6 +377,8 @@ def terrain(out: str, seeds: list[int], points: int) -> None:
         cfg = gen.cfg
         half = np.array([cfg.num_rows * cfg.size[0], cfg.num_cols * cfg.size[1]]) / 2 + 1.0  # 1 m of the border too
         xy = rng.uniform(-half, half, size=(points, 2))
+        # warpgym.tasks.legged.terrain.heights casts the same rays; it is not imported here, where warpgym's
+        # package (Warp's and Newton's imports) is not installed
         data = mujoco.MjData(mjm)
         mujoco.mj_forward(mjm, data)
         z = np.full(points, np.nan)

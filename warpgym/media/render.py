@@ -31,7 +31,7 @@ class RendererUnavailable(RuntimeError):
     """No headless OpenGL context could be made; the message says what was tried and what to install."""
 
 
-def _gl_context(width: int, height: int):
+def gl_context(width: int, height: int):
     """An offscreen OpenGL context, current on this thread: the backend ``MUJOCO_GL`` names, else
     EGL, then OSMesa."""
     asked = os.environ.get("MUJOCO_GL", "").strip().lower()
@@ -56,7 +56,7 @@ def _gl_context(width: int, height: int):
 
 def probe_renderer() -> None:
     """Raise ``RendererUnavailable`` now if no frame could be drawn later."""
-    _gl_context(16, 16).free()
+    gl_context(16, 16).free()
 
 
 @dataclass
@@ -110,7 +110,7 @@ class RobotRenderer:
         self.camera = camera or Camera(distance=(4.5 if tall else 3.5) + 1.2 * self.spacing * (cols - 1),
                                        height=0.9 if tall else 0.4)
         model = self.robot.model
-        self._context = _gl_context(width, height)
+        self._context = gl_context(width, height)
         self._scene = mujoco.MjvScene(model, maxgeom=max(1000, 2 * copies * model.ngeom + 100))
         self._option = mujoco.MjvOption()
         self._perturb = mujoco.MjvPerturb()
@@ -273,7 +273,7 @@ class SuiteView:
             RobotRenderer.check_size(width, height)
             if os.environ.get("MUJOCO_GL", "").strip().lower() not in ("egl", "osmesa"):
                 # Gymnasium's renderer reads MUJOCO_GL when it makes its context: point it at a headless one
-                context = _gl_context(16, 16)
+                context = gl_context(16, 16)
                 os.environ["MUJOCO_GL"] = "egl" if type(context).__module__.endswith("egl") else "osmesa"
                 context.free()
         import gymnasium  # noqa: PLC0415
@@ -324,7 +324,7 @@ class LeggedView:
         self.data = mujoco.MjData(self.model)
         self.root = self.model.body(task.root_body).id
         tall = self.model.body_subtreemass[self.root] > 20.0  # a humanoid rather than a quadruped
-        self._context = _gl_context(width, height)
+        self._context = gl_context(width, height)
         self._scene = mujoco.MjvScene(self.model, maxgeom=1000)
         self._option = mujoco.MjvOption()
         self._option.geomgroup[3] = 1  # the collision geoms: what the robot is made of in this scene

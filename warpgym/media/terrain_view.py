@@ -11,7 +11,7 @@ import sys
 
 import numpy as np
 
-from warpgym.media.render import _gl_context
+from warpgym.media.render import gl_context
 from warpgym.tasks.legged import terrain as tr
 
 # one colour per kind, in the order of the grid's sub_terrains (ROUGH's seven, then repeating)
@@ -41,7 +41,7 @@ def draw(ground: tr.Terrain, width: int = 960, height: int = 540) -> np.ndarray:
     mjm.vis.global_.offwidth, mjm.vis.global_.offheight = max(width, 640), max(height, 480)
     data = mujoco.MjData(mjm)
     mujoco.mj_forward(mjm, data)
-    context = _gl_context(width, height)
+    context = gl_context(width, height)
     try:
         with mujoco.Renderer(mjm, height, width) as renderer:
             cam = mujoco.MjvCamera()

@@ -301,9 +301,10 @@ def generate(grid: TerrainGrid, seed: int) -> Terrain:
     if not grid.curriculum and weights.sum() <= 0:
         raise ValueError("TerrainGrid: every proportion is 0: give at least one kind a weight")
     weights = weights / weights.sum() if weights.sum() > 0 else weights
-    order = ([(c, r) for c in range(cols) for r in range(rows)] if grid.curriculum
-             else [divmod(i, cols)[::-1] for i in range(rows * cols)])
-    for c, r in order:
+    # mjlab's order: column by column in curriculum mode, row by row otherwise
+    order = ([(r, c) for c in range(cols) for r in range(rows)] if grid.curriculum
+             else [(r, c) for r in range(rows) for c in range(cols)])
+    for r, c in order:
         if grid.curriculum:
             kind = c
             d = _lerp(grid.difficulty_range, r / max(rows - 1, 1))
