@@ -132,3 +132,31 @@ def test_a_summary_reports_at_its_own_mark_and_refuses_another(out, tmp_path, ca
     with pytest.raises(SystemExit):
         sbs.main(["--report", str(path), "--mark", "600"])
     assert "summarised at 445 s" in capsys.readouterr().err
+
+
+def test_on_one_gpu_mjlab_trains_first_with_its_packages_then_warpgyms_seeds_without_them(tmp_path, monkeypatch):
+    # stand-ins for both interpreters: each prints its time, its MuJoCo setting, its path and its arguments
+    fake = tmp_path / "fake-python"
+    fake.write_text('#!/bin/sh\nsleep 0.2\necho "$(date +%s.%N)|${MUJOCO_GL:-unset}|$PYTHONPATH|$*"\n')
+    fake.chmod(0o755)
+    monkeypatch.setattr(sbs.sys, "executable", str(fake))
+    monkeypatch.setenv("CUDA_VISIBLE_DEVICES", "0")
+    run = tmp_path / "run"
+    sbs.main(["--out", str(run), "--start", "--one-gpu", "--tasks", "G1VelocityFlat-v0", "--speed-envs",
+              "--mjlab-python", str(fake), "--mjlab-path", "/mj/site", "--seeds", "3", "4", "--ours-budget", "5"])
+    sbs.main(["--out", str(run), "--wait", "30"])
+    jobs = json.loads((run / "jobs.json").read_text())
+    assert jobs["one_gpu"] and {j["framework"] for j in jobs["jobs"]} == {"mjlab", "warpgym"}
+    assert len({j["pid"] for j in jobs["jobs"]}) == 1  # one shell, so its end is both trainings' end
+    mj = (run / "train-mjlab-G1VelocityFlat-v0.log").read_text().split("|")
+    ours = [line.split("|") for line in (run / "train-warpgym-G1VelocityFlat-v0.log").read_text().splitlines()]
+    assert mj[1] == "disable" and mj[2].split(":")[1] == "/mj/site" and "Mjlab-Velocity-Flat-Unitree-G1" in mj[3]
+    assert [o[1] for o in ours] == ["unset", "unset"] and "/mj/site" not in ours[0][2]
+    assert float(mj[0]) < float(ours[0][0]) < float(ours[1][0])  # mjlab, then the seeds in order
+    assert "--seed 3" in ours[0][3] and "--seed 4" in ours[1][3]
+
+
+def test_one_gpu_refuses_two_tasks(tmp_path):
+    with pytest.raises(SystemExit, match="one task per --out folder"):
+        sbs.main(["--out", str(tmp_path), "--start", "--one-gpu", "--speed-envs", "--tasks", "G1VelocityFlat-v0",
+                  "Go1VelocityFlat-v0"])

@@ -14,7 +14,8 @@ Two measures, each both frameworks:
 Runs span several machine calls: ``--start`` measures the bare steps (both at once, each on its own GPU), then
 starts the trainings in sessions of their own (they outlive the call); ``--wait SECONDS`` waits for them; ``--report``
 writes ``summary.json`` (each run's curve in it) and prints the table, ``--figure PNG`` draws the curves. A task needs
-two GPUs: mjlab on the first, warpgym on the second.
+two GPUs: mjlab on the first, warpgym on the second; with ``--one-gpu`` they take turns on one (the bare steps one
+after the other, then mjlab's training, then warpgym's seeds, all in one session of their own).
 ``--pack DIR`` ends any call by writing what the runs have so far into DIR (the logs, metrics and mjlab's event
 files as ``runs.tar.gz``; the policies without optimiser state as ``policies.tar.gz``): a machine taken back between
 calls then loses only what came after. mjlab's packages for the GPU machine: benchmarks/learning/mjlab_stage.sh.
@@ -31,6 +32,7 @@ import argparse
 import glob
 import json
 import os
+import shlex
 import statistics
 import subprocess
 import sys
@@ -59,8 +61,12 @@ def slot(gpu: str, cores: list[int], extra: dict) -> dict:
     return {"env": child_env(CUDA_VISIBLE_DEVICES=gpu, **extra), "preexec_fn": lambda: os.sched_setaffinity(0, cores)}
 
 
-def assign(tasks: list[str]) -> list[dict]:
-    """mjlab's run of task i on GPU i, warpgym's on GPU len(tasks) + i, each with its GPU's share of the cores."""
+def assign(tasks: list[str], one_gpu: bool = False) -> list[dict]:
+    """mjlab's run of task i on GPU i, warpgym's on GPU len(tasks) + i, each with its GPU's share of the cores; with
+    ``one_gpu`` both on the first GPU with all the cores, as they take turns."""
+    if one_gpu:
+        gpu, cores = visible_gpus(1)[0], core_shares(1)[0]
+        return [{"task": t, "mjlab_gpu": gpu, "ours_gpu": gpu, "mjlab_cores": cores, "ours_cores": cores} for t in tasks]
     gpus = visible_gpus(2 * len(tasks))
     shares = core_shares(2 * len(tasks))
     return [{"task": t, "mjlab_gpu": gpus[i], "ours_gpu": gpus[len(tasks) + i], "mjlab_cores": shares[i],
@@ -68,7 +74,8 @@ def assign(tasks: list[str]) -> list[dict]:
 
 
 def speeds(args, plan: list[dict]) -> None:
-    """The bare steps of every task, both frameworks, all at once (each process on its own GPU)."""
+    """The bare steps of every task, both frameworks, all at once (each process on its own GPU) or, with
+    ``--one-gpu``, one after the other."""
     procs = []
     for job in plan:
         t = job["task"]
@@ -83,14 +90,26 @@ def speeds(args, plan: list[dict]) -> None:
             log = open(os.path.join(args.out, f"speed-{name}-{t}.log"), "w")
             procs.append((cmd, subprocess.Popen(cmd, cwd=ROOT, stdout=log, stderr=subprocess.STDOUT,
                                                 **slot(gpu, cores, extra))))
+            if args.one_gpu:
+                procs[-1][1].wait()
     for cmd, p in procs:
         if p.wait() != 0:
             print(f"warning: {' '.join(cmd[:6])} ... exited {p.returncode}; see its log in {args.out}")
 
 
+def launch(cmd: list[str], log_path: str, gpu: str, cores: list[int], extra: dict) -> subprocess.Popen:
+    # a session of its own: the training outlives this call (the machine's next call waits for it)
+    with open(log_path, "w") as log:
+        return subprocess.Popen(cmd, cwd=ROOT, stdout=log, stderr=subprocess.STDOUT, start_new_session=True,
+                                **slot(gpu, cores, extra))
+
+
 def start(args) -> None:
     os.makedirs(args.out, exist_ok=True)
-    plan = assign(args.tasks)
+    if args.one_gpu and len(args.tasks) > 1:
+        raise SystemExit(f"--one-gpu takes one task, not {len(args.tasks)} ({' '.join(args.tasks)}): mjlab's clock "
+                         "starts when the call does, so run one task per --out folder")
+    plan = assign(args.tasks, args.one_gpu)
     if args.speed_envs:
         speeds(args, plan)
     launched = []
@@ -104,20 +123,28 @@ def start(args) -> None:
         ours_cmd = (f"for s in {seeds}; do {sys.executable} -m warpgym train --task {t} --num-envs {args.num_envs} "
                     f"--time-limit {args.ours_budget:g} --seed $s --run-dir {args.out}/warpgym-{t}-seed$s "
                     f"--device cuda:0 --no-plots --save-at {' '.join(str(m) for m in args.save_at)}; done")
+        logs = {name: os.path.join(args.out, f"train-{name}-{t}.log") for name in ("mjlab", "warpgym")}
+        if args.one_gpu:  # mjlab's training, then warpgym's seeds: one shell, mjlab's packages on its command alone
+            mj_env = ["env", *(f"{k}={v}" for k, v in mjlab_env(args).items())]
+            chain = (f"{shlex.join(mj_env + mj)} > {shlex.quote(logs['mjlab'])} 2>&1; "
+                     f"{{ {ours_cmd}; }} > {shlex.quote(logs['warpgym'])} 2>&1")
+            started = time.time()
+            p = launch(["bash", "-c", chain], os.path.join(args.out, f"train-{t}.log"), job["mjlab_gpu"],
+                       job["mjlab_cores"], {})
+            launched += [{"task": t, "framework": name, "gpu": job["mjlab_gpu"], "pid": p.pid, "started": started,
+                          "command": mj if name == "mjlab" else ours_cmd} for name in ("mjlab", "warpgym")]
+            continue
         for name, cmd, gpu, cores, extra in (
                 ("mjlab", mj, job["mjlab_gpu"], job["mjlab_cores"], mjlab_env(args)),
                 ("warpgym", ["bash", "-c", ours_cmd], job["ours_gpu"], job["ours_cores"], {})):
-            log = open(os.path.join(args.out, f"train-{name}-{t}.log"), "w")
             started = time.time()
-            # a session of its own: the training outlives this call (the machine's next call waits for it)
-            p = subprocess.Popen(cmd, cwd=ROOT, stdout=log, stderr=subprocess.STDOUT, start_new_session=True,
-                                 **slot(gpu, cores, extra))
+            p = launch(cmd, logs[name], gpu, cores, extra)
             launched.append({"task": t, "framework": name, "gpu": gpu, "pid": p.pid, "started": started,
                              "command": cmd if name == "mjlab" else ours_cmd})
     write_json(os.path.join(args.out, "jobs.json"), {
         "jobs": launched, "num_envs": args.num_envs, "mjlab_budget_s": args.mjlab_budget,
         "ours_budget_s": args.ours_budget, "seeds": args.seeds, "mjlab_seed": args.mjlab_seed,
-        "device": gpu_name(), "date": time.strftime("%Y-%m-%d")})
+        "device": gpu_name(), "date": time.strftime("%Y-%m-%d"), "one_gpu": args.one_gpu})
     print(f"started {len(launched)} trainings; their logs: {args.out}/train-*.log")
 
 
@@ -396,6 +423,8 @@ def main(argv=None) -> int:
     ap.add_argument("--report", metavar="OUT", help="summarise OUT: summary.json and the table (or print the table "
                     "of a summary.json again)")
     ap.add_argument("--tasks", nargs="+", default=["Go1VelocityFlat-v0"], choices=sorted(MIRRORS))
+    ap.add_argument("--one-gpu", action="store_true", help="mjlab and warpgym take turns on one GPU (one task): the "
+                    "bare steps one after the other, then mjlab's training, then warpgym's seeds")
     ap.add_argument("--num-envs", type=int, default=4096)
     ap.add_argument("--speed-envs", type=int, nargs="*", default=[4096, 8192], help="bare-step sizes ([]: none)")
     ap.add_argument("--mjlab-python", default=sys.executable, help="the interpreter that imports mjlab")
