@@ -73,6 +73,7 @@ def test_without_a_mark_the_15_minute_mark_is_the_target_and_a_run_that_ended_be
 @pytest.mark.parametrize("name, rows_expected", [
     ("side_by_side_2026-11-28.json", 2 + 2 + 2 * 4),  # two headers, two speed rows, per task mjlab's row and 3 seeds
     ("side_by_side_go1_15min_2026-11-28.json", 2 + 1 + 4),  # the Go1's 15-minute run: one speed row, mjlab, 3 seeds
+    ("side_by_side_g1_15min_2026-11-29.json", 2 + 1 + 2),  # the G1's on one GPU: one speed row, mjlab, seed 0
 ])
 def test_the_published_tables_are_what_the_report_prints_from_the_committed_summary(name, rows_expected):
     """docs/benchmarks.md's legged tables, row for row, as ``--report`` prints them from the summaries it wrote."""
