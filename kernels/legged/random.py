@@ -8,3 +8,4 @@ PUSH = 3
 STARTUP = 4  # the randomisation drawn once when the env is built
 FINAL_OBSERVATION = 5  # the noise of an ended episode's last observation
 
+TERRAIN = 6  # a world past the top level sent to a random one
