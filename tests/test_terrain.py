@@ -1,9 +1,11 @@
 """warpgym's rough ground against mjlab's own (warpgym/tasks/legged/terrain.py): the same seed gives the same
-ground, judged by MuJoCo's ray casts onto both compiles at points spread over the grid and its border
+ground, drawn at random or in curriculum mode (one kind a column, as the rough tasks build it), judged by MuJoCo's
+ray casts onto both compiles at points spread over the grid and its border
 (tests/data/legged/rough_terrain.npz, recorded by ``python -m benchmarks.physics.mjlab_side terrain`` in mjlab's
 environment; CI records it afresh), and the patches' starts agree; the generator's own promises hold."""
 
 import os
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -28,17 +30,19 @@ def reference():
     return np.load(os.path.join(folder, "rough_terrain.npz"))
 
 
-def test_the_same_seed_gives_mjlabs_ground_under_every_ray_and_its_starts(reference):
+@pytest.mark.parametrize("prefix, grid", [("", tr.ROUGH), ("curriculum_", replace(tr.ROUGH, curriculum=True))],
+                         ids=["random", "curriculum"])
+def test_the_same_seed_gives_mjlabs_ground_under_every_ray_and_its_starts(reference, prefix, grid):
     for seed in reference["seeds"]:
-        ground, mjm = compiled(tr.ROUGH, int(seed))
-        points = reference[f"seed{seed}_points"]
-        theirs = reference[f"seed{seed}_heights"]
+        ground, mjm = compiled(grid, int(seed))
+        points = reference[f"{prefix}seed{seed}_points"]
+        theirs = reference[f"{prefix}seed{seed}_heights"]
         ours = tr.heights(mjm, points)
         assert np.isfinite(theirs).all() and np.isfinite(ours).all()
         # the heightfields hold float32 data: the same cells give the same heights to float32's precision
         assert np.abs(ours - theirs).max() < 1e-5, (seed, np.abs(ours - theirs).max())
         assert np.ptp(theirs) > 1.0  # the ground is not flat: stairs and slopes rise and fall by metres
-        np.testing.assert_allclose(ground.origins, reference[f"seed{seed}_origins"], atol=1e-9)
+        np.testing.assert_allclose(ground.origins, reference[f"{prefix}seed{seed}_origins"], atol=1e-9)
 
 
 def test_a_stairs_patch_rises_a_step_per_ring_and_its_inverse_falls():

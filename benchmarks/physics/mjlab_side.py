@@ -357,9 +357,10 @@ def returns(checkpoint: str, task: str, num_envs: int, seed: int, out: str) -> N
 
 
 def terrain(out: str, seeds: list[int], points: int) -> None:
-    """mjlab's rough ground (``ROUGH_TERRAINS_CFG``) for each seed, compiled by MuJoCo: each patch's start and the
-    heights under ``points`` (x, y) drawn over the grid and its border, by MuJoCo's ray cast straight down, into
-    OUT (.npz). warpgym's generator is judged on it (tests/test_terrain.py)."""
+    """mjlab's rough ground (``ROUGH_TERRAINS_CFG``) for each seed, compiled by MuJoCo, as drawn at random (keys
+    ``seedS_*``) and in curriculum mode, one kind a column, as its rough tasks build it (``curriculum_seedS_*``):
+    each patch's start and the heights under ``points`` (x, y) drawn over the grid and its border, by MuJoCo's ray
+    cast straight down, into OUT (.npz). warpgym's generator is judged on it (tests/test_terrain.py)."""
     from dataclasses import replace  # noqa: PLC0415
 
     import mujoco  # noqa: PLC0415
@@ -370,28 +371,29 @@ def terrain(out: str, seeds: list[int], points: int) -> None:
     rng = np.random.default_rng(0)
     arrays = {}
     for seed in seeds:
-        gen = TerrainGenerator(replace(ROUGH_TERRAINS_CFG, seed=seed))
-        spec = mujoco.MjSpec()
-        gen.compile(spec)
-        mjm = spec.compile()
-        cfg = gen.cfg
-        half = np.array([cfg.num_rows * cfg.size[0], cfg.num_cols * cfg.size[1]]) / 2 + 1.0  # 1 m of the border too
-        xy = rng.uniform(-half, half, size=(points, 2))
-        # warpgym.tasks.legged.terrain.heights casts the same rays; it is not imported here, where warpgym's
-        # package (Warp's and Newton's imports) is not installed
-        data = mujoco.MjData(mjm)
-        mujoco.mj_forward(mjm, data)
-        z = np.full(points, np.nan)
-        geomid = np.zeros(1, dtype=np.int32)
-        for i, (x, y) in enumerate(xy):
-            dist = mujoco.mj_ray(mjm, data, np.array([x, y, 10.0]), np.array([0.0, 0.0, -1.0]), None, 1, -1, geomid)
-            if dist >= 0:
-                z[i] = 10.0 - dist
-        arrays[f"seed{seed}_points"] = xy
-        arrays[f"seed{seed}_heights"] = z
-        arrays[f"seed{seed}_origins"] = gen.terrain_origins
-        print(f"seed {seed}: {mjm.ngeom} geoms, {mjm.nhfield} heightfields, heights {np.nanmin(z):.3f} to "
-              f"{np.nanmax(z):.3f} m", flush=True)
+        for prefix, curriculum in (("", False), ("curriculum_", True)):
+            gen = TerrainGenerator(replace(ROUGH_TERRAINS_CFG, seed=seed, curriculum=curriculum))
+            spec = mujoco.MjSpec()
+            gen.compile(spec)
+            mjm = spec.compile()
+            rows, cols = gen.terrain_origins.shape[:2]
+            half = np.array([rows * gen.cfg.size[0], cols * gen.cfg.size[1]]) / 2 + 1.0  # 1 m of the border too
+            xy = rng.uniform(-half, half, size=(points, 2))
+            # warpgym.tasks.legged.terrain.heights casts the same rays; it is not imported here, where warpgym's
+            # package (Warp's and Newton's imports) is not installed
+            data = mujoco.MjData(mjm)
+            mujoco.mj_forward(mjm, data)
+            z = np.full(points, np.nan)
+            geomid = np.zeros(1, dtype=np.int32)
+            for i, (x, y) in enumerate(xy):
+                dist = mujoco.mj_ray(mjm, data, np.array([x, y, 10.0]), np.array([0.0, 0.0, -1.0]), None, 1, -1, geomid)
+                if dist >= 0:
+                    z[i] = 10.0 - dist
+            arrays[f"{prefix}seed{seed}_points"] = xy
+            arrays[f"{prefix}seed{seed}_heights"] = z
+            arrays[f"{prefix}seed{seed}_origins"] = gen.terrain_origins
+            print(f"seed {seed}{' (curriculum)' if curriculum else ''}: {mjm.ngeom} geoms, {mjm.nhfield} heightfields, "
+                  f"heights {np.nanmin(z):.3f} to {np.nanmax(z):.3f} m", flush=True)
     np.savez_compressed(out, seeds=np.array(seeds), mjlab=np.array(_version()), **arrays)
 
 
