@@ -53,12 +53,14 @@ PRESETS.update({
 
 # The legged velocity tasks: mjlab's rsl_rl settings (its rl_cfg.py for the Go1 and the G1: 512-256-128 ELU actor
 # and critic, both observations normalised, 24 steps a rollout, 5 epochs of 4 mini-batches, an adaptive learning
-# rate from 1e-3 under a KL target of 0.01, an entropy bonus of 0.01, no action bound) and rsl_rl's staggered start
+# rate from 1e-3 under a KL target of 0.01, an entropy bonus of 0.01, no action bound) and rsl_rl's staggered start;
+# its rough tasks train with the same settings
 _LEGGED = dict(net_dims=(512, 256, 128), horizon_len=24, minibatch_size=24576, repeat_times=5, learning_rate=1e-3,
                desired_kl=0.01, entropy_coef=0.01, gamma=0.99, lambda_gae=0.95, clip_ratio=0.2, value_clip=0.2,
                value_coef=1.0, max_grad_norm=1.0, bounds_coef=0.0, reward_scale=1.0, stagger_episodes=True,
                eval_gap=60.0)
-PRESETS.update({"Go1VelocityFlat-v0": _LEGGED, "G1VelocityFlat-v0": _LEGGED})
+PRESETS.update({name: _LEGGED for name in ("Go1VelocityFlat-v0", "G1VelocityFlat-v0", "Go1VelocityRough-v0",
+                                            "G1VelocityRough-v0")})
 
 
 # Fields renamed since configs and checkpoints were first saved: the old name is still read (Config.renamed)

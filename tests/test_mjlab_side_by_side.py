@@ -76,14 +76,17 @@ def test_without_a_mark_the_15_minute_mark_is_the_target_and_a_run_that_ended_be
     ("side_by_side_g1_15min_2026-11-29.json", 2 + 1 + 2),  # the G1's on one GPU: one speed row, mjlab, seed 0
 ])
 def test_the_published_tables_are_what_the_report_prints_from_the_committed_summary(name, rows_expected):
-    """docs/benchmarks.md's legged tables, row for row, as ``--report`` prints them from the summaries it wrote."""
+    """The legged tables of docs/benchmarks.md (and, for the runs it no longer shows, of the log, docs/history.md),
+    row for row, as ``--report`` prints them from the summaries it wrote."""
     import os
 
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     with open(os.path.join(root, "docs", "bench", "legged", name)) as f:
         summary = json.load(f)
-    with open(os.path.join(root, "docs", "benchmarks.md")) as f:
-        page = set(f.read().splitlines())
+    page = set()
+    for doc in ("benchmarks.md", "history.md"):
+        with open(os.path.join(root, "docs", doc)) as f:
+            page |= set(f.read().splitlines())
     rows = [line for line in sbs.table(summary).splitlines() if line.startswith("| ")]
     assert len(rows) == rows_expected
     assert [r for r in rows if r not in page] == []
@@ -142,6 +145,7 @@ def test_on_one_gpu_mjlab_trains_first_with_its_packages_then_warpgyms_seeds_wit
     fake.chmod(0o755)
     monkeypatch.setattr(sbs.sys, "executable", str(fake))
     monkeypatch.setenv("CUDA_VISIBLE_DEVICES", "0")
+    monkeypatch.delenv("MUJOCO_GL", raising=False)  # set by other tests' renderers: only mjlab's command sets it here
     run = tmp_path / "run"
     sbs.main(["--out", str(run), "--start", "--one-gpu", "--tasks", "G1VelocityFlat-v0", "--speed-envs",
               "--mjlab-python", str(fake), "--mjlab-path", "/mj/site", "--seeds", "3", "4", "--ours-budget", "5"])

@@ -59,7 +59,7 @@ def test_the_bound_is_the_ground_with_its_border_less_the_margin(ground):
     assert bounds(ground) == pytest.approx((40.0 + 20.0 - 0.3, 28.0 + 20.0 - 0.3))
 
 
-def launch_moves(ground, start_level, kind, walked, command, done, force_all=0, frozen=0, seed=0):
+def launch_moves(ground, start_level, kind, walked, command, done, force_all=0, steps=5, seed=0):
     n = len(start_level)
     t = TerrainLevels()
     t.origins = wp.array(ground.origins.astype(np.float32), dtype=wp.vec3)
@@ -77,11 +77,12 @@ def launch_moves(ground, start_level, kind, walked, command, done, force_all=0, 
     d.xpos = wp.array(xpos, dtype=wp.vec3)
     st = LeggedState()
     st.command = wp.array(np.asarray(command, np.float32), dtype=float)
+    st.step_count = wp.array([steps], dtype=wp.int32)
     out = StepOutputs()
     for name in ("terminated", "truncated", "time_outs", "done"):
         setattr(out, name, wp.array(np.asarray(done, bool), dtype=wp.bool))
     rng = wp.array(np.full(1, seed, np.int32), dtype=wp.int32)
-    wp.launch(move_levels, dim=n, inputs=[t, r, d, st, force_all, frozen, rng, out])
+    wp.launch(move_levels, dim=n, inputs=[t, r, d, st, force_all, rng, out])
     return t.level.numpy(), t.origin.numpy()
 
 
@@ -99,9 +100,9 @@ def test_levels_move_up_for_half_a_patch_down_for_half_the_asked_distance(ground
     got, origin = launch_moves(ground, level, kind, [c[1] for c in cases], [c[2] for c in cases], [c[3] for c in cases])
     assert got.tolist() == [c[4] for c in cases]
     np.testing.assert_allclose(origin, ground.origins[got, 2], atol=1e-5)
-    # frozen (the env's first reset): levels stay, the starts are those of the levels
+    # the env's first reset, before any step: levels stay, the starts are those of the levels
     got, _ = launch_moves(ground, level, kind, [c[1] for c in cases], [c[2] for c in cases], [True] * len(cases),
-                          force_all=1, frozen=1)
+                          force_all=1, steps=0)
     assert got.tolist() == level
 
 

@@ -73,6 +73,10 @@ def native_episodes(task: LeggedTask, act, episodes: int) -> Tracking:
     """``act``: a function from the policy's observation (numpy float32, (obs,)) to its action."""
     import mujoco  # noqa: PLC0415
 
+    if task.terrain is not None or task.height_scan is not None:
+        raise ValueError(f"{task.name}: native MuJoCo replays the flat-ground tasks only so far (a rough "
+                         "task's observation needs its height scan cast by MuJoCo there): replay "
+                         "Go1VelocityFlat-v0 or G1VelocityFlat-v0")
     m = mujoco.MjModel.from_xml_path(task.scene_path)
     d = mujoco.MjData(m)
     idx = resolve(task, m)

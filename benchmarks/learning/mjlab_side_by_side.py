@@ -40,7 +40,9 @@ import time
 
 from benchmarks.harness import ROOT, child_env, core_shares, visible_gpus, write_json
 
-MIRRORS = {"Go1VelocityFlat-v0": "Mjlab-Velocity-Flat-Unitree-Go1", "G1VelocityFlat-v0": "Mjlab-Velocity-Flat-Unitree-G1"}
+MIRRORS = {"Go1VelocityFlat-v0": "Mjlab-Velocity-Flat-Unitree-Go1", "G1VelocityFlat-v0": "Mjlab-Velocity-Flat-Unitree-G1",
+           "Go1VelocityRough-v0": "Mjlab-Velocity-Rough-Unitree-Go1",
+           "G1VelocityRough-v0": "Mjlab-Velocity-Rough-Unitree-G1"}
 MARK = 900.0  # mjlab's 15-minute mark [s]
 WINDOW = 30.0  # its rows in the last WINDOW seconds before the mark make its target
 SMOOTH = 3  # warpgym's rows a return is averaged over before it is compared

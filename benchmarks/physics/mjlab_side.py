@@ -4,12 +4,14 @@ mjlab 1.6 pins MuJoCo and MuJoCo Warp 3.11 where warpgym pins 3.17, so mjlab liv
 its own (CI's mjlab stage; on the GPU machine, its staged wheels) and this file imports nothing of warpgym. Its
 commands:
 
-- ``export DIR``: mjlab's velocity scenes (robot, actuators, sensors, floor, keyframe and the physics options its
-  config sets after compiling) written as MJCF: the files warpgym's legged tasks compile
+- ``export DIR``: mjlab's velocity scenes (robot, actuators, sensors, floor or an empty terrain body, keyframe and
+  the physics options its config sets after compiling) written as MJCF: the files warpgym's legged tasks compile
   (warpgym/tasks/legged/assets). The visual meshes are left out: they collide with nothing, and the physics of
   the file is the same without them (tests/test_legged.py compares the compiled fields).
 - ``reference OUT.npz``: transitions of mjlab's own env on the CPU, with everything warpgym needs to start
   from the same state (tests/test_legged_judge.py steps warpgym's env from it and compares).
+- ``models OUT.npz``: mjlab's compiled rough scenes for one ground seed, field by field (tests/test_legged_rough.py
+  compares warpgym's compile of the same scene and ground).
 - ``speed``: mjlab's env stepped with random actions, env-steps per second (benchmarks/learning/mjlab_side_by_side.py).
 - ``returns CKPT``: a warpgym checkpoint's deterministic policy in mjlab's own env as it trains (noise, pushes and
   randomisation on), the return of each world's first episode (benchmarks/physics/legged_returns.py). The policy
@@ -30,8 +32,15 @@ os.environ.setdefault("MUJOCO_GL", "disable")
 TASKS = {  # warpgym's id -> the mjlab task it mirrors
     "Go1VelocityFlat-v0": "Mjlab-Velocity-Flat-Unitree-Go1",
     "G1VelocityFlat-v0": "Mjlab-Velocity-Flat-Unitree-G1",
+    "Go1VelocityRough-v0": "Mjlab-Velocity-Rough-Unitree-Go1",
+    "G1VelocityRough-v0": "Mjlab-Velocity-Rough-Unitree-G1",
 }
-SCENE_FILES = {"Go1VelocityFlat-v0": "go1_velocity_flat.xml", "G1VelocityFlat-v0": "g1_velocity_flat.xml"}
+SCENE_FILES = {name: name.replace("Velocity", "_velocity_").replace("-v0", "").lower() + ".xml" for name in TASKS}
+# the rough tasks' scenes: the robot and its sensors over an empty "terrain" body, which warpgym fills with its
+# generated ground when it builds an env (warpgym.tasks.legged.terrain: the same ground for the same seed)
+ROUGH_SCENES = {TASKS[name] for name in TASKS if "Rough" in name}
+TERRAIN_PREFIXES = ("hf_texture_", "hf_material_", "hfield_")
+TERRAIN_SEED = 0  # warpgym's rough tasks' default terrain_seed
 
 
 def _env_cfg(task_id: str, num_envs: int):
@@ -63,6 +72,15 @@ def scene_xml(task_id: str) -> str:
     opt.jacobian = {"auto": mujoco.mjtJacobian.mjJAC_AUTO, "dense": mujoco.mjtJacobian.mjJAC_DENSE,
                     "sparse": mujoco.mjtJacobian.mjJAC_SPARSE}[m.jacobian]
     opt.solver = {"newton": mujoco.mjtSolver.mjSOL_NEWTON, "cg": mujoco.mjtSolver.mjSOL_CG}[m.solver]
+    if task_id in ROUGH_SCENES:  # the generated ground and what only draws it (its lights, textures, materials)
+        terrain = spec.body("terrain")
+        for geom in list(terrain.geoms):
+            spec.delete(geom)
+        for light in [light for light in spec.lights if light.parent.name == "terrain"]:
+            spec.delete(light)
+        for item in [*spec.hfields, *spec.materials, *spec.textures]:
+            if item.name.startswith(TERRAIN_PREFIXES):
+                spec.delete(item)
     for geom in [g for g in spec.geoms if g.type == mujoco.mjtGeom.mjGEOM_MESH]:
         if geom.contype or geom.conaffinity:
             raise ValueError(f"{task_id}: mesh geom {geom.name!r} collides; it cannot be left out")
@@ -72,8 +90,10 @@ def scene_xml(task_id: str) -> str:
     # MuJoCo 3.11 writes the main default class as an empty <default/>, which MuJoCo 3.17 refuses
     # ("empty class name"); it holds nothing
     xml = spec.to_xml().replace("<default>\n    <default/>\n", "<default>\n", 1)
+    ground = ("and an empty terrain body, filled with the generated ground when an env is built"
+              if task_id in ROUGH_SCENES else "and floor")
     header = (f"<!-- mjlab {_version()}'s scene of {task_id}: the robot of mjlab's asset zoo (from MuJoCo Menagerie, "
-              "BSD-3-Clause, see LICENSE-menagerie.txt), its actuators, sensors and floor (mjlab, Apache-2.0, see "
+              f"BSD-3-Clause, see LICENSE-menagerie.txt), its actuators, sensors {ground} (mjlab, Apache-2.0, see "
               "NOTICE-mjlab.txt), with the physics options mjlab sets after compiling and without the visual "
               "meshes. Written by `python -m benchmarks.physics.mjlab_side export DIR` in mjlab's environment. -->\n")
     return header + xml
@@ -88,7 +108,8 @@ def _version() -> str:
 def export(folder: str) -> None:
     os.makedirs(folder, exist_ok=True)
     for ours, theirs in TASKS.items():
-        path = os.path.join(folder, SCENE_FILES[ours])
+        name = SCENE_FILES[ours]
+        path = os.path.join(folder, name)
         with open(path, "w") as f:
             f.write(scene_xml(theirs))
         print(f"{theirs} -> {path}")
@@ -129,7 +150,23 @@ def snapshot(env, foot_geoms) -> dict:
         "errors": _np(torch_stack([cmd.metrics["error_vel_xy"], cmd.metrics["error_vel_yaw"]])),
         "foot_friction": _np(model.geom_friction[:, geom_ids]), "body_ipos": _np(model.body_ipos),
         "dof_invweight0": _np(model.dof_invweight0), "body_invweight0": _np(model.body_invweight0),
-    }
+    } | rough_state(env)
+
+
+def rough_state(env) -> dict:
+    """On rough ground, what else a world carries: its terrain level and kind, its start, and the ground's normal
+    under its base that the upright term reads (from the last scan)."""
+    terrain = env.scene.terrain
+    if terrain is None or getattr(terrain, "terrain_origins", None) is None:
+        return {}
+    out = {"terrain_level": _np(terrain.terrain_levels), "terrain_kind": _np(terrain.terrain_types),
+           "env_origin": _np(env.scene.env_origins)}
+    upright = env.reward_manager.get_term_cfg("upright")
+    if upright.params.get("terrain_sensor_names"):
+        from mjlab.tasks.velocity.mdp.terrain_utils import terrain_normal_from_sensors
+
+        out["terrain_normal"] = _np(terrain_normal_from_sensors(env, upright.params["terrain_sensor_names"]))
+    return out
 
 
 def torch_stack(tensors):
@@ -176,15 +213,39 @@ def model_fields(mjm) -> dict:
     return out
 
 
+def rough_models(out: str, seed: int) -> None:
+    """mjlab's compiled scenes of its rough tasks with the ground generated from ``seed``, field by field as
+    ``model_fields`` records them (keys prefixed by warpgym's task id), into OUT (.npz): the judge of warpgym's
+    compile of the same scene and ground (tests/test_legged_rough.py)."""
+    import numpy as np
+    from mjlab.envs import ManagerBasedRlEnv
+
+    arrays = {}
+    for ours, theirs in TASKS.items():
+        if theirs not in ROUGH_SCENES:
+            continue
+        cfg = _env_cfg(theirs, 1)
+        cfg.scene.terrain.terrain_generator.seed = seed
+        env = ManagerBasedRlEnv(cfg, device="cpu")  # its model as the env sets its options
+        mjm = env.sim.mj_model
+        arrays.update({f"{ours}/{k}": v for k, v in model_fields(mjm).items()})
+        print(f"{theirs}: {mjm.ngeom} geoms, {mjm.nbody} bodies, {mjm.nsensor} sensors", flush=True)
+        env.close()
+    np.savez_compressed(out, seed=np.array(seed), mjlab=np.array(_version()), **arrays)
+
+
 def edges(env) -> None:
-    """A last transition with the rare cases in it: world 0 tipped 80 degrees about its x axis (it falls), world 1
-    one step short of the time limit, world 2 with a knee past its soft limit."""
+    """A last transition with the rare cases in it: world 0 tipped 80 degrees about its x axis (it falls; where
+    only a thigh's touch ends an episode, it is also lowered 0.12 m onto the ground), world 1 one step short of the
+    time limit, world 2 with a knee past its soft limit."""
     import math
 
     data, robot = env.sim.data, env.scene["robot"]
     q = data.qpos[0, 3:7].clone()
     c, s = math.cos(math.radians(40.0)), math.sin(math.radians(40.0))
     data.qpos[0, 3:7] = torch_tensor([q[0] * c - q[1] * s, q[0] * s + q[1] * c, q[2] * c + q[3] * s, q[3] * c - q[2] * s])
+    if "illegal_contact" in env.termination_manager.active_terms:  # tilt ends nothing here: a thigh on the ground does
+        data.qpos[0, 2] -= 0.12
     env.episode_length_buf[1] = env.max_episode_length - 1
     limits = robot.data.soft_joint_pos_limits[2]
     data.qpos[2, 7 + 2] = limits[2, 1] + 0.09
@@ -211,6 +272,8 @@ def reference(path: str, task: str, num_envs: int, warmup: int, steps: int, seed
     cfg = _env_cfg(theirs, num_envs)
     cfg.seed = seed
     cfg.observations["actor"].enable_corruption = False
+    if theirs in ROUGH_SCENES:  # warpgym's default ground
+        cfg.scene.terrain.terrain_generator.seed = TERRAIN_SEED
     friction = cfg.events.get("foot_friction_slide") or cfg.events["foot_friction"]
     foot_geoms = ["robot/" + g for g in friction.params["asset_cfg"].geom_names]
     env = ManagerBasedRlEnv(cfg, device="cpu")
@@ -252,7 +315,8 @@ def reference(path: str, task: str, num_envs: int, warmup: int, steps: int, seed
     arrays["term_names"] = np.array(names)
     arrays["foot_geoms"] = np.array(foot_geoms)
     env.close()
-    arrays.update(distributions(theirs, dist_envs, resamples, seed, foot_geoms))
+    if dist_envs > 0:
+        arrays.update(distributions(theirs, dist_envs, resamples, seed, foot_geoms))
     np.savez_compressed(path, **arrays)
     print(f"{theirs}: {steps} transitions of {num_envs} worlds, draws of {dist_envs} -> {path}")
 
@@ -411,7 +475,7 @@ def main(argv=None) -> None:
     r.add_argument("--steps", type=int, default=4)
     r.add_argument("--seed", type=int, default=0)
     r.add_argument("--action-std", type=float, default=0.4)
-    r.add_argument("--dist-envs", type=int, default=256)
+    r.add_argument("--dist-envs", type=int, default=256, help="worlds of the distributions' draws (0: none)")
     r.add_argument("--resamples", type=int, default=16)
     sp = sub.add_parser("speed", help="mjlab's env with random actions on cuda:0, env-steps/s, as JSON into OUT")
     sp.add_argument("out")
@@ -430,8 +494,13 @@ def main(argv=None) -> None:
     tr.add_argument("out")
     tr.add_argument("--seeds", type=int, nargs="+", default=[0, 1])
     tr.add_argument("--points", type=int, default=4000)
+    md = sub.add_parser("models", help="mjlab's compiled rough scenes for a ground seed, field by field (.npz)")
+    md.add_argument("out")
+    md.add_argument("--seed", type=int, default=0)
     args = p.parse_args(argv)
-    if args.command == "terrain":
+    if args.command == "models":
+        rough_models(args.out, args.seed)
+    elif args.command == "terrain":
         terrain(args.out, args.seeds, args.points)
     elif args.command == "returns":
         returns(args.checkpoint, args.task, args.num_envs, args.seed, args.out)

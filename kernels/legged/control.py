@@ -1,10 +1,10 @@
 """A control step's actions into MuJoCo's controls, and what mjlab's contact sensors keep after every physics
-step: how long each foot has been in the air or on the ground, and the physics steps with a self-collision."""
+step: how long each foot has been in the air or on the ground, and the physics steps with a contact of each group."""
 
 import warp as wp
 
 from kernels.legged.frames import sensor3
-from kernels.legged.params import LeggedParams, LeggedRobot, LeggedState, MjLegged
+from kernels.legged.params import NUM_GROUPS, LeggedParams, LeggedRobot, LeggedState, MjLegged
 
 wp.set_module_options({"enable_backward": False})
 
@@ -30,13 +30,15 @@ def apply_legged_actions(
         st.action[w, j] = x
         ctrl[w, r.joint_actuator[j]] = x * r.action_scale[j] + r.default_joint_pos[j] - st.encoder_bias[w, j]
     nan_count[w] = bad
-    st.collision_hits[w] = 0
+    for g in range(NUM_GROUPS):
+        st.collision_hits[w, g] = 0
 
 
 @wp.kernel
 def track_feet(p: LeggedParams, r: LeggedRobot, d: MjLegged, st: LeggedState):
     """After each physics step (mjlab's ContactSensor.update): air and contact times of each foot, from the
-    contact sensors that step computed, and whether the self-collision sensor felt more than the threshold."""
+    contact sensors that step computed, and for each contact group whether any of its sensors felt more than the
+    threshold."""
     w = wp.tid()
     for f in range(r.foot_found.shape[0]):
         contact = d.sensordata[w, r.foot_found[f]] > 0.0
@@ -46,6 +48,10 @@ def track_feet(p: LeggedParams, r: LeggedRobot, d: MjLegged, st: LeggedState):
         else:
             st.air_time[w, f] = st.air_time[w, f] + p.physics_dt
             st.contact_time[w, f] = 0.0
-    if r.collision_force >= 0:
-        if wp.length(sensor3(d, w, r.collision_force)) > p.collision_force:
-            st.collision_hits[w] = st.collision_hits[w] + 1
+    for g in range(NUM_GROUPS):
+        felt = int(0)
+        for h in range(r.hit_force.shape[0]):
+            if r.hit_group[h] == g and wp.length(sensor3(d, w, r.hit_force[h])) > p.collision_force:
+                felt = 1
+        if felt != 0:
+            st.collision_hits[w, g] = st.collision_hits[w, g] + 1

@@ -3,10 +3,10 @@ world: the base's velocities from the IMU sensors, gravity in the base's frame, 
 through the randomised encoder bias) and velocities, the last action, the command; the critic also the feet's
 heights, air times, contacts and contact forces, and neither noise nor bias.
 
-The feet's heights are mjlab's foot height scan: a ring of rays cast straight down from each foot's site onto the
-terrain, the closest hit reported and a miss (beyond ``foot_scan_range``, or from under the floor) clamped into
-[0, range]. On the flat floor at z = 0 every ray of a ring hits at the site's own height, so the scan is the site's
-height clamped into that range, which is what ``foot_height`` computes.
+On rough ground both also see the height scan (the base's height above the ground under a grid of rays, after
+the command; the policy's with noise), and the feet's heights are the foot height scan's (``kernels.legged.scan``:
+a ring of rays cast down from each foot). On the flat floor at z = 0 every ray of a ring hits at the site's own
+height, so the scan is the site's height clamped into [0, range], which is what ``foot_height`` computes.
 """
 
 import warp as wp
@@ -25,6 +25,14 @@ FOOT_SCAN_RANGE = 1.0
 @wp.func
 def foot_height(d: MjLegged, w: int, site: int):
     return wp.clamp(d.site_xpos[w, site][2], 0.0, FOOT_SCAN_RANGE)
+
+
+@wp.func
+def foot_height_now(p: LeggedParams, r: LeggedRobot, d: MjLegged, st: LeggedState, w: int, f: int):
+    """A foot's height: scanned on rough ground (the scan this observation made), the site's on the flat floor."""
+    if p.foot_scan != 0:
+        return st.foot_clear[w, f]
+    return foot_height(d, w, r.foot_site[f])
 
 
 @wp.func
@@ -69,9 +77,14 @@ def write_observation(p: LeggedParams, r: LeggedRobot, d: MjLegged, st: LeggedSt
         actor[w, k + i] = st.command[w, i]
         critic[w, k + i] = st.command[w, i]
     k = k + 3
+    for i in range(p.num_scan):
+        h = st.scan[w, i]
+        actor[w, k + i] = (h + wp.randf(rng, -p.noise_scan, p.noise_scan)) * p.scan_scale
+        critic[w, k + i] = h * p.scan_scale
+    k = k + p.num_scan
     nf = r.foot_site.shape[0]
     for f in range(nf):
-        critic[w, k + f] = foot_height(d, w, r.foot_site[f])
+        critic[w, k + f] = foot_height_now(p, r, d, st, w, f)
         critic[w, k + nf + f] = st.air_time[w, f]
         contact = float(0.0)
         if d.sensordata[w, r.foot_found[f]] > 0.0:
@@ -85,9 +98,9 @@ def write_observation(p: LeggedParams, r: LeggedRobot, d: MjLegged, st: LeggedSt
 @wp.kernel
 def observe(p: LeggedParams, r: LeggedRobot, rng_state: wp.array[wp.int32], d: MjLegged, st: LeggedState,
             actor: wp.array2d[float], critic: wp.array2d[float]):
-    """mjlab's sense and observation pass after the step's forward pass: the feet's heights, kept for the next
-    step's rewards, and both observations."""
+    """mjlab's sense and observation pass after the step's forward pass (and, on rough ground, the scans): the
+    feet's heights, kept for the next step's rewards, and both observations."""
     w = wp.tid()
     for f in range(r.foot_site.shape[0]):
-        st.foot_height[w, f] = foot_height(d, w, r.foot_site[f])
+        st.foot_height[w, f] = foot_height_now(p, r, d, st, w, f)
     write_observation(p, r, d, st, w, stream(rng_state, w, OBSERVATION), actor, critic)

@@ -5,7 +5,7 @@ randomised encoder bias) and the episode bookkeeping (``LeggedEpisodes``), and t
 (``Term``: each is written at its column of ``LeggedEpisodes.terms``, and ``info["reward_<name>"]`` reads it).
 
 Shapes: N worlds, J actuated joints (hinges, in the model's order, which is the action's), F feet,
-K reward terms, S command stages, Q = nq, V = nv, B bodies, T sites, D sensor data entries.
+K reward terms, S command stages (or height scan rays), H contact group sensors, Q = nq, V = nv, B bodies, T sites, D sensor data entries.
 """
 
 import enum
@@ -30,9 +30,19 @@ class Term(enum.IntEnum):
     foot_slip = 11
     soft_landing = 12
     self_collisions = 13
+    shank_collision = 14  # the rough Go1's: its calves on the ground
+    trunk_head_collision = 15  # ... its trunk or head on the ground
 
 
 NUM_TERMS = len(Term)
+
+# Contact groups (LeggedRobot.hit_group): each counts the physics steps of a control step in which any of its
+# contact sensors felt more than ``LeggedParams.collision_force`` (mjlab's force history over the decimation)
+SELF_COLLISION = 0  # the self_collisions term
+SHANK_GROUND = 1  # the shank_collision term
+TRUNK_GROUND = 2  # the trunk_head_collision term
+ILLEGAL_CONTACT = 3  # ends the episode (mjlab's illegal_contact termination)
+NUM_GROUPS = 4
 
 # Command flags (LeggedState.command_kind): bits of one int per world
 HEADING = 1  # the yaw rate steers toward a heading target
@@ -74,9 +84,16 @@ class LeggedParams:
     swing_command: float
     slip_command: float
     landing_command: float
-    collision_force: float  # contact force [N] above which a self-collision substep counts
+    collision_force: float  # contact force [N] above which a contact group's physics step counts
+    upright_terrain: int  # 1: the upright term's "up" is the ground's normal under the base (the rough Go1's)
     # termination
+    fall_over: int  # 1: a base tilted beyond limit_angle ends the episode (0: the rough Go1's, which may tilt)
     limit_angle: float  # tilt of the base from upright that ends an episode [rad]
+    # ground scans: the height scan's noise and scale in the observations; 1 where the feet's heights are scanned
+    num_scan: int  # rays of the height scan (0: none)
+    noise_scan: float
+    scan_scale: float
+    foot_scan: int
     # observation noise: uniform in [-x, x] on the policy's terms (0 with noise off)
     noise_lin_vel: float
     noise_ang_vel: float
@@ -121,7 +138,8 @@ class LeggedRobot:
     imu_lin_vel: int  # sensordata addresses (velocimeter, gyro, subtree angular momentum)
     imu_ang_vel: int
     angmom: int
-    collision_force: int  # sensordata address of the self-collision sensor's force; -1: none
+    hit_force: wp.array[wp.int32]  # (H,) sensordata addresses of the contact groups' sensors' forces
+    hit_group: wp.array[wp.int32]  # (H,) the group of each
 
 
 @wp.struct
@@ -155,8 +173,11 @@ class LeggedState:
     contact_time: wp.array2d[float]  # (N, F) ... on it
     peak_height: wp.array2d[float]  # (N, F) highest foot height of the swing in progress
     foot_height: wp.array2d[float]  # (N, F) foot heights when the last observation was made
-    collision_hits: wp.array[wp.int32]  # (N,) physics steps of this step with a self-collision
+    collision_hits: wp.array2d[wp.int32]  # (N, NUM_GROUPS) physics steps of this step with a contact of each group
     encoder_bias: wp.array2d[float]  # (N, J) randomised once per world
+    scan: wp.array2d[float]  # (N, max(S, 1)) the height scan (unscaled, no noise) at the last observation
+    foot_clear: wp.array2d[float]  # (N, F) the feet's scanned heights at the last observation (rough ground)
+    terrain_normal: wp.array[wp.vec3]  # (N,) the ground's normal under the base at the last observation
     step_count: wp.array[wp.int32]  # (1,) env steps since the env was built (the command curriculum's clock)
 
 

@@ -1,7 +1,7 @@
 """mjlab's reset of the worlds whose episode ended (its reset events, the sensors' and managers' resets), and the
 randomisation it draws once per world when the env is built (its startup events).
 
-A reset world starts from its default pose (the scene's keyframe), moved by a uniform offset in x, y, z and yaw,
+A reset world starts from its default pose (the scene's keyframe) at its start on the ground, moved by a uniform offset in x, y, z and yaw,
 its joints at their defaults (plus mjlab's offset range, 0 in its config) clamped into the soft limits, at rest,
 with zero controls and a fresh solver warm start (MuJoCo Warp's reset_data zeroes them too); its action history,
 air and contact times and tracking errors restart, it draws a new command and a new time to its next push. The
@@ -12,7 +12,7 @@ import warp as wp
 
 from kernels.common import StepOutputs, resets_world, stream
 from kernels.legged.commands import draw_command
-from kernels.legged.params import LeggedEpisodes, LeggedParams, LeggedRobot, LeggedState, MjLegged
+from kernels.legged.params import NUM_GROUPS, LeggedEpisodes, LeggedParams, LeggedRobot, LeggedState, MjLegged
 from kernels.legged.random import RESET, STARTUP
 
 wp.set_module_options({"enable_backward": False})
@@ -20,15 +20,16 @@ wp.set_module_options({"enable_backward": False})
 
 @wp.kernel
 def reset_legged_worlds(p: LeggedParams, r: LeggedRobot, force_all: int, stagger: int,
-                        rng_state: wp.array[wp.int32], d: MjLegged, st: LeggedState, ep: LeggedEpisodes,
-                        out: StepOutputs):
+                        rng_state: wp.array[wp.int32], origin: wp.array[wp.vec3], d: MjLegged, st: LeggedState,
+                        ep: LeggedEpisodes, out: StepOutputs):
+    """``origin``: each world's start on the ground (its terrain patch's; zero on flat ground)."""
     w = wp.tid()
     if not resets_world(force_all, out, w):
         return
     rng = stream(rng_state, w, RESET)
     a = r.root_qpos
     for i in range(3):
-        d.qpos[w, a + i] = r.default_root[i] + wp.randf(rng, p.reset_lo[i], p.reset_hi[i])
+        d.qpos[w, a + i] = r.default_root[i] + origin[w][i] + wp.randf(rng, p.reset_lo[i], p.reset_hi[i])
     yaw = wp.randf(rng, p.reset_lo[3], p.reset_hi[3])
     turn = wp.quat(wp.cos(0.5 * yaw), 0.0, 0.0, wp.sin(0.5 * yaw))
     base = wp.quat(r.default_root[3], r.default_root[4], r.default_root[5], r.default_root[6])
@@ -56,7 +57,8 @@ def reset_legged_worlds(p: LeggedParams, r: LeggedRobot, force_all: int, stagger
     for f in range(st.air_time.shape[1]):
         st.air_time[w, f] = 0.0
         st.contact_time[w, f] = 0.0
-    st.collision_hits[w] = 0
+    for g in range(NUM_GROUPS):
+        st.collision_hits[w, g] = 0
     rng = draw_command(p, st, w, rng)
     st.push_time_left[w] = wp.randf(rng, p.push_interval_lo, p.push_interval_hi)
     ep.length[w] = 0

@@ -4,7 +4,8 @@ orientation, cast by MuJoCo Warp (``warpgym.sim.rays``), then read as heights.
 
 A step of a scan is three launches, all in the step's graph: ``aim_rays`` (origins and directions in the world),
 MuJoCo Warp's ``rays`` (distances, geoms and normals), then ``scan_heights`` (mjlab's ``height_scan`` observation)
-or ``scan_clearance`` (the foot height scan: the closest ground under each frame).
+or ``scan_clearance`` (the foot height scan: the closest ground under each frame), and ``fit_ground_normal`` (the
+slope under the base, which the rough Go1's upright term measures tilt against).
 
 Shapes: N worlds, F frames, R rays a frame (F * R rays a world, frame-major as mjlab orders them).
 """
@@ -75,6 +76,7 @@ def hit_z(s: RayScan, w: int, k: int):
 
 @wp.func
 def hit(s: RayScan, w: int, k: int):
+    """A hit within reach (mjlab masks a distance beyond it to -1, a miss)."""
     d = s.dist[w, k]
     return d >= 0.0 and d <= s.max_distance
 
@@ -114,3 +116,57 @@ def scan_clearance(s: RayScan, out: wp.array2d[float]):
     if misses == r:
         low = wp.clamp(z, 0.0, s.max_distance)
     out[w, f] = low
+
+
+@wp.kernel
+def fit_ground_normal(s: RayScan, picks: wp.array[wp.int32], out: wp.array[wp.vec3]):
+    """mjlab's terrain_normal_from_sensors: the plane through the hits of the rays ``picks`` (its evenly spaced
+    subsample), its normal the covariance's eigenvector of least eigenvalue, turned upward; straight up where the
+    fit says nothing (fewer than 3 hits, points on a line or a heap, a state no longer finite)."""
+    w = wp.tid()
+    n = int(0)
+    centre = wp.vec3(0.0)
+    for j in range(picks.shape[0]):
+        k = picks[j]
+        if hit(s, w, k):
+            centre += s.pnt[w, k] + s.vec[w, k] * s.dist[w, k]
+            n += 1
+    up = wp.vec3(0.0, 0.0, 1.0)
+    if n < 3:
+        out[w] = up
+        return
+    centre = centre / float(n)
+    cov = wp.mat33(0.0)
+    for j in range(picks.shape[0]):
+        k = picks[j]
+        if hit(s, w, k):
+            e = s.pnt[w, k] + s.vec[w, k] * s.dist[w, k] - centre
+            cov += wp.outer(e, e)
+    finite = True
+    for i in range(3):
+        for j in range(3):
+            if not wp.isfinite(cov[i, j]):
+                finite = False
+    if not finite:
+        out[w] = up
+        return
+    q, ev = wp.eig3(cov)
+    # ascending order of the eigenvalues, as eigh returns them
+    lo, mid, top = int(0), int(1), int(2)
+    if ev[mid] < ev[lo]:
+        lo, mid = mid, lo
+    if ev[top] < ev[mid]:
+        mid, top = top, mid
+    if ev[mid] < ev[lo]:
+        lo, mid = mid, lo
+    eps = 1.1920929e-07  # float32's machine epsilon
+    plane_like = ev[lo] / wp.max(ev[mid], eps) < 0.1
+    spread = ev[mid] > wp.max(ev[top], eps) * 1.0e-6
+    if not (plane_like and spread):
+        out[w] = up
+        return
+    normal = wp.vec3(q[0, lo], q[1, lo], q[2, lo])
+    normal = normal / wp.max(wp.length(normal), 1.0e-8)
+    if normal[2] < 0.0:
+        normal = -normal
+    out[w] = normal

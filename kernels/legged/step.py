@@ -14,8 +14,10 @@ import warp as wp
 from kernels.common import StepOutputs, state_is_finite, stream
 from kernels.legged.frames import angular_velocity, point_velocity, projected_gravity, rotate_inverse, root_velocity_b, sensor3
 from kernels.legged.observations import write_observation
-from kernels.legged.params import LeggedEpisodes, LeggedParams, LeggedRobot, LeggedState, MjLegged, Term
+from kernels.legged.params import (ILLEGAL_CONTACT, SELF_COLLISION, SHANK_GROUND, TRUNK_GROUND, LeggedEpisodes,
+                                   LeggedParams, LeggedRobot, LeggedState, MjLegged, Term)
 from kernels.legged.random import FINAL_OBSERVATION, PUSH
+from kernels.legged.terrain_levels import TerrainLevels, out_of_bounds
 
 wp.set_module_options({"enable_backward": False})
 
@@ -104,6 +106,8 @@ def term_value(p: LeggedParams, r: LeggedRobot, d: MjLegged, st: LeggedState, w:
         return wp.exp(-(ez * ez + omega[0] * omega[0] + omega[1] * omega[1]) / p.ang_var)
     if term == Term.upright:
         g = projected_gravity(d.xquat[w, r.upright_body])
+        if p.upright_terrain != 0:  # the ground's normal in the body's frame: (0, 0, 1) when level with it
+            g = rotate_inverse(d.xquat[w, r.upright_body], st.terrain_normal[w])
         return wp.exp(-(g[0] * g[0] + g[1] * g[1]) / p.upright_var)
     if term == Term.pose:
         return posture(p, r, d, st, w)
@@ -135,7 +139,11 @@ def term_value(p: LeggedParams, r: LeggedRobot, d: MjLegged, st: LeggedState, w:
         return feet_terms(p, r, d, st, w, term) * active(p, st, w, p.slip_command)
     if term == Term.soft_landing:
         return feet_terms(p, r, d, st, w, term) * active(p, st, w, p.landing_command)
-    return float(st.collision_hits[w])  # self_collisions
+    if term == Term.shank_collision:
+        return float(st.collision_hits[w, SHANK_GROUND])
+    if term == Term.trunk_head_collision:
+        return float(st.collision_hits[w, TRUNK_GROUND])
+    return float(st.collision_hits[w, SELF_COLLISION])  # self_collisions
 
 
 @wp.func
@@ -160,13 +168,16 @@ def push(p: LeggedParams, r: LeggedRobot, d: MjLegged, w: int, rng: wp.uint32):
 
 @wp.kernel
 def legged_step(p: LeggedParams, r: LeggedRobot, rng_state: wp.array[wp.int32], d: MjLegged, st: LeggedState,
-                ep: LeggedEpisodes, out: StepOutputs, critic: wp.array2d[float], final_critic: wp.array2d[float]):
+                ep: LeggedEpisodes, t: TerrainLevels, out: StepOutputs, critic: wp.array2d[float],
+                final_critic: wp.array2d[float]):
     w = wp.tid()
     length = ep.length[w] + 1
     ep.length[w] = length
     g = projected_gravity(d.xquat[w, r.root_body])
-    fell = wp.abs(wp.acos(wp.clamp(-g[2], -1.0, 1.0))) > p.limit_angle
-    time_out = length >= p.episode_length
+    fell = p.fall_over != 0 and wp.abs(wp.acos(wp.clamp(-g[2], -1.0, 1.0))) > p.limit_angle
+    fell = fell or st.collision_hits[w, ILLEGAL_CONTACT] > 0
+    # beyond the ground's edge ends an episode as a time-out (mjlab's out_of_terrain_bounds)
+    time_out = length >= p.episode_length or out_of_bounds(t, r, d, w)
 
     reward = float(0.0)
     for k in range(p.weights.shape[0]):

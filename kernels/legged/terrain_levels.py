@@ -31,14 +31,14 @@ class TerrainLevels:
 
 
 @wp.kernel
-def move_levels(t: TerrainLevels, r: LeggedRobot, d: MjLegged, st: LeggedState, force_all: int, frozen: int,
+def move_levels(t: TerrainLevels, r: LeggedRobot, d: MjLegged, st: LeggedState, force_all: int,
                 rng_state: wp.array[wp.int32], out: StepOutputs):
-    """Before the reset of the worlds it resets: their levels moved by how far they walked (``frozen``: not at
-    all), their origins set."""
+    """Before the reset of the worlds it resets: their levels moved by how far they walked (not before the env's
+    first step), their origins set."""
     w = wp.tid()
     if not resets_world(force_all, out, w):
         return
-    if frozen == 0:
+    if st.step_count[0] > 0:
         pos = d.xpos[w, r.root_body]
         dx = pos[0] - t.origin[w][0]
         dy = pos[1] - t.origin[w][1]

@@ -151,7 +151,7 @@ def parser() -> CommandParser:
     ap.add_argument("--tasks", nargs="+", default=None, metavar="NAME-v5",
                     help="Gymnasium's MuJoCo tasks instead of the robots: MuJoCo Warp's step against the task's")
     ap.add_argument("--legged", nargs="+", default=None, metavar="NAME-v0",
-                    help="the legged velocity tasks instead (Go1VelocityFlat-v0, G1VelocityFlat-v0): the env's step "
+                    help="the legged velocity tasks instead (Go1VelocityFlat-v0 ... G1VelocityRough-v0): the env's step "
                          "with random actions, as benchmarks/learning/mjlab_side_by_side.py times mjlab's")
     ap.add_argument("--warmup", type=positive_int(20), default=20, help="--legged: steps before each timing")
     ap.add_argument("--num-envs", nargs="+", type=positive_int(4096), default=[1024, 4096, 16384])

@@ -17,7 +17,7 @@ def parser(description: str | None = None) -> CommandParser:
     ap = CommandParser(prog="warpgym train", description=description)
     ap.add_argument("--task", default=None, help="Ant (default), Humanoid, one of Gymnasium's MuJoCo tasks "
                                                  "(InvertedPendulum-v5 ... HumanoidStandup-v5) or a legged task "
-                                                 "(Go1VelocityFlat-v0, G1VelocityFlat-v0)")
+                                                 "(Go1VelocityFlat-v0, G1VelocityFlat-v0, Go1VelocityRough-v0, G1VelocityRough-v0)")
     ap.add_argument("--num-envs", type=positive_int(4096), default=None,
                     help="default: the task's preset on a GPU (8192 for the Ant, 4096 for the Humanoid and "
                          "the legged tasks), fewer on the CPU")

@@ -21,15 +21,19 @@ from gymnasium.vector.utils import batch_space
 from kernels.legged.commands import update_commands
 from kernels.legged.control import apply_legged_actions, track_feet
 from kernels.legged.observations import observe
-from kernels.legged.params import NUM_TERMS, LeggedEpisodes, LeggedState, MjLegged
+from kernels.legged.params import NUM_GROUPS, NUM_TERMS, LeggedEpisodes, LeggedState, MjLegged
 from kernels.legged.resets import randomize_worlds, reset_legged_worlds
+from kernels.legged.scan import fit_ground_normal
 from kernels.legged.step import count_step, legged_step
+from kernels.legged.terrain_levels import TerrainLevels, move_levels
 from warpgym.envs.graph_env import GraphVecEnv
 from warpgym.sim.mjw_sim import MjwSim
-from warpgym.sim.scene import compile_scene
+from warpgym.sim.rays import RayCaster, Scan, ScanFrames
 from warpgym.tasks.legged import LeggedTask, get_legged_task
 from warpgym.tasks.legged.base import TERM_NAMES
-from warpgym.tasks.legged.model import kernel_structs, resolve
+from warpgym.tasks.legged.levels import bounds, start_levels
+from warpgym.tasks.legged.model import compile_task_scene, kernel_structs, resolve
+from warpgym.tasks.legged.scan import normal_picks
 
 # the model fields randomised per world, and those MuJoCo Warp's set_const derives from them (mjlab's list)
 RANDOMISED_FIELDS = ("geom_friction", "body_ipos")
@@ -70,7 +74,7 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
         if render_mode is not None:
             raise ValueError(f"render_mode={render_mode!r}: {task.name} draws through `warpgym play RUN --gif`")
         self.render_mode = None
-        compiled = compile_scene(task.scene_path)
+        compiled, self.terrain = compile_task_scene(task)
         self.index = idx = resolve(task, compiled.mjm)
         self.sim = sim = MjwSim(compiled, num_envs, device, frame_skip=task.decimation, nconmax=task.nconmax,
                                 njmax=task.njmax, contact_sensor_maxmatch=task.contact_sensor_maxmatch)
@@ -78,7 +82,8 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
         self.device = sim.torch_device
         self.num_actions = a = sim.nu
         joints, feet = len(idx.joint_names), len(idx.foot_site)
-        self.num_obs = o = 12 + 2 * joints + a
+        scan = 0 if task.height_scan is None else len(task.height_scan.offsets)
+        self.num_obs = o = 12 + 2 * joints + a + scan
         self.num_critic_obs = c = o + 6 * feet
         self.max_episode_steps = task.episode_length
         self.metadata = {**self.metadata, "render_fps": int(round(1.0 / (task.decimation * task.timestep)))}
@@ -101,8 +106,12 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
         st.command_time_left, st.push_time_left = buf(n), buf(n)
         st.air_time, st.contact_time = buf((n, feet)), buf((n, feet))
         st.peak_height, st.foot_height = buf((n, feet)), buf((n, feet))
-        st.collision_hits, st.encoder_bias = buf(n, wp.int32), buf((n, joints))
+        st.collision_hits, st.encoder_bias = buf((n, NUM_GROUPS), wp.int32), buf((n, joints))
         st.step_count = buf(1, wp.int32)
+        st.scan, st.foot_clear = buf((n, max(scan, 1))), buf((n, feet))
+        st.terrain_normal = wp.array(np.tile(np.float32([0.0, 0.0, 1.0]), (n, 1)), dtype=wp.vec3, device=dev)
+        self._terrain_levels(seed)
+        self._scans()
         self._episodes = ep = LeggedEpisodes()
         ep.length, ep.total_return, ep.errors = buf(n, wp.int32), buf(n), buf((n, 2))
         ep.ended_return, ep.ended_length, ep.ended_errors = buf(n), buf(n, wp.int32), buf((n, 2))
@@ -122,11 +131,69 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
         errors = t(ep.ended_errors)
         episode = {"r": t(ep.ended_return), "l": t(ep.ended_length), "error_vel_xy": errors[:, 0],
                    "error_vel_yaw": errors[:, 1], "_r": done, "_l": done}
+        if self.terrain is not None:  # the level each ended episode's world moved to: training logs its mean
+            episode["terrain_level"] = t(self._levels.level)
         so_far = {"r": t(ep.total_return), "l": t(ep.length)}
         self._expose({**{f"reward_{name}": terms[:, k] for k, name in enumerate(TERM_NAMES)},
                       "episode": episode, "_episode": done, "episode_so_far": so_far,
                       "critic_obs": t(self._critic), "final_critic_obs": t(self._final_critic),
-                      "command": t(st.command)})
+                      "command": t(st.command),
+                      **({"terrain_level": t(self._levels.level)} if self.terrain is not None else {})})
+
+    # ------------------------------------------------------------------ rough ground
+    def _terrain_levels(self, seed: int) -> None:
+        """Each world's level, kind and start on the generated ground (``TerrainLevels``); on the flat floor one
+        start at the origin and no bound."""
+        task, n, dev = self.task, self.num_envs, self.sim.device
+        t = self._levels = TerrainLevels()
+        if self.terrain is None:
+            levels, kinds, origins = np.zeros(n, np.int32), np.zeros(n, np.int32), np.zeros((1, 1, 3), np.float32)
+            t.half_x = t.half_y = 1.0e30
+        else:
+            levels, kinds = start_levels(self.terrain, n, task.max_init_terrain_level, np.random.default_rng(seed))
+            origins = self.terrain.origins.astype(np.float32)
+            t.half_x, t.half_y = bounds(self.terrain, task.terrain_margin)
+        t.origins = wp.array(origins, dtype=wp.vec3, device=dev)
+        t.level = wp.array(levels, dtype=wp.int32, device=dev)
+        t.kind = wp.array(kinds, dtype=wp.int32, device=dev)
+        t.origin = wp.array(origins[levels, kinds], dtype=wp.vec3, device=dev)
+        t.patch_length = float(self.terrain.grid.size[0]) if self.terrain is not None else 1.0e30
+        t.episode_s = float(task.episode_length_s)
+
+    def _scans(self) -> None:
+        """The height scan under the root body and the ring under each foot, cast by MuJoCo Warp."""
+        task, sim, idx = self.task, self.sim, self.index
+        self._height_scan = self._foot_scan = self._caster = None
+        patterns = [p for p in (task.height_scan, task.foot_scan) if p is not None]
+        if not patterns:
+            return
+        groups = sorted({g for p in patterns for g in p.groups})
+        self._caster = RayCaster(sim.mjm, sim.m, sim.d, tuple(groups), device=sim.device)
+        if task.height_scan is not None:
+            p = task.height_scan
+            root = np.array([idx.root_body])
+            self._height_scan = Scan(ScanFrames("body", root, root), p.array(), p.direction, p.alignment,
+                                     p.max_distance, num_envs=self.num_envs, device=sim.device)
+            self._normal_picks = wp.array(normal_picks(self._height_scan.num_rays), dtype=wp.int32, device=sim.device)
+        if task.foot_scan is not None:
+            p = task.foot_scan
+            self._foot_scan = Scan(ScanFrames("site", idx.foot_site, idx.foot_body), p.array(), p.direction,
+                                   p.alignment, p.max_distance, num_envs=self.num_envs, device=sim.device)
+
+    def _sense(self) -> None:
+        """mjlab's sense pass after the forward pass: the scans cast, read into the task's state."""
+        if self._caster is None:
+            return
+        st, n, dev = self._state, self.num_envs, self.sim.device
+        scans = [s for s in (self._height_scan, self._foot_scan) if s is not None]
+        self._caster.sense(*scans)
+        if self._height_scan is not None:
+            self._height_scan.heights(st.scan)
+            if self.task.upright_on_terrain:
+                wp.launch(fit_ground_normal, dim=n, inputs=[self._height_scan.s, self._normal_picks],
+                          outputs=[st.terrain_normal], device=dev)
+        if self._foot_scan is not None:
+            self._foot_scan.clearance(st.foot_clear)
 
     # ------------------------------------------------------------------ the randomisation drawn once
     def _randomize(self, rz) -> None:
@@ -149,15 +216,20 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
                   outputs=[sim.d.ctrl, self._nan_count], device=dev)
         sim.simulate()
         wp.launch(legged_step, dim=n, inputs=[self.params, self.robot, self._rng_state, self._mj, self._state,
-                                              self._episodes, self._out, self._critic, self._final_critic], device=dev)
+                                              self._episodes, self._levels, self._out, self._critic,
+                                              self._final_critic], device=dev)
         self._finish_step()
 
     def _launch_reset(self, force_all: int) -> None:
         sim, n, dev = self.sim, self.num_envs, self.sim.device
+        if self.terrain is not None:  # mjlab's curriculum runs first in its reset
+            wp.launch(move_levels, dim=n, inputs=[self._levels, self.robot, self._mj, self._state, force_all,
+                                                  self._rng_state, self._out], device=dev)
         wp.launch(reset_legged_worlds, dim=n, inputs=[self.params, self.robot, force_all, self._stagger,
-                                                      self._rng_state, self._mj, self._state, self._episodes,
-                                                      self._out], device=dev)
+                                                      self._rng_state, self._levels.origin, self._mj, self._state,
+                                                      self._episodes, self._out], device=dev)
         sim.forward()
+        self._sense()
         wp.launch(update_commands, dim=n, inputs=[self.params, self.robot, force_all, self._rng_state, self._out.done,
                                                   self._mj, self._state, self._episodes], device=dev)
         wp.launch(observe, dim=n, inputs=[self.params, self.robot, self._rng_state, self._mj, self._state,
@@ -166,19 +238,22 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
     # ------------------------------------------------------------------ the task's state (Tensor API)
     STATE_KEYS = ("qpos", "qvel", "warm_start", "action", "prev_action", "command", "heading_target", "command_kind",
                   "command_time_left", "push_time_left", "air_time", "contact_time", "peak_height", "foot_height",
-                  "encoder_bias", "length", "errors", "foot_friction", "body_ipos")
+                  "encoder_bias", "length", "errors", "foot_friction", "body_ipos", "terrain_level", "terrain_kind",
+                  "env_origin", "terrain_normal")
 
     def _state_views(self) -> dict[str, torch.Tensor]:
         """Writable torch views of everything a world carries from step to step: MuJoCo's state, the task's
-        (command, timers, contact times, action history) and the randomised model fields."""
-        t, st, d, m, ep = self.sim.to_torch, self._state, self.sim.d, self.sim.m, self._episodes
+        (command, timers, contact times, action history; on rough ground its level, kind, start and the ground's
+        normal under the base from the last scan) and the randomised model fields."""
+        t, st, d, m, ep, lv = self.sim.to_torch, self._state, self.sim.d, self.sim.m, self._episodes, self._levels
         return {"qpos": t(d.qpos), "qvel": t(d.qvel), "warm_start": t(d.qacc_warmstart), "action": t(st.action),
                 "prev_action": t(st.prev_action), "command": t(st.command), "heading_target": t(st.heading_target),
                 "command_kind": t(st.command_kind), "command_time_left": t(st.command_time_left),
                 "push_time_left": t(st.push_time_left), "air_time": t(st.air_time), "contact_time": t(st.contact_time),
                 "peak_height": t(st.peak_height), "foot_height": t(st.foot_height), "encoder_bias": t(st.encoder_bias),
                 "length": t(ep.length), "errors": t(ep.errors), "geom_friction": t(m.geom_friction),
-                "body_ipos": t(m.body_ipos)}
+                "body_ipos": t(m.body_ipos), "terrain_level": t(lv.level), "terrain_kind": t(lv.kind),
+                "env_origin": t(lv.origin), "terrain_normal": t(st.terrain_normal)}
 
     def state(self) -> dict[str, torch.Tensor]:
         """A copy of every world's state (``STATE_KEYS``; ``foot_friction`` is the foot geoms' (N, G, 3)), and the
@@ -224,6 +299,7 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
         say), without a step or any draw: the policy's observation, and the critic's in the info."""
         def run():
             self.sim.forward()
+            self._sense()
             wp.launch(observe, dim=self.num_envs, inputs=[self.params, self.robot, self._rng_state, self._mj,
                                                           self._state, self._out.obs, self._critic],
                       device=self.sim.device)

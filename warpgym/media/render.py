@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from warpgym.native import NativeRobot
+from warpgym.tasks.legged.model import compile_task_scene
 
 INSTALL_GL = ("install an OpenGL that needs no display: the NVIDIA driver's EGL on a GPU machine, Mesa's on "
               "a CPU-only one (Debian/Ubuntu: apt install libegl1 libgl1-mesa-dri) or OSMesa "
@@ -311,7 +312,7 @@ class SuiteView:
 
 
 class LeggedView:
-    """Draws one world of a legged task from MuJoCo's qpos: the scene file as MuJoCo compiles it, its collision
+    """Draws one world of a legged task from MuJoCo's qpos: the scene as MuJoCo compiles it (and its ground), its collision
     geometry shown (the file holds no visual meshes), the camera following the base from behind and above."""
 
     def __init__(self, task, width: int = 640, height: int = 480):
@@ -320,7 +321,7 @@ class LeggedView:
         RobotRenderer.check_size(width, height)
         self._mj = mujoco
         self.task, self.width, self.height = task, width, height
-        self.model = mujoco.MjModel.from_xml_path(task.scene_path)
+        self.model = compile_task_scene(task)[0].mjm  # with its generated ground, on rough tasks
         self.data = mujoco.MjData(self.model)
         self.root = self.model.body(task.root_body).id
         tall = self.model.body_subtreemass[self.root] > 20.0  # a humanoid rather than a quadruped

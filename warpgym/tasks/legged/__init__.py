@@ -2,10 +2,11 @@
 definition."""
 
 from warpgym.tasks.legged.base import LeggedTask
-from warpgym.tasks.legged.g1 import G1VelocityFlat
-from warpgym.tasks.legged.go1 import Go1VelocityFlat
+from warpgym.tasks.legged.g1 import G1VelocityFlat, G1VelocityRough
+from warpgym.tasks.legged.go1 import Go1VelocityFlat, Go1VelocityRough
 
-LEGGED: dict[str, LeggedTask] = {t.name: t for t in (Go1VelocityFlat(), G1VelocityFlat())}
+LEGGED: dict[str, LeggedTask] = {t.name: t for t in (Go1VelocityFlat(), G1VelocityFlat(), Go1VelocityRough(),
+                                                      G1VelocityRough())}
 
 
 def get_legged_task(name) -> LeggedTask:

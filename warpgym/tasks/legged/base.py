@@ -24,6 +24,7 @@ BASE_WEIGHTS = {
     "track_linear_velocity": 2.0, "track_angular_velocity": 2.0, "upright": 1.0, "pose": 1.0, "body_ang_vel": 0.0,
     "angular_momentum": 0.0, "dof_pos_limits": -1.0, "action_rate_l2": -0.1, "air_time": 0.0, "foot_clearance": -2.0,
     "foot_swing_height": -0.25, "foot_slip": -0.1, "soft_landing": -1e-5, "self_collisions": 0.0,
+    "shank_collision": 0.0, "trunk_head_collision": 0.0,
 }
 
 
@@ -45,6 +46,11 @@ class LeggedTask:
     foot_sites: tuple[str, ...]  # the feet's heights and velocities
     foot_sensors: tuple[str, ...]  # contact sensors "<name>_found" and "<name>_force", one per foot
     self_collision_sensor: str = ""  # "<name>_force" felt by self-collisions; "": none
+    # more contact sensors ("<name>_force"), each group counted as mjlab's force history counts it: the calves'
+    # and the trunk's and head's touches of the ground (terms), and those that end an episode (illegal contact)
+    shank_sensors: tuple[str, ...] = ()
+    trunk_sensors: tuple[str, ...] = ()
+    illegal_contact_sensors: tuple[str, ...] = ()
     imu_lin_vel_sensor: str = "robot/imu_lin_vel"
     imu_ang_vel_sensor: str = "robot/imu_ang_vel"
     angmom_sensor: str = "robot/root_angmom"
@@ -90,8 +96,22 @@ class LeggedTask:
     slip_command: float = 0.05
     landing_command: float = 0.05
     self_collision_force: float = 10.0
-    # termination: the base tilted further than this from upright
+    # termination: the base tilted further than this from upright (fall_over=False: tilt ends nothing)
+    fall_over: bool = True
     fall_angle: float = math.radians(70.0)
+    # rough ground (terrain=None: the scene's floor): a TerrainGrid (warpgym.tasks.legged.terrain, curriculum=True)
+    # generated from terrain_seed into the scene's "terrain" body; each world's first level drawn up to
+    # max_init_terrain_level; an episode whose base leaves the ground (less terrain_margin) ends as a time-out
+    terrain: object = None
+    terrain_seed: int = 0
+    max_init_terrain_level: int = 5
+    terrain_margin: float = 0.3
+    # ground scans (warpgym.tasks.legged.scan.ScanPattern): the height scan under the root body that both
+    # observations see (the policy's with noise_height_scan), the ring under each foot site for the feet's heights
+    height_scan: object = None
+    foot_scan: object = None
+    noise_height_scan: float = 0.1
+    upright_on_terrain: bool = False  # the upright term's "up" is the ground's normal under the height scan
     # observation noise on the policy's terms, uniform in [-x, x] (mjlab's play mode turns it off)
     observation_noise: bool = True
     noise_lin_vel: float = 0.5
@@ -185,7 +205,8 @@ class LeggedTask:
         non_negative = ("rel_standing_envs", "rel_heading_envs", "rel_forward_envs", "heading_control_stiffness",
                         "walking_threshold", "running_threshold", "air_time_command", "clearance_command",
                         "swing_command", "slip_command", "landing_command", "self_collision_force", "noise_lin_vel",
-                        "noise_ang_vel", "noise_gravity", "noise_joint_pos", "noise_joint_vel")
+                        "noise_ang_vel", "noise_gravity", "noise_joint_pos", "noise_joint_vel", "terrain_margin",
+                        "noise_height_scan")
         for name in positive + non_negative:
             v = getattr(self, name)
             ok = _is_number(v) and (v > 0 if name in positive else v >= 0)
@@ -205,6 +226,14 @@ class LeggedTask:
             if not (isinstance(axis, tuple) and len(axis) == 4 and axis[0] in (0, 1, 2) and _is_range(axis[1:3])
                     and axis[1] > 0 and axis[3] in ("uniform", "log_uniform")):
                 fail("foot_friction", "must hold (axis 0-2, low > 0, high, 'uniform' or 'log_uniform') entries")
+        if self.terrain is not None and not getattr(self.terrain, "curriculum", False):
+            fail("terrain", "must be a TerrainGrid with curriculum=True (one kind a column, levels along rows), "
+                            "e.g. dataclasses.replace(terrain.ROUGH, curriculum=True)")
+        if isinstance(self.max_init_terrain_level, bool) or not isinstance(self.max_init_terrain_level, int) \
+                or self.max_init_terrain_level < 0:
+            fail("max_init_terrain_level", "must be a level >= 0 (mjlab's rough tasks: 5)")
+        if self.upright_on_terrain and self.height_scan is None:
+            fail("upright_on_terrain", "needs a height_scan to fit the ground's normal to")
         for name in ("posture_std_standing", "posture_std_walking", "posture_std_running"):
             if not all(isinstance(k, str) and _is_number(v) and v > 0 for k, v in getattr(self, name)):
                 fail(name, "must map joint-name patterns to positive stds")

@@ -1,5 +1,5 @@
-"""Unitree G1 (29 joints) on flat ground, following a velocity command: mjlab's ``Mjlab-Velocity-Flat-Unitree-G1``
-(``unitree_g1_flat_env_cfg``, mjlab 1.6.0).
+"""Unitree G1 (29 joints) following a velocity command, on flat ground (mjlab's ``Mjlab-Velocity-Flat-Unitree-G1``,
+``unitree_g1_flat_env_cfg``) and on rough ground (``Mjlab-Velocity-Rough-Unitree-G1``), mjlab 1.6.0.
 
 The G1 of MuJoCo Menagerie as mjlab's asset zoo configures it (every collision geom on, self-collisions
 included, seven capsules a foot with condim 3), its knees-bent keyframe, the torso's centre of mass offset, a
@@ -9,6 +9,8 @@ penalty on the torso's roll and pitch rates, on the whole body's angular momentu
 from dataclasses import dataclass
 
 from warpgym.tasks.legged.base import LeggedTask, _weights
+from warpgym.tasks.legged.go1 import ROUGH_CURRICULUM
+from warpgym.tasks.legged.scan import G1_FOOT_SCAN, TERRAIN_SCAN
 
 SIDES = ("left", "right")
 
@@ -42,3 +44,20 @@ class G1VelocityFlat(LeggedTask):
     nconmax: int = 48
     reward_weights: tuple = _weights(body_ang_vel=-0.05, angular_momentum=-0.02, self_collisions=-1.0)
     foot_friction: tuple = ((0, 0.3, 1.2, "uniform"),)
+
+
+@dataclass(frozen=True)
+class G1VelocityRough(G1VelocityFlat):
+    """Unitree G1 on mjlab's rough ground: ``Mjlab-Velocity-Rough-Unitree-G1`` (``unitree_g1_rough_env_cfg``): the
+    generated ground with its curriculum, the height scan under the pelvis in both observations, the feet's scanned
+    heights and more room for contacts; the fall still ends an episode."""
+
+    name: str = "G1VelocityRough-v0"
+    mirrors: str = "Mjlab-Velocity-Rough-Unitree-G1"
+    scene_file: str = "g1_velocity_rough.xml"
+    nconmax: int = 70
+    njmax: int = 1500
+    contact_sensor_maxmatch: int = 500
+    terrain: object = ROUGH_CURRICULUM
+    height_scan: object = TERRAIN_SCAN
+    foot_scan: object = G1_FOOT_SCAN

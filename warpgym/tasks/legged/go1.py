@@ -1,14 +1,19 @@
-"""Unitree Go1 on flat ground, following a velocity command: mjlab's ``Mjlab-Velocity-Flat-Unitree-Go1``
-(``unitree_go1_flat_env_cfg``, mjlab 1.6.0).
+"""Unitree Go1 following a velocity command, on flat ground (mjlab's ``Mjlab-Velocity-Flat-Unitree-Go1``,
+``unitree_go1_flat_env_cfg``) and on rough ground (``Mjlab-Velocity-Rough-Unitree-Go1``), mjlab 1.6.0.
 
 The Go1 of MuJoCo Menagerie as mjlab's asset zoo configures it (every collision geom on, the feet with condim 6
 and their own friction, position actuators of 10 Hz and damping ratio 2, elliptic friction cones), its foot
 friction randomised per axis, the trunk's centre of mass offset.
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from warpgym.tasks.legged.base import LeggedTask, _weights
+from warpgym.tasks.legged.scan import GO1_FOOT_SCAN, TERRAIN_SCAN
+from warpgym.tasks.legged.terrain import ROUGH
+
+# mjlab's rough tasks build its ROUGH_TERRAINS_CFG in curriculum mode: one kind a column, ten levels
+ROUGH_CURRICULUM = replace(ROUGH, curriculum=True)
 
 FEET = ("FR", "FL", "RR", "RL")
 HIP_THIGH = r".*(FR|FL|RR|RL)_(hip|thigh)_joint.*"
@@ -34,3 +39,31 @@ class Go1VelocityFlat(LeggedTask):
     reward_weights: tuple = _weights()
     # condim-6 feet: sliding, torsional and rolling friction each drawn
     foot_friction: tuple = ((0, 0.3, 1.5, "uniform"), (1, 1e-4, 2e-2, "log_uniform"), (2, 1e-5, 5e-3, "log_uniform"))
+
+
+@dataclass(frozen=True)
+class Go1VelocityRough(Go1VelocityFlat):
+    """Unitree Go1 on mjlab's rough ground: ``Mjlab-Velocity-Rough-Unitree-Go1`` (``unitree_go1_rough_env_cfg``).
+
+    What the flat task takes away comes back: the generated ground with its curriculum, the height scan under the
+    trunk in both observations, the feet's scanned heights, upright measured against the ground's slope, the
+    calves', trunk's and head's touches of the ground and self-collisions charged, the thighs' touch ending an
+    episode where tilt no longer does, and more room for contacts.
+    """
+
+    name: str = "Go1VelocityRough-v0"
+    mirrors: str = "Mjlab-Velocity-Rough-Unitree-Go1"
+    scene_file: str = "go1_velocity_rough.xml"
+    self_collision_sensor: str = "self_collision_trunk"
+    shank_sensors: tuple = tuple(f"shank_ground_touch_{f}_calf_collision{i}" for f in FEET for i in (1, 2))
+    trunk_sensors: tuple = ("trunk_ground_touch_trunk_collision", "trunk_ground_touch_head_collision")
+    illegal_contact_sensors: tuple = tuple(f"thigh_ground_touch_{f}_thigh_collision{i}" for f in FEET for i in (1, 2, 3))
+    reward_weights: tuple = _weights(self_collisions=-0.1, shank_collision=-0.1, trunk_head_collision=-0.1)
+    fall_over: bool = False
+    nconmax: int = 35
+    njmax: int = 1500
+    contact_sensor_maxmatch: int = 500
+    terrain: object = ROUGH_CURRICULUM
+    height_scan: object = TERRAIN_SCAN
+    foot_scan: object = GO1_FOOT_SCAN
+    upright_on_terrain: bool = True

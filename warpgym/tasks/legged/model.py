@@ -37,10 +37,11 @@ class RobotIndex:
     foot_body: np.ndarray
     foot_found: np.ndarray
     foot_force: np.ndarray
+    hit_force: np.ndarray  # (H,) sensordata addresses of the contact groups' forces
+    hit_group: np.ndarray  # (H,) each one's group (kernels.legged.params: SELF_COLLISION ... ILLEGAL_CONTACT)
     imu_lin_vel: int
     imu_ang_vel: int
     angmom: int
-    collision_force: int
 
 
 def _names(mjm, kind) -> list[str]:
@@ -119,6 +120,12 @@ def resolve(task: LeggedTask, mjm) -> RobotIndex:
     def sensor(field, name):
         return int(mjm.sensor_adr[_find(task, mjm, "sensor", field, name)])
 
+    from kernels.legged.params import ILLEGAL_CONTACT, SELF_COLLISION, SHANK_GROUND, TRUNK_GROUND  # noqa: PLC0415
+
+    groups = [("self_collision_sensor", task.self_collision_sensor, SELF_COLLISION)] if task.self_collision_sensor else []
+    groups += [("shank_sensors", n, SHANK_GROUND) for n in task.shank_sensors]
+    groups += [("trunk_sensors", n, TRUNK_GROUND) for n in task.trunk_sensors]
+    groups += [("illegal_contact_sensors", n, ILLEGAL_CONTACT) for n in task.illegal_contact_sensors]
     sites = np.array([_find(task, mjm, "site", "foot_sites", s) for s in task.foot_sites], np.int32)
     if len(task.foot_sensors) != len(sites):
         raise ValueError(f"{task.name}: foot_sensors names {len(task.foot_sensors)} feet, foot_sites {len(sites)}: "
@@ -141,9 +148,21 @@ def resolve(task: LeggedTask, mjm) -> RobotIndex:
         imu_lin_vel=sensor("imu_lin_vel_sensor", task.imu_lin_vel_sensor),
         imu_ang_vel=sensor("imu_ang_vel_sensor", task.imu_ang_vel_sensor),
         angmom=sensor("angmom_sensor", task.angmom_sensor),
-        collision_force=sensor("self_collision_sensor", task.self_collision_sensor + "_force")
-        if task.self_collision_sensor else -1,
+        hit_force=np.array([sensor(field, name + "_force") for field, name, _ in groups], np.int32),
+        hit_group=np.array([g for _, _, g in groups], np.int32),
     )
+
+
+def compile_task_scene(task: LeggedTask):
+    """MuJoCo's compile of the task's scene with its generated ground (rough tasks; none on the flat floor):
+    ``(CompiledModel, Terrain or None)``, the same model for the env, its drawings and native MuJoCo."""
+    from warpgym.sim.scene import compile_scene  # noqa: PLC0415
+    from warpgym.tasks.legged.terrain import add_to_spec, generate  # noqa: PLC0415
+
+    if task.terrain is None:
+        return compile_scene(task.scene_path), None
+    ground = generate(task.terrain, task.terrain_seed)
+    return compile_scene(task.scene_path, lambda spec: add_to_spec(spec, ground)), ground
 
 
 def kernel_structs(task: LeggedTask, idx: RobotIndex, device: str):
@@ -184,7 +203,14 @@ def kernel_structs(task: LeggedTask, idx: RobotIndex, device: str):
     p.swing_height, p.swing_command = task.swing_height, task.swing_command
     p.slip_command, p.landing_command = task.slip_command, task.landing_command
     p.collision_force = task.self_collision_force
+    p.upright_terrain = int(task.upright_on_terrain)
+    p.fall_over = int(task.fall_over)
     p.limit_angle = task.fall_angle
+    p.num_scan = 0 if task.height_scan is None else len(task.height_scan.offsets)
+    p.noise_scan = (1.0 if task.observation_noise else 0.0) * task.noise_height_scan
+    # mjlab scales the scan by 1 / its reach
+    p.scan_scale = 1.0 if task.height_scan is None else 1.0 / task.height_scan.max_distance
+    p.foot_scan = int(task.foot_scan is not None)
     on = 1.0 if task.observation_noise else 0.0
     p.noise_lin_vel, p.noise_ang_vel = on * task.noise_lin_vel, on * task.noise_ang_vel
     p.noise_gravity, p.noise_joint_pos = on * task.noise_gravity, on * task.noise_joint_pos
@@ -210,7 +236,7 @@ def kernel_structs(task: LeggedTask, idx: RobotIndex, device: str):
     r.foot_site, r.foot_body = arr(idx.foot_site, wp.int32), arr(idx.foot_body, wp.int32)
     r.foot_found, r.foot_force = arr(idx.foot_found, wp.int32), arr(idx.foot_force, wp.int32)
     r.imu_lin_vel, r.imu_ang_vel, r.angmom = idx.imu_lin_vel, idx.imu_ang_vel, idx.angmom
-    r.collision_force = idx.collision_force
+    r.hit_force, r.hit_group = arr(idx.hit_force, wp.int32), arr(idx.hit_group, wp.int32)
 
     rz = Randomization()
     axes = task.foot_friction if task.randomize else ()

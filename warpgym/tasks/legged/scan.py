@@ -54,6 +54,16 @@ class ScanPattern:
         return np.asarray(self.offsets, dtype=np.float32).reshape(-1, 3)
 
 
+def normal_picks(num_rays: int, max_points: int = 32) -> np.ndarray:
+    """The rays mjlab fits the ground's normal to: ``max_points`` of them evenly spaced (torch's float32
+    ``linspace``, truncated), or all when there are no more."""
+    import torch  # noqa: PLC0415
+
+    if num_rays <= max_points:
+        return np.arange(num_rays, dtype=np.int32)
+    return torch.linspace(0, num_rays - 1, max_points).long().numpy().astype(np.int32)
+
+
 def pattern(offsets: np.ndarray, **kwargs) -> ScanPattern:
     return ScanPattern(offsets=tuple(tuple(float(v) for v in p) for p in offsets), **kwargs)
 

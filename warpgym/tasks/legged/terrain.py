@@ -320,10 +320,11 @@ def generate(grid: TerrainGrid, seed: int) -> Terrain:
 
 
 def add_to_spec(spec, terrain: Terrain, body_name: str = "terrain") -> None:
-    """The terrain's geoms on a new world body of ``spec`` (an ``mujoco.MjSpec``), massless, named in order."""
+    """The terrain's geoms on the world body ``body_name`` of ``spec`` (an ``mujoco.MjSpec``; made when the spec has
+    none, as the rough tasks' scenes have an empty one), massless, named in order."""
     import mujoco  # noqa: PLC0415
 
-    body = spec.worldbody.add_body(name=body_name)
+    body = spec.body(body_name) or spec.worldbody.add_body(name=body_name)
     for i, g in enumerate(terrain.boxes_and_fields()):
         if isinstance(g, Box):
             body.add_geom(name=f"terrain_{i}", type=mujoco.mjtGeom.mjGEOM_BOX, size=list(g.half), pos=list(g.pos),
