@@ -63,6 +63,8 @@ BLOCKS = {
     "readme-learning": ("README.md", "benchmarks.learning.suite_learning", SUITE_LEARNING,
                         after("The README's table:", 2)),
     "suite-learning": ("docs/benchmarks.md", "benchmarks.learning.suite_learning", SUITE_LEARNING, first(2)),
+    "suite-sb3": ("docs/benchmarks.md", "benchmarks.learning.suite_learning", ["--report", "docs/bench/suite_sb3"],
+                  first(1)),
     "suite-speed": ("docs/benchmarks.md", "benchmarks.speed.suite_speed",
                     ["--report", "docs/bench/suite_speed_h100_same_states.json", "docs/bench/suite_speed_h100_cpu.json"],
                     first(1)),
