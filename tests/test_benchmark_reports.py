@@ -1111,17 +1111,17 @@ def test_background_overlap_times_the_chunk_beside_the_iteration_and_refuses_emp
 
 
 def test_the_suite_gif_caption_gives_the_drawn_policies_scores_and_cards_from_the_tables_json():
-    """The GIFs of Gymnasium's tasks (docs/benchmarks.md, above the learning table) are seed 0's 10-minute policies
+    """The GIFs of Gymnasium's tasks (docs/tasks.md, at the head of the suite's section) are seed 0's 10-minute policies
     of the learning table: the caption's scores and each alt text's card are those of the table's JSON, so a row made
     again (a preset changed, the row promoted, the GIF redrawn) cannot leave the superseded row's score or card."""
     import re
 
     root = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
-    with open(os.path.join(root, "docs", "benchmarks.md")) as f:
+    with open(os.path.join(root, "docs", "tasks.md")) as f:
         readme = f.read()
     caption = re.search(r"Gymnasium's ((?:[\w-]+-v5, )+[\w-]+-v5 and [\w-]+-v5) after 10 minutes, which score "
                         r"([\d, and-]+) in `gymnasium.make`'s env \(seed 0\)", " ".join(readme.split()))
-    assert caption, "the GIF caption above the suite's learning table moved or changed its form"
+    assert caption, "the GIF caption of docs/tasks.md's suite section moved or changed its form"
     tasks = re.split(r", | and ", caption.group(1))
     scores = [int(v) for v in re.split(r", | and ", caption.group(2))]
     assert len(tasks) == len(scores) == 7

@@ -186,8 +186,7 @@ def test_the_scene_and_ground_compile_to_mjlabs_model(task):
     assert ours_sensors == ref[prefix + "sensor_objects"].tolist()
 
 
-def test_ended_episodes_report_their_level_and_native_mujoco_refuses_rough_ground_in_one_line(go1):
-    from warpgym.native_legged import native_episodes
+def test_ended_episodes_report_their_level_and_drawings_compile_the_same_ground(go1):
     from warpgym.tasks.legged import LEGGED
     from warpgym.tasks.legged.model import compile_task_scene
 
@@ -199,9 +198,7 @@ def test_ended_episodes_report_their_level_and_native_mujoco_refuses_rough_groun
     _, _, _, truncated, info = go1.step(torch.zeros(N, go1.num_actions))
     assert truncated.all()
     assert torch.equal(info["episode"]["terrain_level"].cpu(), go1.info["terrain_level"].cpu())
-    # drawings and native MuJoCo compile the same scene and ground as the env
+    # drawings and native MuJoCo (tests/test_native_legged.py) compile the same scene and ground as the env
     model, ground = compile_task_scene(LEGGED["Go1VelocityRough-v0"])
     assert model.mjm.ngeom == go1.sim.mjm.ngeom > 500 and ground is not None
-    with pytest.raises(ValueError, match="flat-ground tasks only"):
-        native_episodes(LEGGED["Go1VelocityRough-v0"], lambda obs: np.zeros(12, np.float32), 1)
     go1.reset(seed=0)

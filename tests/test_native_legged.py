@@ -30,3 +30,52 @@ def test_the_schedule_cycles_its_commands():
     table = commands(1000, 0.02)
     assert table.shape == (1000, 3) and np.allclose(table[0], SCHEDULE[0]) and np.allclose(table[150], SCHEDULE[1])
     assert len({tuple(c) for c in table}) == len(SCHEDULE)
+
+
+def test_on_rough_ground_native_mujoco_scans_the_ground_as_warpgym_does_and_tracks_alike():
+    """A rough task: native MuJoCo's height scan (``mj_ray``, float64) of each kind of ground, heightfields
+    included, against warpgym's observation of the same state; and a policy that reads the scan, on the three kinds
+    of boxes (flat, stairs up and down, where the two simulators' contacts agree), tracking alike."""
+    import mujoco
+
+    from warpgym.envs.legged import LeggedVecEnv
+    from warpgym.native_legged import height_scan, start_patches, start_pose, start_yaws
+    from warpgym.tasks.legged.model import compile_task_scene
+
+    task = LEGGED["Go1VelocityRough-v0"].replace(episode_length_s=2.0)
+    kinds = len(task.terrain.sub_terrains)
+    env = LeggedVecEnv(task, num_envs=kinds, device="cpu", pushes=False, randomize=False, observation_noise=False)
+    starts = start_patches(env.terrain, kinds, level=9)
+    state = env.state()
+    qpos, idx = state["qpos"].clone(), env.index
+    for e, (yaw, (_, origin)) in enumerate(zip(start_yaws(kinds), starts)):
+        qpos[e, :7] = torch.as_tensor(start_pose(idx, yaw))
+        qpos[e, :3] += torch.as_tensor(origin + [1.3, -0.7, 0.2], dtype=qpos.dtype)  # off the patch's centre
+    env.write_state({"qpos": qpos})
+    obs, _ = env.observe()
+    m = compile_task_scene(task)[0].mjm
+    d = mujoco.MjData(m)
+    scans = 187
+    for e in range(kinds):
+        d.qpos[:] = qpos[e].double().numpy()
+        mujoco.mj_forward(m, d)
+        native = height_scan(mujoco, m, d, idx.root_body, task.height_scan) / 5.0
+        ours = obs[e, -scans:].numpy()
+        # MuJoCo Warp's bounding-volume rays miss a heightfield where they meet it at its lowest height (the flat
+        # floor of the inverted pyramid's pit): 21 rays here read the reach (5 m, 1.0 scaled), in warpgym as in
+        # mjlab's own env from this state, where native MuJoCo hits the floor
+        missed = (np.abs(ours - 1.0) < 1e-6) & (native < 1.0)
+        assert missed.sum() == (21 if e == 4 else 0), (e, int(missed.sum()))
+        np.testing.assert_allclose(ours[~missed], native[~missed], atol=2e-5, err_msg=f"kind {e}")
+    assert np.ptp(obs[1, -scans:].numpy()) > 0.02  # the stairs at the top level: the scan is not flat
+    env.close()
+
+    def reads_the_scan(obs):
+        return np.full(12, 0.5 * np.tanh(5.0 * float(np.mean(obs[-scans:])) - 1.0), np.float32)
+
+    native = native_episodes(task, reads_the_scan, 3, level=9)
+    ours = warpgym_episodes(task, lambda obs: torch.as_tensor(np.stack([reads_the_scan(o) for o in obs.numpy()])), 3,
+                            level=9)
+    assert native.falls == ours.falls == 0 and list(native.falls_by_kind) == ["flat", "pyramid_stairs",
+                                                                               "pyramid_stairs_inv"]
+    assert abs(native.error_xy / ours.error_xy - 1) < 0.01 and abs(native.error_yaw / ours.error_yaw - 1) < 0.01

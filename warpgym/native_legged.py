@@ -5,8 +5,11 @@ check of ``warpgym eval`` for the legged tasks.
 Both sides play the nominal robot (no randomisation, no pushes, no observation noise, no encoder bias), from the
 same starts (the keyframe pose turned to a yaw of its own per episode), the same commands (each held
 ``hold`` seconds, in turn), for the task's episode length. Tracking errors are mjlab's: the base's planar speed and
-yaw rate against the command, from the base's own velocity in its frame, averaged over every step. A fall is the
-base tilted past the task's limit.
+yaw rate against the command, from the base's own velocity in its frame, averaged over every step. A fall is what
+ends the task's episode: the base tilted past the task's limit, or (the rough Go1) a thigh on the ground.
+
+On rough ground the episodes start on the patches of one level, a kind of ground each in turn, and native MuJoCo's
+observation casts the height scan with ``mj_ray`` (float64) as mjlab's sensor aims it; falls are counted per kind.
 """
 
 from __future__ import annotations
@@ -17,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from warpgym.tasks.legged import LeggedTask
-from warpgym.tasks.legged.model import resolve
+from warpgym.tasks.legged.model import compile_task_scene, resolve
 
 # vx, vy [m/s], yaw rate [rad/s]: forward, a turn while walking, sideways, backward, turning in place, standing
 SCHEDULE = ((1.0, 0.0, 0.0), (0.6, 0.0, 0.4), (0.0, 0.5, 0.0), (-0.6, 0.0, 0.0), (0.0, 0.0, -0.5), (0.0, 0.0, 0.0))
@@ -30,9 +33,45 @@ class Tracking:
     error_yaw: float  # mean |command - yaw rate| [rad/s]
     falls: int
     episodes: int
+    falls_by_kind: dict | None = None  # rough ground: {kind of ground: (falls, episodes)}
 
     def to_dict(self) -> dict:
         return dict(vars(self))
+
+
+def start_patches(ground, episodes: int, level: int) -> list[tuple[int, np.ndarray]]:
+    """Episode e's kind of ground (e modulo the kinds) and its patch's start at ``level``: [(kind, origin)]."""
+    level = min(level, ground.grid.num_rows - 1)
+    cols = ground.grid.cols
+    return [(e % cols, ground.origins[level, e % cols].astype(np.float64)) for e in range(episodes)]
+
+
+def per_kind(ground, kinds: list[int], fell: list[bool]) -> dict:
+    names = [name for name, _ in ground.grid.sub_terrains]
+    return {names[k]: (sum(f for kk, f in zip(kinds, fell) if kk == k), kinds.count(k)) for k in sorted(set(kinds))}
+
+
+def height_scan(mujoco, m, d, body: int, pattern) -> np.ndarray:
+    """mjlab's height scan in native MuJoCo: the body's height above each ray's hit (``mj_ray`` over the pattern's
+    geom groups, the body itself left out), aimed in the body's heading; the reach where nothing is hit."""
+    mat = d.xmat[body].reshape(3, 3)
+    x = mat[:2, 0]
+    if np.linalg.norm(x) < 0.1:  # nose straight up or down: the y axis turned a quarter, as mjlab's sensor does
+        y = mat[:2, 1] / max(np.linalg.norm(mat[:2, 1]), 1e-6)
+        x = np.array([y[1], -y[0]])
+    x = x / max(np.linalg.norm(x), 1e-6)
+    rot = np.array([[x[0], -x[1], 0.0], [x[1], x[0], 0.0], [0.0, 0.0, 1.0]])
+    groups = np.array([1 if g in pattern.groups else 0 for g in range(6)], np.uint8)
+    direction = rot @ np.asarray(pattern.direction, np.float64)
+    pos = d.xpos[body]
+    out = np.full(len(pattern.offsets), pattern.max_distance)
+    geomid = np.zeros(1, np.int32)
+    for i, offset in enumerate(pattern.array().astype(np.float64)):
+        pnt = pos + rot @ offset
+        dist = mujoco.mj_ray(m, d, pnt, direction, groups, 1, body, geomid)
+        if 0 <= dist <= pattern.max_distance:
+            out[i] = pos[2] - (pnt[2] + direction[2] * dist)
+    return out
 
 
 def commands(steps: int, dt: float, schedule=SCHEDULE, hold: float = HOLD) -> np.ndarray:
@@ -69,52 +108,63 @@ def tilt(quat) -> float:
     return math.acos(max(-1.0, min(1.0, 1 - 2 * (x * x + y * y))))
 
 
-def native_episodes(task: LeggedTask, act, episodes: int) -> Tracking:
-    """``act``: a function from the policy's observation (numpy float32, (obs,)) to its action."""
+def native_episodes(task: LeggedTask, act, episodes: int, level: int | None = None) -> Tracking:
+    """``act``: a function from the policy's observation (numpy float32, (obs,)) to its action. ``level``: the rough
+    ground's level the episodes start on (default: the curriculum's highest first level)."""
+    level = task.max_init_terrain_level if level is None else level
     import mujoco  # noqa: PLC0415
 
-    if task.terrain is not None or task.height_scan is not None:
-        raise ValueError(f"{task.name}: native MuJoCo replays the flat-ground tasks only so far (a rough "
-                         "task's observation needs its height scan cast by MuJoCo there): replay "
-                         "Go1VelocityFlat-v0 or G1VelocityFlat-v0")
-    m = mujoco.MjModel.from_xml_path(task.scene_path)
+    from kernels.legged.params import ILLEGAL_CONTACT  # noqa: PLC0415
+
+    compiled, ground = compile_task_scene(task)
+    m = compiled.mjm
     d = mujoco.MjData(m)
     idx = resolve(task, m)
     steps, dt = task.episode_length, task.decimation * task.timestep
     schedule = commands(steps, dt)
     r, j = idx.root_qpos, idx.joint_qpos
-    errors, falls = [], 0
-    for yaw in start_yaws(episodes):
+    illegal = idx.hit_force[idx.hit_group == ILLEGAL_CONTACT]
+    starts = start_patches(ground, episodes, level) if ground is not None else [(0, np.zeros(3))] * episodes
+    errors, fell = [], []
+    for yaw, (_, origin) in zip(start_yaws(episodes), starts):
         mujoco.mj_resetData(m, d)
         d.qpos[r:r + 7] = start_pose(idx, yaw)
+        d.qpos[r:r + 3] += origin
         d.qpos[j] = idx.default_joint_pos
         mujoco.mj_forward(m, d)
         action = np.zeros(len(j), np.float32)
+        ended = False
         for t in range(steps):
             cmd = schedule[t]
             quat = d.xquat[idx.root_body]
             gravity = base_velocity(quat, [0.0, 0.0, -1.0], [0.0, 0.0, 0.0])[0]
-            obs = np.concatenate([d.sensordata[idx.imu_lin_vel:idx.imu_lin_vel + 3],
-                                  d.sensordata[idx.imu_ang_vel:idx.imu_ang_vel + 3], gravity,
-                                  d.qpos[j] - idx.default_joint_pos, d.qvel[idx.joint_dof], action, cmd]).astype(np.float32)
-            action = np.asarray(act(obs), np.float32)
+            parts = [d.sensordata[idx.imu_lin_vel:idx.imu_lin_vel + 3], d.sensordata[idx.imu_ang_vel:idx.imu_ang_vel + 3],
+                     gravity, d.qpos[j] - idx.default_joint_pos, d.qvel[idx.joint_dof], action, cmd]
+            if task.height_scan is not None:  # mjlab scales the scan by 1 / its reach
+                parts.append(height_scan(mujoco, m, d, idx.root_body, task.height_scan) / task.height_scan.max_distance)
+            action = np.asarray(act(np.concatenate(parts).astype(np.float32)), np.float32)
             d.ctrl[idx.joint_actuator] = action * idx.action_scale + idx.default_joint_pos
+            touched = False
             for _ in range(task.decimation):
                 mujoco.mj_step(m, d)
+                touched |= any(np.linalg.norm(d.sensordata[a:a + 3]) > task.self_collision_force for a in illegal)
             mujoco.mj_forward(m, d)
             lin, ang = base_velocity(d.qpos[r + 3:r + 7], d.qvel[idx.root_dof:idx.root_dof + 3],
                                      d.qvel[idx.root_dof + 3:idx.root_dof + 6])
             errors.append((math.hypot(cmd[0] - lin[0], cmd[1] - lin[1]), abs(cmd[2] - ang[2])))
-            if tilt(d.qpos[r + 3:r + 7]) > task.fall_angle:
-                falls += 1
+            if touched or (task.fall_over and tilt(d.qpos[r + 3:r + 7]) > task.fall_angle):
+                ended = True
                 break
+        fell.append(ended)
     e = np.array(errors)
-    return Tracking(float(e[:, 0].mean()), float(e[:, 1].mean()), falls, episodes)
+    by_kind = per_kind(ground, [k for k, _ in starts], fell) if ground is not None else None
+    return Tracking(float(e[:, 0].mean()), float(e[:, 1].mean()), sum(fell), episodes, by_kind)
 
 
-def warpgym_episodes(task: LeggedTask, act, episodes: int, device: str = "cpu") -> Tracking:
+def warpgym_episodes(task: LeggedTask, act, episodes: int, device: str = "cpu", level: int | None = None) -> Tracking:
     """The same episodes in warpgym's env, one world each; ``act`` maps a batch of observations (torch) to
     actions."""
+    level = task.max_init_terrain_level if level is None else level
     import torch  # noqa: PLC0415
 
     from warpgym.envs.legged import LeggedVecEnv  # noqa: PLC0415
@@ -128,11 +178,20 @@ def warpgym_episodes(task: LeggedTask, act, episodes: int, device: str = "cpu") 
     obs, _ = env.reset(seed=0)
     qpos = env.state()["qpos"]
     r = idx.root_qpos
-    for e, yaw in enumerate(start_yaws(episodes)):
+    ground = env.terrain
+    starts = start_patches(ground, episodes, level) if ground is not None else [(0, np.zeros(3))] * episodes
+    for e, (yaw, (_, origin)) in enumerate(zip(start_yaws(episodes), starts)):
         qpos[e, r:r + 7] = torch.as_tensor(start_pose(idx, yaw))
+        qpos[e, r:r + 3] += torch.as_tensor(origin, dtype=qpos.dtype)
         qpos[e, torch.as_tensor(idx.joint_qpos).long()] = torch.as_tensor(idx.default_joint_pos)
-    env.write_state({"qpos": qpos, "qvel": torch.zeros_like(env.state()["qvel"]), "command": schedule[0].expand(episodes, 3),
-                     "length": torch.zeros(episodes, dtype=torch.int32)})
+    start = {"qpos": qpos, "qvel": torch.zeros_like(env.state()["qvel"]), "command": schedule[0].expand(episodes, 3),
+             "length": torch.zeros(episodes, dtype=torch.int32)}
+    if ground is not None:
+        level = min(level, ground.grid.num_rows - 1)
+        start |= {"terrain_level": torch.full((episodes,), level, dtype=torch.int32),
+                  "terrain_kind": torch.as_tensor([k for k, _ in starts], dtype=torch.int32),
+                  "env_origin": torch.as_tensor(np.array([o for _, o in starts]), dtype=torch.float32)}
+    env.write_state(start)
     obs, _ = env.observe()
     alive = torch.ones(episodes, dtype=torch.bool, device=env.device)
     root_dof = idx.root_dof
@@ -152,7 +211,9 @@ def warpgym_episodes(task: LeggedTask, act, episodes: int, device: str = "cpu") 
         alive &= ~terminated
     env.close()
     n = float(counted.sum())
-    return Tracking(float(sums[0]) / n, float(sums[1]) / n, int(falls.sum()), episodes)
+    fell = [bool(f) for f in falls.cpu()]
+    by_kind = per_kind(ground, [k for k, _ in starts], fell) if ground is not None else None
+    return Tracking(float(sums[0]) / n, float(sums[1]) / n, int(falls.sum()), episodes, by_kind)
 
 
 def rotate_to_base(quat, lin_world):

@@ -173,6 +173,11 @@ def legged_in_native_mujoco(args, ckpt: dict, name: str, device: str) -> int:
     for label, t in (("native MuJoCo", native), ("warpgym", ours)):
         print(f"| {label} | {t.error_xy:.3f} | {t.error_yaw:.3f} | {t.falls} of {t.episodes} |")
     print(f"native / warpgym: {out['error_xy_ratio']:.3f} (xy), {out['error_yaw_ratio']:.3f} (yaw)")
+    if native.falls_by_kind:  # rough ground: the episodes start on one level, a kind of ground each in turn
+        print("| ground | falls, native MuJoCo | falls, warpgym |")
+        print("|---|---|---|")
+        for kind, (fell, n) in native.falls_by_kind.items():
+            print(f"| {kind} | {fell} of {n} | {ours.falls_by_kind[kind][0]} of {n} |")
     if args.json:
         write_json(args.json, out)
     return 0

@@ -41,7 +41,7 @@ class TaskEntry:
     clip_drawer: str  # the function that draws a recorded clip, by entry point (warpgym.media.video)
     training_clips: bool  # `warpgym train --video` can film its evaluations (media.clips draws the robots only)
     scored_in: str | None  # "native MuJoCo" or "Gymnasium's env": where `warpgym eval` plays a trained policy (None:
-    # nowhere yet, the rough legged tasks, whose height scans native MuJoCo does not cast yet)
+    # nowhere)
     reports_speed: bool  # the env's forward speed is the task's measure (eval/speed beside eval/return)
     # `warpgym train`'s default envs and iterations on a GPU and on the CPU (docs/benchmarks.md, "Envs per GPU")
     default_envs: tuple[int, int]
@@ -77,8 +77,7 @@ def _legged(name: str, episode_length: int) -> TaskEntry:
                      "warpgym.envs.legged:LeggedVecEnv", "warpgym.envs.single:LeggedEnv", (),
                      physics_flags=False, clip_keys=("dof_pos", "dof_vel"), clip_all_worlds=False,
                      clip_drawer="warpgym.media.video:draw_legged_clip", training_clips=False,
-                     scored_in=None if "Rough" in name else "native MuJoCo", reports_speed=False,
-                     default_envs=(4096, 32),
+                     scored_in="native MuJoCo", reports_speed=False, default_envs=(4096, 32),
                      default_iterations=(1000, 30))
 
 
