@@ -128,6 +128,9 @@ def main(argv=None) -> int:
     except BaseException as e:
         # status 2 is a flag's error (warpgym.cli.flags): nothing started, its one line says it all
         if args.run_dir and not (isinstance(e, SystemExit) and e.code in (0, None, 2)):
+            # torchrun's SIGTERM, after a peer died, can come while this line is written: it must not cut it
+            for sig in previous:
+                signal.signal(sig, signal.SIG_IGN)
             why = f"{type(e).__name__}: {str(e).splitlines()[0][:300]}" if str(e) else type(e).__name__
             hint = resume_hint(args.run_dir) if rank == 0 else "Rank 0's output says how to resume."
             sys.stderr.write(f"\nwarpgym worker {rank}: training stopped ({why}). {hint}\n")
