@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 import warp as wp
 
+from warpgym.native_legged import yaw_rotation
 from warpgym.sim.rays import RayCaster, Scan, ScanFrames
 from warpgym.tasks.legged import terrain as T
 from warpgym.tasks.legged.scan import G1_FOOT_SCAN, GO1_FOOT_SCAN, TERRAIN_SCAN, grid_offsets, ring_offsets
@@ -64,15 +65,7 @@ def native_rays(mjm, data, qpos, kind, obj, pattern, alignment="yaw"):
     pos = (data.xpos if kind == "body" else data.site_xpos)[obj].copy()
     mat = (data.xmat if kind == "body" else data.site_xmat)[obj].reshape(3, 3)
     body = obj if kind == "body" else mjm.site_bodyid[obj]
-    if alignment == "yaw":
-        x = mat[:2, 0]
-        if np.linalg.norm(x) < 0.1:
-            y = mat[:2, 1] / max(np.linalg.norm(mat[:2, 1]), 1e-6)
-            x = np.array([y[1], -y[0]])
-        x = x / np.linalg.norm(x)
-        rot = np.array([[x[0], -x[1], 0], [x[1], x[0], 0], [0, 0, 1.0]])
-    else:
-        rot = mat
+    rot = yaw_rotation(mat) if alignment == "yaw" else mat
     out = []
     for off in pattern.array().astype(np.float64):
         pnt, vec = pos + rot @ off, rot @ np.array(pattern.direction)

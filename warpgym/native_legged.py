@@ -51,16 +51,22 @@ def per_kind(ground, kinds: list[int], fell: list[bool]) -> dict:
     return {names[k]: (sum(f for kk, f in zip(kinds, fell) if kk == k), kinds.count(k)) for k in sorted(set(kinds))}
 
 
-def height_scan(mujoco, m, d, body: int, pattern) -> np.ndarray:
-    """mjlab's height scan in native MuJoCo: the body's height above each ray's hit (``mj_ray`` over the pattern's
-    geom groups, the body itself left out), aimed in the body's heading; the reach where nothing is hit."""
-    mat = d.xmat[body].reshape(3, 3)
+def yaw_rotation(mat) -> np.ndarray:
+    """mjlab's yaw-only rotation of a frame (3 x 3, float64): its x axis on the ground plane; nose straight up or
+    down, its y axis turned a quarter to the right (kernels.legged.scan.yaw_rotation, in float32)."""
+    mat = np.asarray(mat, np.float64).reshape(3, 3)
     x = mat[:2, 0]
-    if np.linalg.norm(x) < 0.1:  # nose straight up or down: the y axis turned a quarter, as mjlab's sensor does
+    if np.linalg.norm(x) < 0.1:
         y = mat[:2, 1] / max(np.linalg.norm(mat[:2, 1]), 1e-6)
         x = np.array([y[1], -y[0]])
     x = x / max(np.linalg.norm(x), 1e-6)
-    rot = np.array([[x[0], -x[1], 0.0], [x[1], x[0], 0.0], [0.0, 0.0, 1.0]])
+    return np.array([[x[0], -x[1], 0.0], [x[1], x[0], 0.0], [0.0, 0.0, 1.0]])
+
+
+def height_scan(mujoco, m, d, body: int, pattern) -> np.ndarray:
+    """mjlab's height scan in native MuJoCo: the body's height above each ray's hit (``mj_ray`` over the pattern's
+    geom groups, the body itself left out), aimed in the body's heading; the reach where nothing is hit."""
+    rot = yaw_rotation(d.xmat[body])
     groups = np.array([1 if g in pattern.groups else 0 for g in range(6)], np.uint8)
     direction = rot @ np.asarray(pattern.direction, np.float64)
     pos = d.xpos[body]

@@ -48,10 +48,10 @@ def track_feet(p: LeggedParams, r: LeggedRobot, d: MjLegged, st: LeggedState):
         else:
             st.air_time[w, f] = st.air_time[w, f] + p.physics_dt
             st.contact_time[w, f] = 0.0
+    felt = int(0)  # a bit per group that felt more than the threshold this physics step
+    for h in range(r.hit_force.shape[0]):
+        if wp.length(sensor3(d, w, r.hit_force[h])) > p.collision_force:
+            felt = felt | (1 << r.hit_group[h])
     for g in range(NUM_GROUPS):
-        felt = int(0)
-        for h in range(r.hit_force.shape[0]):
-            if r.hit_group[h] == g and wp.length(sensor3(d, w, r.hit_force[h])) > p.collision_force:
-                felt = 1
-        if felt != 0:
+        if (felt >> g) & 1 != 0:
             st.collision_hits[w, g] = st.collision_hits[w, g] + 1

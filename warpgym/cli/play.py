@@ -127,10 +127,9 @@ def main(argv=None) -> int:
     if args.json:
         write_json(args.json, result)
     nxt = [] if filming else [f"warpgym play {args.checkpoint} --gif {task.lower()}.gif draws it"]
-    if entry.scored_in:
-        nxt.append(f"warpgym eval {args.checkpoint} scores it in {entry.scored_in}")
-    ends = f" (the numbers: {args.json})." if args.json else " (--json OUT writes the numbers)."
-    print(("Next: " + "; ".join(nxt) if nxt else "Done") + ends)
+    nxt.append(f"warpgym eval {args.checkpoint} scores it in {entry.scored_in}")
+    print("Next: " + "; ".join(nxt) + (f" (the numbers: {args.json})." if args.json else
+                                       " (--json OUT writes the numbers)."))
     return 0
 
 

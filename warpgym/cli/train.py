@@ -326,7 +326,7 @@ def closing_line(task: str, run_dir: str, summary: dict) -> str:
     best = summary.get("best_eval")
     result = (f"its best evaluation returned {best['eval/return']:.1f}"
               + (f" at {best['eval/speed']:.2f} m/s" if entry.reports_speed else "") if best else "it was not evaluated")
-    score = f"warpgym eval {run_dir} scores it in {entry.scored_in}; " if entry.scored_in else ""
+    score = f"warpgym eval {run_dir} scores it in {entry.scored_in}; "
     n = final.get("samples") or 0
     samples = f"{n / 1e6:.1f} M" if n >= 1e6 else f"{n / 1e3:.1f} k"
     return (f"Trained {task} for {summary['iterations']} iterations ({samples} samples, "

@@ -40,8 +40,7 @@ class TaskEntry:
     clip_all_worlds: bool
     clip_drawer: str  # the function that draws a recorded clip, by entry point (warpgym.media.video)
     training_clips: bool  # `warpgym train --video` can film its evaluations (media.clips draws the robots only)
-    scored_in: str | None  # "native MuJoCo" or "Gymnasium's env": where `warpgym eval` plays a trained policy (None:
-    # nowhere)
+    scored_in: str  # "native MuJoCo" or "Gymnasium's env": where `warpgym eval` plays a trained policy
     reports_speed: bool  # the env's forward speed is the task's measure (eval/speed beside eval/return)
     # `warpgym train`'s default envs and iterations on a GPU and on the CPU (docs/benchmarks.md, "Envs per GPU")
     default_envs: tuple[int, int]
