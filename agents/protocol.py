@@ -26,6 +26,10 @@ never happen (NaN actions, physics blow-ups, dropped constraints), with ``FAULT_
 The runner logs them in every row (``faults/<name>``, summed over processes) and warns once per
 counter when it first rises above zero.
 
+Optional: ``curriculum() -> {name: device scalar}``, the env's curriculum state as means over its envs (the mean
+terrain level, say), read when a row is logged. The runner logs each as ``curriculum/<name>``, the mean over every
+env of every process.
+
 Optional too: ``graph_capturable = True`` declares that ``step`` can be recorded into a torch CUDA
 graph and replayed: it never waits on the host, and its outputs are persistent tensors that each
 step overwrites. The runner then captures whole rollouts.

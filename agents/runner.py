@@ -97,6 +97,9 @@ class OnPolicyRunner:
         self._stop_request = torch.zeros(1, dtype=torch.float64, device=self.device)
         # running totals of things that should never happen (agents.protocol), logged every row
         self._faults = env.fault_counters() if hasattr(env, "fault_counters") else {}
+        # the env's curriculum state (agents.protocol), a mean over its envs, logged every row as curriculum/<name>
+        self._curriculum = env.curriculum if callable(getattr(env, "curriculum", None)) else dict
+        self._curriculum_names = list(self._curriculum())
         # Only an env that declares it (agents.protocol) is captured; the normaliser update stays
         # outside the graph, since across processes it all-reduces.
         capturable = cuda_graph and self.device.type == "cuda" and spec.graph_capturable
@@ -326,7 +329,13 @@ class OnPolicyRunner:
         episode sums and the stop request travel in one collective, summed over the processes."""
         self._stop_request.fill_(1.0 if wants_stop else 0.0)
         faults = [t.reshape(1).to(torch.float64) for t in self._faults.values()]
-        shared = self.workers.sum_(torch.cat([self.episodes.take(), *faults, self._stop_request]))
+        # each process's means weighted by its envs (several GPUs may hold different numbers), and the weight
+        weight = float(self.spec.num_envs)
+        curriculum = [torch.as_tensor(v, device=self.device).reshape(1).to(torch.float64) * weight
+                      for v in self._curriculum().values()]
+        counts = [torch.full((1,), weight, dtype=torch.float64, device=self.device)] if curriculum else []
+        shared = self.workers.sum_(torch.cat([self.episodes.take(), *faults, *curriculum, *counts,
+                                              self._stop_request]))
         keys = list(stats)
         values = torch.cat([torch.stack([stats[k].float() for k in keys]).double(), shared])
         self.clock.mark("statistics")
@@ -350,7 +359,12 @@ class OnPolicyRunner:
         row.update(dict(zip(keys, values[: len(keys)])))
         episode_end = len(keys) + self.episodes.size
         row.update(self.episodes.summary(values[len(keys) : episode_end]))
-        for name, count in zip(self._faults, values[episode_end:-1]):
+        fault_end = episode_end + len(self._faults)
+        if self._curriculum_names:
+            envs = values[-2]
+            row.update({f"curriculum/{name}": v / envs
+                        for name, v in zip(self._curriculum_names, values[fault_end:-2])})
+        for name, count in zip(self._faults, values[episode_end:fault_end]):
             row[f"faults/{name}"] = int(count)
             if count > 0 and name not in self._faults_reported:  # once per run: not a line per step
                 self._faults_reported.add(name)

@@ -568,7 +568,24 @@ def test_fault_counters_are_logged_every_row_and_warned_once():
     assert len(warnings) == 1 and "= 3 by iteration 3" in warnings[0] and "the test env glitched" in warnings[0]
 
 
-class _Payload:
+class CurriculumPointMass(FaultyPointMass):
+    """The faulty point mass with a curriculum state (agents.protocol): its steps so far, divided by 4."""
+
+    def curriculum(self):
+        return {"stage": torch.tensor(self.steps / 4.0)}
+
+
+def test_curriculum_state_is_logged_beside_the_faults():
+    cfg = Config(net_dims=(8,), horizon_len=4, minibatch_size=32, repeat_times=1, eval_gap=1e9, save_gap=10**6)
+    history = OnPolicyRunner(CurriculumPointMass(8), cfg, print_fn=lambda s: None).learn(max_iterations=4)
+    # read when each iteration's row is staged, after its 4 steps; the fault counter keeps its own column
+    assert [r["curriculum/stage"] for r in history] == [1.0, 2.0, 3.0, 4.0]
+    assert [r["faults/glitches"] for r in history] == [0, 0, 3, 7]
+    flat = OnPolicyRunner(FaultyPointMass(8), cfg, print_fn=lambda s: None).learn(max_iterations=1)
+    assert not any(k.startswith("curriculum/") for k in flat[0])
+
+
+
     """Unpickling this would run code: it records that it ran."""
 
     def __reduce__(self):

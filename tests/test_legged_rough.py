@@ -85,6 +85,8 @@ def test_a_world_that_walked_half_a_patch_moves_up_a_level_when_its_episode_ends
     _, _, terminated, truncated, info = go1.step(torch.zeros(N, go1.num_actions))
     assert bool(truncated[w]) and not bool(terminated[w])
     assert int(go1.info["terrain_level"][w]) == levels[w] + 1
+    # the curriculum state training logs (curriculum/terrain_level): every world's level, this one's move included
+    assert float(go1.curriculum()["terrain_level"]) == pytest.approx((levels.sum() + 1) / N)
     go1.reset(seed=0)
 
 

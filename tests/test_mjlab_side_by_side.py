@@ -10,7 +10,8 @@ from benchmarks.learning import mjlab_side_by_side as sbs
 STARTED = 1_000_000.0
 
 
-def write_mjlab(folder, rows):
+def write_mjlab(folder, rows, levels=None):
+    """mjlab's TensorBoard tags; ``levels(t)``: its curriculum's mean terrain level (rough ground)."""
     from torch.utils.tensorboard import SummaryWriter
 
     writer = SummaryWriter(str(folder / "go1_velocity" / "run"))
@@ -18,15 +19,17 @@ def write_mjlab(folder, rows):
         writer.add_scalar("Train/mean_reward", ret, it, walltime=STARTED + t)
         writer.add_scalar("Metrics/twist/error_vel_xy", err, it, walltime=STARTED + t)
         writer.add_scalar("Perf/total_fps", 100_000.0, it, walltime=STARTED + t)
+        if levels:
+            writer.add_scalar("Curriculum/terrain_levels/mean", levels(t), it, walltime=STARTED + t)
     writer.close()
 
 
-def write_ours(folder, rows):
+def write_ours(folder, rows, levels=None):
     folder.mkdir(parents=True)
     with open(folder / "metrics.jsonl", "w") as f:
         for it, (t, ret) in enumerate(rows):
-            f.write(json.dumps({"iteration": it, "time_s": t, "return": ret, "samples_per_s": 300_000.0,
-                                "episode/error_vel_xy": 0.5}) + "\n")
+            row = {"iteration": it, "time_s": t, "return": ret, "samples_per_s": 300_000.0, "episode/error_vel_xy": 0.5}
+            f.write(json.dumps(row | ({"curriculum/terrain_level": levels(t)} if levels else {})) + "\n")
 
 
 @pytest.fixture
@@ -105,6 +108,34 @@ def test_the_curves_are_thinned_to_one_point_per_interval_and_drawn(out, tmp_pat
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+def test_on_rough_ground_both_logs_terrain_levels_reach_the_table_and_a_second_row_of_panels(tmp_path):
+    from PIL import Image
+
+    task = "Go1VelocityRough-v0"
+    (tmp_path / "jobs.json").write_text(json.dumps({
+        "jobs": [{"task": task, "framework": "mjlab", "started": STARTED}], "device": "GPU", "date": "2026-11-30",
+        "num_envs": 4096}))
+    write_mjlab(tmp_path / f"mjlab-{task}", [(t, t / 10.0, 1.0) for t in range(10, 510, 10)],
+                levels=lambda t: t / 100.0)
+    write_ours(tmp_path / f"warpgym-{task}-seed0", [(float(t), t / 5.0) for t in range(5, 300, 5)],
+               levels=lambda t: t / 50.0)
+    summary = sbs.summarize(str(tmp_path), mark=445.0)
+    e = summary["tasks"][task]
+    # mjlab's levels at 420, 430, 440 s: 4.3 on average; warpgym's at 210, 215, 220 s (where it reached 43): 4.3
+    assert e["mjlab"]["at_mark"]["terrain_level"] == pytest.approx(4.3)
+    assert e["warpgym"][0]["reached"]["terrain_level"] == pytest.approx(4.3)
+    assert e["mjlab"]["levels"][0] == [10.0, 0.1] and e["warpgym"][0]["levels"][1] == [10.0, 0.2]
+    table = sbs.table(summary)
+    assert "| 43.00 (level 4.30) |" in table and "220 (0.49x) (level 4.30) not met" in table
+    flat, rough = tmp_path / "flat.png", tmp_path / "rough.png"
+    sbs.draw(summary, str(rough))
+    for run in [e["mjlab"], *e["warpgym"]]:
+        run.pop("levels")
+    sbs.draw(summary, str(flat))
+    # the curriculum's row doubles the figure's height; without levels there is none
+    assert Image.open(rough).height == 2 * Image.open(flat).height
+
+
 def test_first_episodes_counts_each_worlds_first_episode_only():
     """The counting both sides of benchmarks/physics/legged_returns.py share: rewards up to each world's first end,
     a fall told from a time-out, nothing after it (the world's next episode) counted."""
@@ -138,7 +169,9 @@ def test_a_summary_reports_at_its_own_mark_and_refuses_another(out, tmp_path, ca
     assert "summarised at 445 s" in capsys.readouterr().err
 
 
-def test_on_one_gpu_mjlab_trains_first_with_its_packages_then_warpgyms_seeds_without_them(tmp_path, monkeypatch):
+@pytest.mark.parametrize("ours_first", [False, True])
+def test_on_one_gpu_mjlab_and_warpgyms_seeds_take_turns_its_packages_on_its_command_alone(tmp_path, monkeypatch,
+                                                                                           ours_first):
     # stand-ins for both interpreters: each prints its time, its MuJoCo setting, its path and its arguments
     fake = tmp_path / "fake-python"
     fake.write_text('#!/bin/sh\nsleep 0.2\necho "$(date +%s.%N)|${MUJOCO_GL:-unset}|$PYTHONPATH|$*"\n')
@@ -148,7 +181,8 @@ def test_on_one_gpu_mjlab_trains_first_with_its_packages_then_warpgyms_seeds_wit
     monkeypatch.delenv("MUJOCO_GL", raising=False)  # set by other tests' renderers: only mjlab's command sets it here
     run = tmp_path / "run"
     sbs.main(["--out", str(run), "--start", "--one-gpu", "--tasks", "G1VelocityFlat-v0", "--speed-envs",
-              "--mjlab-python", str(fake), "--mjlab-path", "/mj/site", "--seeds", "3", "4", "--ours-budget", "5"])
+              "--mjlab-python", str(fake), "--mjlab-path", "/mj/site", "--seeds", "3", "4", "--ours-budget", "5"]
+             + (["--ours-first"] if ours_first else []))
     sbs.main(["--out", str(run), "--wait", "30"])
     jobs = json.loads((run / "jobs.json").read_text())
     assert jobs["one_gpu"] and {j["framework"] for j in jobs["jobs"]} == {"mjlab", "warpgym"}
@@ -157,7 +191,11 @@ def test_on_one_gpu_mjlab_trains_first_with_its_packages_then_warpgyms_seeds_wit
     ours = [line.split("|") for line in (run / "train-warpgym-G1VelocityFlat-v0.log").read_text().splitlines()]
     assert mj[1] == "disable" and mj[2].split(":")[1] == "/mj/site" and "Mjlab-Velocity-Flat-Unitree-G1" in mj[3]
     assert [o[1] for o in ours] == ["unset", "unset"] and "/mj/site" not in ours[0][2]
-    assert float(mj[0]) < float(ours[0][0]) < float(ours[1][0])  # mjlab, then the seeds in order
+    assert float(ours[0][0]) < float(ours[1][0])  # the seeds in order
+    assert (float(mj[0]) > float(ours[1][0])) == ours_first  # mjlab before them or, --ours-first, after
+    # mjlab's clock: the moment its turn came, written down just before its process started
+    started = float((run / "started-mjlab-G1VelocityFlat-v0").read_text())
+    assert 0.0 < float(mj[0]) - started < 5.0
     assert "--seed 3" in ours[0][3] and "--seed 4" in ours[1][3]
 
 

@@ -15,7 +15,8 @@ Runs span several machine calls: ``--start`` measures the bare steps (both at on
 starts the trainings in sessions of their own (they outlive the call); ``--wait SECONDS`` waits for them; ``--report``
 writes ``summary.json`` (each run's curve in it) and prints the table, ``--figure PNG`` draws the curves. A task needs
 two GPUs: mjlab on the first, warpgym on the second; with ``--one-gpu`` they take turns on one (the bare steps one
-after the other, then mjlab's training, then warpgym's seeds, all in one session of their own).
+after the other, then mjlab's training, then warpgym's seeds, all in one session of their own; ``--ours-first``
+swaps the trainings).
 ``--pack DIR`` ends any call by writing what the runs have so far into DIR (the logs, metrics and mjlab's event
 files as ``runs.tar.gz``; the policies without optimiser state as ``policies.tar.gz``): a machine taken back between
 calls then loses only what came after. mjlab's packages for the GPU machine: benchmarks/learning/mjlab_stage.sh.
@@ -126,10 +127,13 @@ def start(args) -> None:
                     f"--time-limit {args.ours_budget:g} --seed $s --run-dir {args.out}/warpgym-{t}-seed$s "
                     f"--device cuda:0 --no-plots --save-at {' '.join(str(m) for m in args.save_at)}; done")
         logs = {name: os.path.join(args.out, f"train-{name}-{t}.log") for name in ("mjlab", "warpgym")}
-        if args.one_gpu:  # mjlab's training, then warpgym's seeds: one shell, mjlab's packages on its command alone
+        if args.one_gpu:  # mjlab's training and warpgym's seeds in turn: one shell, mjlab's packages on its command
             mj_env = ["env", *(f"{k}={v}" for k, v in mjlab_env(args).items())]
-            chain = (f"{shlex.join(mj_env + mj)} > {shlex.quote(logs['mjlab'])} 2>&1; "
-                     f"{{ {ours_cmd}; }} > {shlex.quote(logs['warpgym'])} 2>&1")
+            # the clock of mjlab's rows starts when its process does, which the shell writes down first
+            mj_part = (f"date +%s.%N > {shlex.quote(started_file(args.out, t))}; "
+                       f"{shlex.join(mj_env + mj)} > {shlex.quote(logs['mjlab'])} 2>&1")
+            ours_part = f"{{ {ours_cmd}; }} > {shlex.quote(logs['warpgym'])} 2>&1"
+            chain = f"{ours_part}; {mj_part}" if args.ours_first else f"{mj_part}; {ours_part}"
             started = time.time()
             p = launch(["bash", "-c", chain], os.path.join(args.out, f"train-{t}.log"), job["mjlab_gpu"],
                        job["mjlab_cores"], {})
@@ -146,8 +150,13 @@ def start(args) -> None:
     write_json(os.path.join(args.out, "jobs.json"), {
         "jobs": launched, "num_envs": args.num_envs, "mjlab_budget_s": args.mjlab_budget,
         "ours_budget_s": args.ours_budget, "seeds": args.seeds, "mjlab_seed": args.mjlab_seed,
-        "device": gpu_name(), "date": time.strftime("%Y-%m-%d"), "one_gpu": args.one_gpu})
+        "device": gpu_name(), "date": time.strftime("%Y-%m-%d"), "one_gpu": args.one_gpu,
+        "ours_first": args.one_gpu and args.ours_first})
     print(f"started {len(launched)} trainings; their logs: {args.out}/train-*.log")
+
+
+def started_file(out: str, task: str) -> str:
+    return os.path.join(out, f"started-mjlab-{task}")
 
 
 def gpu_name() -> str:
@@ -199,7 +208,7 @@ def mjlab_scalars(folder: str, started: float) -> list[dict]:
     acc.Reload()
     tags = {"return": "Train/mean_reward", "error_vel_xy": "Metrics/twist/error_vel_xy",
             "error_vel_yaw": "Metrics/twist/error_vel_yaw", "samples_per_s": "Perf/total_fps",
-            "length": "Train/mean_episode_length"}
+            "length": "Train/mean_episode_length", "terrain_level": "Curriculum/terrain_levels/mean"}
     rows: dict[int, dict] = {}
     for key, tag in tags.items():
         if tag not in acc.Tags()["scalars"]:
@@ -218,7 +227,7 @@ def ours_rows(run_dir: str) -> list[dict]:
         rows = [json.loads(line) for line in f if line.strip()]
     return [{"iteration": r["iteration"], "time_s": r["time_s"], "return": r.get("return"),
              "error_vel_xy": r.get("episode/error_vel_xy"), "error_vel_yaw": r.get("episode/error_vel_yaw"),
-             "samples_per_s": r.get("samples_per_s")} for r in rows]
+             "samples_per_s": r.get("samples_per_s"), "terrain_level": r.get("curriculum/terrain_level")} for r in rows]
 
 
 def mean_of(rows: list[dict], key: str) -> float | None:
@@ -228,7 +237,7 @@ def mean_of(rows: list[dict], key: str) -> float | None:
 
 def at_mark(rows: list[dict], mark: float) -> dict:
     window = [r for r in rows if mark - WINDOW <= r["time_s"] <= mark]
-    return {k: mean_of(window, k) for k in ("return", "error_vel_xy", "error_vel_yaw")} | {"rows": len(window)}
+    return {k: mean_of(window, k) for k in ("return", "error_vel_xy", "error_vel_yaw", "terrain_level")} | {"rows": len(window)}
 
 
 def first_reaching(rows: list[dict], target: float) -> dict | None:
@@ -238,17 +247,25 @@ def first_reaching(rows: list[dict], target: float) -> dict | None:
         window = have[i - SMOOTH + 1 : i + 1]
         if statistics.fmean(r["return"] for r in window) >= target:
             return {"time_s": have[i]["time_s"], "iteration": have[i]["iteration"],
-                    "error_vel_xy": mean_of(window, "error_vel_xy"), "error_vel_yaw": mean_of(window, "error_vel_yaw")}
+                    "error_vel_xy": mean_of(window, "error_vel_xy"), "error_vel_yaw": mean_of(window, "error_vel_yaw"),
+                    "terrain_level": mean_of(window, "terrain_level")}
     return None
 
 
-def curve(rows: list[dict], every: float = CURVE_EVERY) -> list[list[float]]:
-    """``[time_s, return]`` pairs at least ``every`` seconds apart: the figure's line, small enough to commit."""
+def curve(rows: list[dict], key: str = "return", every: float = CURVE_EVERY) -> list[list[float]]:
+    """``[time_s, value]`` pairs of ``key`` at least ``every`` seconds apart: the figure's line, small enough to
+    commit."""
     out: list[list[float]] = []
     for r in rows:
-        if r.get("return") is not None and (not out or r["time_s"] - out[-1][0] >= every):
-            out.append([round(r["time_s"], 1), round(r["return"], 3)])
+        if r.get(key) is not None and (not out or r["time_s"] - out[-1][0] >= every):
+            out.append([round(r["time_s"], 1), round(r[key], 3)])
     return out
+
+
+def curves(rows: list[dict]) -> dict:
+    """The return's curve and, on rough ground, the mean terrain level's (the curriculum's climb)."""
+    levels = curve(rows, "terrain_level")
+    return {"curve": curve(rows)} | ({"levels": levels} if levels else {})
 
 
 def median_rate(rows: list[dict]) -> float | None:
@@ -278,10 +295,14 @@ def summarize(out: str, mark: float = MARK) -> dict:
     summary = {"device": jobs["device"], "date": jobs["date"], "num_envs": jobs["num_envs"], "mark_s": mark, "tasks": {}}
     for task in sorted({j["task"] for j in jobs["jobs"]}):
         mj_job = next(j for j in jobs["jobs"] if j["task"] == task and j["framework"] == "mjlab")
-        mj = mjlab_scalars(os.path.join(out, f"mjlab-{task}"), mj_job["started"])
+        started = mj_job["started"]
+        if os.path.isfile(started_file(out, task)):  # on one GPU: when its turn came
+            with open(started_file(out, task)) as f:
+                started = float(f.read())
+        mj = mjlab_scalars(os.path.join(out, f"mjlab-{task}"), started)
         entry = {"mirrors": MIRRORS[task], "speed": speed_rows(out, task),
                  "mjlab": {"rows": len(mj), "last_time_s": mj[-1]["time_s"] if mj else None,
-                           "samples_per_s_median": median_rate(mj), "at_mark": at_mark(mj, mark), "curve": curve(mj)},
+                           "samples_per_s_median": median_rate(mj), "at_mark": at_mark(mj, mark)} | curves(mj),
                  "warpgym": []}
         target = entry["mjlab"]["at_mark"]["return"]
         for run_dir in sorted(glob.glob(os.path.join(out, f"warpgym-{task}-seed*"))):
@@ -290,14 +311,20 @@ def summarize(out: str, mark: float = MARK) -> dict:
             reached = first_reaching(rows, target) if target is not None else None
             entry["warpgym"].append({"seed": seed, "rows": len(rows), "last_time_s": rows[-1]["time_s"] if rows else None,
                                      "samples_per_s_median": median_rate(rows), "reached": reached,
-                                     "at_end": at_mark(rows, rows[-1]["time_s"]) if rows else None,
-                                     "curve": curve(rows)})
+                                     "at_end": at_mark(rows, rows[-1]["time_s"]) if rows else None}
+                                    | curves(rows))
         summary["tasks"][task] = entry
     return summary
 
 
 def fmt(x, spec=".0f", none="-"):
     return none if x is None else format(x, spec)
+
+
+def level(d: dict | None) -> str:
+    """On rough ground, the mean terrain level beside a return (nothing on flat ground)."""
+    x = (d or {}).get("terrain_level")
+    return "" if x is None else f" (level {x:.2f})"
 
 
 def table(summary: dict) -> str:
@@ -322,16 +349,16 @@ def table(summary: dict) -> str:
         m = e["mjlab"]
         a = m["at_mark"]
         lines.append(f"| {task} | mjlab (seed 42) | {fmt(m['samples_per_s_median'] and m['samples_per_s_median'] / 1e3)} k "
-                     f"| {fmt(a['return'], '.2f')} | {fmt(a['error_vel_xy'], '.3f')} / {fmt(a['error_vel_yaw'], '.3f')} "
+                     f"| {fmt(a['return'], '.2f')}{level(a)} | {fmt(a['error_vel_xy'], '.3f')} / {fmt(a['error_vel_yaw'], '.3f')} "
                      f"| {mark:.0f} | |")
         for r in e["warpgym"]:
             got = r["reached"]
-            when = "not reached" if got is None else f"{got['time_s']:.0f} ({got['time_s'] / mark:.2f}x)"
+            when = "not reached" if got is None else f"{got['time_s']:.0f} ({got['time_s'] / mark:.2f}x){level(got)}"
             met = "" if got is None else (" met" if got["time_s"] <= GOAL_TIME * mark else " not met")
             err = "" if got is None else f"{fmt(got['error_vel_xy'], '.3f')} / {fmt(got['error_vel_yaw'], '.3f')}"
             end = r["at_end"] or {}
             lines.append(f"| {task} | warpgym seed {r['seed']} | {fmt(r['samples_per_s_median'] and r['samples_per_s_median'] / 1e3)} k "
-                         f"| {fmt(end.get('return'), '.2f')} at {fmt(r['last_time_s'])} s | "
+                         f"| {fmt(end.get('return'), '.2f')}{level(end)} at {fmt(r['last_time_s'])} s | "
                          f"{fmt(end.get('error_vel_xy'), '.3f')} / {fmt(end.get('error_vel_yaw'), '.3f')} at the end "
                          f"| {when}{met} | {err} |")
     return "\n".join(lines)
@@ -339,7 +366,8 @@ def table(summary: dict) -> str:
 
 def draw(summary: dict, path: str) -> None:
     """Return against minutes since each process started, one panel per task: mjlab's run, warpgym's seeds, the
-    target (mjlab's return at the mark) dashed, the mark and a quarter of it dotted."""
+    target (mjlab's return at the mark) dashed, the mark and a quarter of it dotted. On rough ground a second row
+    draws the mean terrain level against the same minutes (the curriculum's climb)."""
     import textwrap  # noqa: PLC0415
 
     import matplotlib  # noqa: PLC0415
@@ -349,25 +377,31 @@ def draw(summary: dict, path: str) -> None:
 
     tasks = list(summary["tasks"])
     mark = summary.get("mark_s", MARK)
-    fig, axes = plt.subplots(1, len(tasks), figsize=(5.0 * len(tasks), 3.4), squeeze=False)
-    for ax, task in zip(axes.flat, tasks):
+    rough = any(e["mjlab"].get("levels") or any(r.get("levels") for r in e["warpgym"])
+                for e in summary["tasks"].values())
+    panels = [("curve", "training return")] + ([("levels", "mean terrain level")] if rough else [])
+    fig, axes = plt.subplots(len(panels), len(tasks), figsize=(5.0 * len(tasks), 3.4 * len(panels)), squeeze=False)
+    for col, task in enumerate(tasks):
         e = summary["tasks"][task]
-        if e["mjlab"].get("curve"):
-            ax.plot(*zip(*[(t / 60.0, r) for t, r in e["mjlab"]["curve"]]), color="tab:orange", label="mjlab")
-        for i, run in enumerate(e["warpgym"]):
-            if run.get("curve"):
-                ax.plot(*zip(*[(t / 60.0, r) for t, r in run["curve"]]), color="tab:blue", alpha=0.8,
-                        label="warpgym (seeds)" if i == 0 else None)
-        target = e["mjlab"]["at_mark"]["return"]
-        if target is not None:
-            ax.axhline(target, color="gray", linestyle="--", linewidth=1)
-        for x in (mark, GOAL_TIME * mark):
-            ax.axvline(x / 60.0, color="gray", linestyle=":", linewidth=1)
-        ax.set_title(f"{task} ({e['mirrors']})", fontsize=9)
-        ax.set_xlabel("minutes since the process started", fontsize=8)
-        ax.set_ylabel("training return", fontsize=8)
-        ax.tick_params(labelsize=7)
-        ax.legend(fontsize=7, loc="lower right")
+        for row, (key, label) in enumerate(panels):
+            ax = axes[row][col]
+            if e["mjlab"].get(key):
+                ax.plot(*zip(*[(t / 60.0, v) for t, v in e["mjlab"][key]]), color="tab:orange", label="mjlab")
+            for i, run in enumerate(e["warpgym"]):
+                if run.get(key):
+                    ax.plot(*zip(*[(t / 60.0, v) for t, v in run[key]]), color="tab:blue", alpha=0.8,
+                            label="warpgym (seeds)" if i == 0 else None)
+            target = e["mjlab"]["at_mark"]["return"]
+            if key == "curve" and target is not None:
+                ax.axhline(target, color="gray", linestyle="--", linewidth=1)
+            for x in (mark, GOAL_TIME * mark):
+                ax.axvline(x / 60.0, color="gray", linestyle=":", linewidth=1)
+            if row == 0:
+                ax.set_title(f"{task} ({e['mirrors']})", fontsize=9)
+            ax.set_xlabel("minutes since the process started", fontsize=8)
+            ax.set_ylabel(label, fontsize=8)
+            ax.tick_params(labelsize=7)
+            ax.legend(fontsize=7, loc="lower right")
     fig.suptitle(textwrap.fill(f"{summary['device']}, {summary['date']}, {summary['num_envs']} envs; dashed: mjlab's "
                                f"return at {mark / 60.0:g} min; dotted: the mark and a quarter of it",
                                width=60 * len(tasks)), fontsize=8)
@@ -427,6 +461,8 @@ def main(argv=None) -> int:
     ap.add_argument("--tasks", nargs="+", default=["Go1VelocityFlat-v0"], choices=sorted(MIRRORS))
     ap.add_argument("--one-gpu", action="store_true", help="mjlab and warpgym take turns on one GPU (one task): the "
                     "bare steps one after the other, then mjlab's training, then warpgym's seeds")
+    ap.add_argument("--ours-first", action="store_true", help="with --one-gpu: warpgym's seeds before mjlab's "
+                    "training (a task new to the GPU shows a failure within minutes, not after mjlab's)")
     ap.add_argument("--num-envs", type=int, default=4096)
     ap.add_argument("--speed-envs", type=int, nargs="*", default=[4096, 8192], help="bare-step sizes ([]: none)")
     ap.add_argument("--mjlab-python", default=sys.executable, help="the interpreter that imports mjlab")

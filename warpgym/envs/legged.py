@@ -141,6 +141,13 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
                       **({"terrain_level": t(self._levels.level)} if self.terrain is not None else {})})
 
     # ------------------------------------------------------------------ rough ground
+    def curriculum(self) -> dict[str, torch.Tensor]:
+        """The curriculum's state (agents.protocol): the mean terrain level over every world, as mjlab logs its
+        ``Curriculum/terrain_levels/mean``; nothing on the flat floor."""
+        if self.terrain is None:
+            return {}
+        return {"terrain_level": self.info["terrain_level"].float().mean()}
+
     def _terrain_levels(self, seed: int) -> None:
         """Each world's level, kind and start on the generated ground (``TerrainLevels``); on the flat floor one
         start at the origin and no bound."""
