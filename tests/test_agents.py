@@ -585,7 +585,7 @@ def test_curriculum_state_is_logged_beside_the_faults():
     assert not any(k.startswith("curriculum/") for k in flat[0])
 
 
-
+class _Payload:
     """Unpickling this would run code: it records that it ran."""
 
     def __reduce__(self):
