@@ -72,6 +72,8 @@ BLOCKS = {
                          ["--report", "docs/bench/legged/side_by_side_go1_15min_2026-11-28.json"], first(3)),
     "legged-g1-15min": ("docs/benchmarks.md", "benchmarks.learning.mjlab_side_by_side",
                         ["--report", "docs/bench/legged/side_by_side_g1_15min_2026-11-29.json"], first(3)),
+    "legged-go1-rough-9min": ("docs/benchmarks.md", "benchmarks.learning.mjlab_side_by_side",
+                              ["--report", "docs/bench/legged/side_by_side_go1_rough_9min_2026-11-29.json"], first(3)),
     "physics": ("docs/benchmarks.md", "benchmarks.physics.fidelity", ["--report", *FIDELITY], first(2)),
     "rllib": ("docs/benchmarks.md", "benchmarks.multi_gpu.rllib_vs_warpgym", ["--report", *RLLIB], first(2)),
     "scaling-ant": scaling("grow_kl", "Ant"),

@@ -77,6 +77,7 @@ def test_without_a_mark_the_15_minute_mark_is_the_target_and_a_run_that_ended_be
     ("side_by_side_2026-11-28.json", 2 + 2 + 2 * 4),  # two headers, two speed rows, per task mjlab's row and 3 seeds
     ("side_by_side_go1_15min_2026-11-28.json", 2 + 1 + 4),  # the Go1's 15-minute run: one speed row, mjlab, 3 seeds
     ("side_by_side_g1_15min_2026-11-29.json", 2 + 1 + 2),  # the G1's on one GPU: one speed row, mjlab, seed 0
+    ("side_by_side_go1_rough_9min_2026-11-29.json", 2 + 1 + 2),  # the Go1 on rough ground, mjlab's first 9 minutes
 ])
 def test_the_published_tables_are_what_the_report_prints_from_the_committed_summary(name, rows_expected):
     """The legged tables of docs/benchmarks.md (and, for the runs it no longer shows, of the log, docs/history.md),

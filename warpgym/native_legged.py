@@ -34,6 +34,7 @@ class Tracking:
     falls: int
     episodes: int
     falls_by_kind: dict | None = None  # rough ground: {kind of ground: (falls, episodes)}
+    errors_by_kind: dict | None = None  # rough ground: {kind of ground: (error xy, error yaw)}, the same means
 
     def to_dict(self) -> dict:
         return dict(vars(self))
@@ -49,6 +50,18 @@ def start_patches(ground, episodes: int, level: int) -> list[tuple[int, np.ndarr
 def per_kind(ground, kinds: list[int], fell: list[bool]) -> dict:
     names = [name for name, _ in ground.grid.sub_terrains]
     return {names[k]: (sum(f for kk, f in zip(kinds, fell) if kk == k), kinds.count(k)) for k in sorted(set(kinds))}
+
+
+def errors_per_kind(ground, kinds: list[int], sums: np.ndarray, steps: np.ndarray) -> dict:
+    """Each kind's tracking errors over its episodes' steps: ``sums`` (episodes, 2) of per-step errors,
+    ``steps`` (episodes,) of steps counted."""
+    names = [name for name, _ in ground.grid.sub_terrains]
+    out = {}
+    for k in sorted(set(kinds)):
+        mine = np.asarray(kinds) == k
+        n = max(float(steps[mine].sum()), 1.0)
+        out[names[k]] = tuple(float(x) for x in sums[mine].sum(0) / n)
+    return out
 
 
 def yaw_rotation(mat) -> np.ndarray:
@@ -132,7 +145,8 @@ def native_episodes(task: LeggedTask, act, episodes: int, level: int | None = No
     illegal = idx.hit_force[idx.hit_group == ILLEGAL_CONTACT]
     starts = start_patches(ground, episodes, level) if ground is not None else [(0, np.zeros(3))] * episodes
     errors, fell = [], []
-    for yaw, (_, origin) in zip(start_yaws(episodes), starts):
+    sums, counted = np.zeros((episodes, 2)), np.zeros(episodes)
+    for e, (yaw, (_, origin)) in enumerate(zip(start_yaws(episodes), starts)):
         mujoco.mj_resetData(m, d)
         d.qpos[r:r + 7] = start_pose(idx, yaw)
         d.qpos[r:r + 3] += origin
@@ -158,13 +172,18 @@ def native_episodes(task: LeggedTask, act, episodes: int, level: int | None = No
             lin, ang = base_velocity(d.qpos[r + 3:r + 7], d.qvel[idx.root_dof:idx.root_dof + 3],
                                      d.qvel[idx.root_dof + 3:idx.root_dof + 6])
             errors.append((math.hypot(cmd[0] - lin[0], cmd[1] - lin[1]), abs(cmd[2] - ang[2])))
+            sums[e] += errors[-1]
+            counted[e] += 1
             if touched or (task.fall_over and tilt(d.qpos[r + 3:r + 7]) > task.fall_angle):
                 ended = True
                 break
         fell.append(ended)
     e = np.array(errors)
-    by_kind = per_kind(ground, [k for k, _ in starts], fell) if ground is not None else None
-    return Tracking(float(e[:, 0].mean()), float(e[:, 1].mean()), sum(fell), episodes, by_kind)
+    kinds = [k for k, _ in starts]
+    if ground is None:
+        return Tracking(float(e[:, 0].mean()), float(e[:, 1].mean()), sum(fell), episodes)
+    return Tracking(float(e[:, 0].mean()), float(e[:, 1].mean()), sum(fell), episodes, per_kind(ground, kinds, fell),
+                    errors_per_kind(ground, kinds, sums, counted))
 
 
 def warpgym_episodes(task: LeggedTask, act, episodes: int, device: str = "cpu", level: int | None = None) -> Tracking:
@@ -201,7 +220,7 @@ def warpgym_episodes(task: LeggedTask, act, episodes: int, device: str = "cpu", 
     obs, _ = env.observe()
     alive = torch.ones(episodes, dtype=torch.bool, device=env.device)
     root_dof = idx.root_dof
-    sums = torch.zeros(2, dtype=torch.float64, device=env.device)
+    sums = torch.zeros(episodes, 2, dtype=torch.float64, device=env.device)
     counted = torch.zeros(episodes, dtype=torch.long, device=env.device)  # device tensors: no host read per step
     falls = torch.zeros(episodes, dtype=torch.long, device=env.device)
     for t in range(steps):
@@ -211,15 +230,20 @@ def warpgym_episodes(task: LeggedTask, act, episodes: int, device: str = "cpu", 
         lin = rotate_to_base(q[:, r + 3:r + 7], v[:, root_dof:root_dof + 3])
         error_xy = torch.linalg.norm(schedule[t, :2] - lin[:, :2], dim=1)
         error_yaw = (schedule[t, 2] - v[:, root_dof + 5]).abs()
-        sums += torch.stack([(error_xy * alive).sum(), (error_yaw * alive).sum()]).double()
+        sums += torch.stack([error_xy * alive, error_yaw * alive], dim=1).double()
         counted += alive
         falls += terminated & alive
         alive &= ~terminated
     env.close()
     n = float(counted.sum())
     fell = [bool(f) for f in falls.cpu()]
-    by_kind = per_kind(ground, [k for k, _ in starts], fell) if ground is not None else None
-    return Tracking(float(sums[0]) / n, float(sums[1]) / n, int(falls.sum()), episodes, by_kind)
+    total = sums.sum(0)
+    xy, yaw = float(total[0]) / n, float(total[1]) / n
+    if ground is None:
+        return Tracking(xy, yaw, int(falls.sum()), episodes)
+    kinds = [k for k, _ in starts]
+    return Tracking(xy, yaw, int(falls.sum()), episodes, per_kind(ground, kinds, fell),
+                    errors_per_kind(ground, kinds, sums.cpu().numpy(), counted.cpu().numpy()))
 
 
 def rotate_to_base(quat, lin_world):

@@ -403,7 +403,7 @@ def draw(summary: dict, path: str) -> None:
             ax.tick_params(labelsize=7)
             ax.legend(fontsize=7, loc="lower right")
     fig.suptitle(textwrap.fill(f"{summary['device']}, {summary['date']}, {summary['num_envs']} envs; dashed: mjlab's "
-                               f"return at {mark / 60.0:g} min; dotted: the mark and a quarter of it",
+                               f"return at {mark / 60.0:.3g} min; dotted: the mark and a quarter of it",
                                width=60 * len(tasks)), fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=110)

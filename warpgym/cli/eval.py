@@ -55,6 +55,9 @@ def parser() -> CommandParser:
                     help="reset seeds (default 0 1 2)")
     ap.add_argument("--device", default="cpu", help="where the policy and warpgym's env run (default cpu)")
     ap.add_argument("--json", default=None, metavar="OUT", help="also write the result as JSON")
+    ap.add_argument("--level", type=non_negative_int(2), default=None,
+                    help="rough tasks: the terrain level every episode starts on (default the curriculum's highest "
+                         "first level, 5)")
     ap.add_argument("--nudge", type=non_negative_float(1e-9), default=0.0, metavar="EPS",
                     help="also play Gymnasium's episodes from starts moved by EPS (e.g. 1e-9) and compare "
                          "Gymnasium with itself: how far a policy's return moves under a change no simulator "
@@ -162,9 +165,13 @@ def legged_in_native_mujoco(args, ckpt: dict, name: str, device: str) -> int:
     def one(obs):
         return batch(torch.as_tensor(obs)[None])[0].cpu().numpy()
 
-    native = native_episodes(task, one, episodes)
-    ours = warpgym_episodes(task, batch, episodes, device)
+    if args.level is not None and task.terrain is None:
+        parser().error(f"--level {args.level}: {name} walks on flat ground; --level picks the rough tasks' level")
+    level = task.max_init_terrain_level if args.level is None else args.level
+    native = native_episodes(task, one, episodes, level)
+    ours = warpgym_episodes(task, batch, episodes, device, level)
     out = {"task": name, "checkpoint": args.checkpoint, "native": native.to_dict(), "warpgym": ours.to_dict(),
+           **({"level": level} if task.terrain is not None else {}),
            "error_xy_ratio": native.error_xy / max(ours.error_xy, 1e-9),
            "error_yaw_ratio": native.error_yaw / max(ours.error_yaw, 1e-9)}
     print(f"{name}, {episodes} episodes of {task.episode_length_s:g} s over a fixed schedule of commands:")
@@ -174,10 +181,12 @@ def legged_in_native_mujoco(args, ckpt: dict, name: str, device: str) -> int:
         print(f"| {label} | {t.error_xy:.3f} | {t.error_yaw:.3f} | {t.falls} of {t.episodes} |")
     print(f"native / warpgym: {out['error_xy_ratio']:.3f} (xy), {out['error_yaw_ratio']:.3f} (yaw)")
     if native.falls_by_kind:  # rough ground: the episodes start on one level, a kind of ground each in turn
-        print("| ground | falls, native MuJoCo | falls, warpgym |")
-        print("|---|---|---|")
+        print(f"each kind of ground at level {level}:")
+        print("| ground | error xy, native / warpgym | error yaw, native / warpgym | falls, native / warpgym |")
+        print("|---|---|---|---|")
         for kind, (fell, n) in native.falls_by_kind.items():
-            print(f"| {kind} | {fell} of {n} | {ours.falls_by_kind[kind][0]} of {n} |")
+            (nx, ny), (ox, oy) = native.errors_by_kind[kind], ours.errors_by_kind[kind]
+            print(f"| {kind} | {nx:.3f} / {ox:.3f} | {ny:.3f} / {oy:.3f} | {fell} / {ours.falls_by_kind[kind][0]} of {n} |")
     if args.json:
         write_json(args.json, out)
     return 0
