@@ -158,3 +158,20 @@ def test_every_section_a_page_or_the_code_cites_by_name_is_on_that_page():
             if not any(h.startswith(title) or title.startswith(h) for h in have):
                 stale.append(f"{file}: docs/{page}.md, \"{title}\"")
     assert not stale, stale
+
+
+def test_the_rough_native_replay_table_is_the_committed_evaluations():
+    """docs/tasks.md's native-MuJoCo table of the rough Go1: each kind's tracking error xy, native / warpgym, at levels
+    2 and 5, as `warpgym eval --level L --json` wrote them; the overall ratios it states too."""
+    import json
+
+    with open(os.path.join(ROOT, "docs", "tasks.md")) as f:
+        page = f.read()
+    for level in (2, 5):
+        with open(os.path.join(ROOT, "docs", "bench", "legged", f"native_Go1VelocityRough-v0_level{level}.json")) as f:
+            got = json.load(f)
+        assert got["level"] == level
+        native, ours = got["native"]["errors_by_kind"], got["warpgym"]["errors_by_kind"]
+        for kind in native:
+            assert f"{native[kind][0]:.3f} / {ours[kind][0]:.3f}" in page, (level, kind)
+        assert f"{got['error_xy_ratio']:.2f}x (level\n{level})" in page or f"{got['error_xy_ratio']:.2f}x (level {level})" in page
