@@ -97,6 +97,7 @@ def test_the_picture_colours_each_patch_by_its_kind_and_draws():
     from dataclasses import replace
 
     from warpgym.media import terrain_view as tv
+    from warpgym.media.ground_colours import PALETTE
 
     ground = tr.generate(replace(tr.ROUGH, num_rows=2, num_cols=4), seed=1)
     mjm = tv.compiled(ground)
@@ -104,7 +105,7 @@ def test_the_picture_colours_each_patch_by_its_kind_and_draws():
     for r in range(2):
         for c in range(4):
             for _ in ground.patches[r][c].geoms:
-                np.testing.assert_allclose(mjm.geom_rgba[at, :3], tv.PALETTE[ground.kinds[r, c]], atol=1e-6)
+                np.testing.assert_allclose(mjm.geom_rgba[at, :3], PALETTE[ground.kinds[r, c]], atol=1e-6)
                 at += 1
     assert mjm.ngeom == at + 4 and np.allclose(mjm.geom_rgba[at:, :3], 0.25)
     from warpgym.media.render import RendererUnavailable
@@ -114,3 +115,26 @@ def test_the_picture_colours_each_patch_by_its_kind_and_draws():
     except RendererUnavailable as e:
         pytest.skip(str(e))
     assert frame.shape == (48, 64, 3) and frame.std() > 5  # a picture, not a blank frame
+
+
+def test_a_clip_of_a_rough_task_colours_only_the_ground_and_refuses_a_model_of_other_ground():
+    """warpgym play's view of a rough task (warpgym.media.render.LeggedView) colours the task scene's ground by kind:
+    the robot's geoms keep theirs; a model compiled from other ground is refused, not coloured wrongly."""
+    import mujoco
+
+    from warpgym.media.ground_colours import PALETTE, colour_ground
+    from warpgym.tasks.legged import get_legged_task
+    from warpgym.tasks.legged.model import compile_task_scene
+
+    compiled, ground = compile_task_scene(get_legged_task("Go1VelocityRough-v0"))
+    mjm = compiled.mjm
+    before = mjm.geom_rgba.copy()
+    colour_ground(mjm, ground)
+    terrain = mjm.geom_bodyid == mujoco.mj_name2id(mjm, mujoco.mjtObj.mjOBJ_BODY, "terrain")
+    assert np.array_equal(mjm.geom_rgba[~terrain], before[~terrain])
+    first = np.flatnonzero(terrain)[0]  # the first patch: row 0, column 0
+    np.testing.assert_allclose(mjm.geom_rgba[first, :3], PALETTE[ground.kinds[0, 0]], atol=1e-6)
+    assert len({tuple(c) for c in mjm.geom_rgba[terrain, :3].round(3)}) == len(PALETTE) + 1  # 7 kinds, the border
+    other = tr.generate(replace(tr.ROUGH, num_rows=2, num_cols=4), seed=1)
+    with pytest.raises(ValueError, match="colour the model compiled from this ground"):
+        colour_ground(mjm, other)

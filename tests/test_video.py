@@ -7,6 +7,7 @@ import sys
 
 import numpy as np
 import pytest
+import torch
 
 pytest.importorskip("av")
 pytest.importorskip("PIL")
@@ -275,3 +276,25 @@ def test_a_clip_of_humanoid_standup_follows_it_as_it_walks_off(tmp_path):
             im.seek(im.n_frames - 1)
             last[name] = np.asarray(im.convert("RGB")).astype(int)
     assert (np.abs(last["seen"] - last["hidden"]).sum(axis=2) > 30).mean() > 0.01
+
+
+def test_a_recorder_keeps_the_world_it_is_given_and_play_refuses_a_world_it_cannot_draw(ant_env, capsys, tmp_path):
+    from warpgym.cli import play
+    from warpgym.media.clips import StateRecorder
+
+    ant_env.reset(seed=0)
+    recorder = StateRecorder(3, first=2)
+    poses = []
+    for _ in range(3):
+        recorder.capture(ant_env)
+        poses.append(ant_env.sim.root_pose[2].cpu().numpy().copy())
+        ant_env.step(torch.rand(4, ant_env.num_actions, device=ant_env.device) * 2 - 1)
+    assert np.array_equal(recorder.states()["root_pose"][:, 0], np.stack(poses))
+    with pytest.raises(ValueError, match="envs 3 to 4 recorded, but the env has 4 robots"):
+        StateRecorder(2, copies=2, first=3).capture(ant_env)
+    checkpoint = tmp_path / "checkpoint.pt"
+    checkpoint.write_bytes(b"")  # parse_args only checks that it is there
+    for argv, says in ((["--world", "2"], "add --gif OUT.gif"), (["--world", "2", "--gif", "a.gif"], "--num-envs 3 or more")):
+        with pytest.raises(SystemExit):
+            play.parse_args([str(checkpoint), *argv])
+        assert says in capsys.readouterr().err

@@ -42,6 +42,9 @@ def parser() -> CommandParser:
                     help="GIF frame rate, dividing 60 and 100 (default 20)")
     ap.add_argument("--gif-width", type=positive_int(320), default=320, help="GIF width in pixels (default 320)")
     ap.add_argument("--json", default=None, metavar="OUT", help="also write the result as JSON")
+    ap.add_argument("--world", type=non_negative_int(5), default=0,
+                    help="the world a clip draws, of --num-envs (default the first); on rough ground the worlds share "
+                         "the kinds of ground in blocks, in the order of the terrain's kinds")
     return ap
 
 
@@ -54,6 +57,10 @@ def parse_args(argv=None):
         ap.error(f"--video {args.video}: the file must end in .mp4 (use --gif for a GIF)")
     if args.gif and not args.gif.lower().endswith(".gif"):
         ap.error(f"--gif {args.gif}: the file must end in .gif")
+    if args.world and not (args.video or args.gif):
+        ap.error(f"--world {args.world}: the world a clip draws; add --gif OUT.gif or --video OUT.mp4")
+    if args.world >= (args.num_envs or 1):
+        ap.error(f"--world {args.world}: pass --num-envs {args.world + 1} or more (the clip's world among them)")
     if args.video or args.gif:
         from warpgym.media.video import frame_stride, why_no_video  # noqa: PLC0415
 
@@ -91,9 +98,10 @@ def main(argv=None) -> int:
     entry = task_entry(task)
     filming = bool(args.video or args.gif)
     n = args.num_envs or (1 if filming else 64 if device.startswith("cuda") else 4)
+    if args.world and entry.clip_all_worlds:
+        raise SystemExit(f"warpgym play: error: --world {args.world}: a clip of {task} draws all its worlds; drop it")
     if filming and n > 1 and not entry.clip_all_worlds:
-        print(f"note: a clip of {task} draws its first world, with Gymnasium's own renderer; --num-envs {n} "
-              "plays the others unseen")
+        print(f"note: a clip of {task} draws world {args.world}; --num-envs {n} plays the others unseen")
     # the trained task as it was trained (episode length, substeps, physics), on this device
     env_class = entry_point(entry.vector_entry_point)
     env = env_class(**{**env_class.replay_args(env_args), "num_envs": n, "device": device, "seed": args.seed})
@@ -104,7 +112,7 @@ def main(argv=None) -> int:
         from warpgym.media.clips import StateRecorder  # noqa: PLC0415
 
         # the reset state, then one per step, of the worlds and the state the task's clips draw
-        recorder = StateRecorder(steps + 1, copies=n if entry.clip_all_worlds else 1,
+        recorder = StateRecorder(steps + 1, copies=n if entry.clip_all_worlds else 1, first=args.world,
                                  **({"keys": entry.clip_keys} if entry.clip_keys else {}))
     result = evaluate(env, policy, normalize, steps, recorder)
     result = {"task": task, "checkpoint": path, "iteration": ckpt["iteration"], "samples": ckpt["samples"],

@@ -26,13 +26,15 @@ from warpgym.media.video import STATE_KEYS, frame_stride, render_clip
 
 
 class StateRecorder:
-    """The states of the first ``copies`` envs at each of ``steps`` control steps (the reset state
+    """The states of ``copies`` envs from env ``first`` on at each of ``steps`` control steps (the reset state
     first), kept on the env's device until ``states()`` reads them."""
 
-    def __init__(self, steps: int, copies: int = 1, keys: tuple[str, ...] = STATE_KEYS):
+    def __init__(self, steps: int, copies: int = 1, keys: tuple[str, ...] = STATE_KEYS, first: int = 0):
         if not isinstance(steps, int) or steps < 1 or not isinstance(copies, int) or copies < 1:
             raise ValueError(f"steps={steps!r} and copies={copies!r} must be positive integers")
-        self.steps, self.copies, self.keys = steps, copies, tuple(keys)
+        if not isinstance(first, int) or first < 0:
+            raise ValueError(f"first={first!r} must be an env index >= 0")
+        self.steps, self.copies, self.keys, self.first = steps, copies, tuple(keys), first
         self._buffers: dict[str, torch.Tensor] | None = None
         self.count = 0
         self.task = None
@@ -41,13 +43,15 @@ class StateRecorder:
         if self.count >= self.steps:
             return
         if self._buffers is None:
-            if self.copies > env.num_envs:
-                raise ValueError(f"copies={self.copies} but the env has {env.num_envs} robots")
+            if self.first + self.copies > env.num_envs:
+                raise ValueError(f"envs {self.first} to {self.first + self.copies - 1} recorded, but the env has "
+                                 f"{env.num_envs} robots")
             self.task = env.task
             # views of the sim's persistent state, made once (each Tensor API property builds a new view),
             # and each robot's step count in its episode, which tells a reset apart from a stride
-            self._sources = {k: getattr(env.sim, k)[: self.copies] for k in self.keys}
-            self._sources["episode_steps"] = env.episode_steps[: self.copies]
+            shown = slice(self.first, self.first + self.copies)
+            self._sources = {k: getattr(env.sim, k)[shown] for k in self.keys}
+            self._sources["episode_steps"] = env.episode_steps[shown]
             self._buffers = {k: torch.empty((self.steps, *v.shape), dtype=v.dtype, device=env.device)
                              for k, v in self._sources.items()}
         for key, buf in self._buffers.items():

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from warpgym.native import NativeRobot
+from warpgym.media.ground_colours import colour_ground
 from warpgym.tasks.legged.model import compile_task_scene
 
 INSTALL_GL = ("install an OpenGL that needs no display: the NVIDIA driver's EGL on a GPU machine, Mesa's on "
@@ -321,7 +322,10 @@ class LeggedView:
         RobotRenderer.check_size(width, height)
         self._mj = mujoco
         self.task, self.width, self.height = task, width, height
-        self.model = compile_task_scene(task)[0].mjm  # with its generated ground, on rough tasks
+        compiled, ground = compile_task_scene(task)
+        self.model = compiled.mjm  # with its generated ground, on rough tasks, each patch coloured by its kind
+        if ground is not None:
+            colour_ground(self.model, ground)
         self.data = mujoco.MjData(self.model)
         self.root = self.model.body(task.root_body).id
         tall = self.model.body_subtreemass[self.root] > 20.0  # a humanoid rather than a quadruped

@@ -11,13 +11,9 @@ import sys
 
 import numpy as np
 
+from warpgym.media.ground_colours import colour_ground
 from warpgym.media.render import gl_context
 from warpgym.tasks.legged import terrain as tr
-
-# one colour per kind, in the order of the grid's sub_terrains (ROUGH's seven, then repeating)
-PALETTE = np.array([(0.62, 0.62, 0.62), (0.27, 0.51, 0.71), (0.80, 0.36, 0.36), (0.40, 0.66, 0.40),
-                    (0.85, 0.65, 0.30), (0.58, 0.44, 0.70), (0.35, 0.70, 0.72)])
-
 
 def compiled(ground: tr.Terrain):
     """The ground's MuJoCo model, each geom coloured by its patch's kind, with a light and a sky-grey background."""
@@ -26,11 +22,9 @@ def compiled(ground: tr.Terrain):
     spec = mujoco.MjSpec()
     spec.worldbody.add_light(pos=[0, 0, 60], dir=[0.3, 0.2, -1], type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL)
     tr.add_to_spec(spec, ground)
-    kinds = [int(ground.kinds[r, c]) for r in range(ground.grid.num_rows) for c in range(ground.grid.cols)
-             for _ in ground.patches[r][c].geoms]
-    for geom, kind in zip(spec.body("terrain").geoms, kinds + [-1] * 4):  # the outer border's four last
-        geom.rgba = [*(PALETTE[kind % len(PALETTE)] if kind >= 0 else (0.25, 0.25, 0.25)), 1.0]
-    return spec.compile()
+    mjm = spec.compile()
+    colour_ground(mjm, ground)
+    return mjm
 
 
 def draw(ground: tr.Terrain, width: int = 960, height: int = 540) -> np.ndarray:

@@ -250,7 +250,7 @@ def draw_robot_clip(env, states: dict, outputs: dict[str, dict], width: int, hei
 def draw_suite_clip(env, states: dict, outputs: dict[str, dict], width: int, height: int) -> tuple[dict, dict]:
     """A clip of one of Gymnasium's tasks (its first world, Gymnasium's renderer): (path -> frames, {})."""
     shown = states["dof_pos"].shape[0] - 1
-    print(f"clip: {shown} steps ({shown * env.sim.dt:.1f} s) of the first world")
+    print(f"clip: {shown} steps ({shown * env.sim.dt:.1f} s) of one world")
     return render_suite_clip(env.task, states, outputs, env.sim.dt, width, height), {}
 
 
@@ -261,7 +261,7 @@ def draw_legged_clip(env, states: dict, outputs: dict[str, dict], width: int, he
 
     qpos = np.asarray(states["dof_pos"])
     shown = qpos.shape[0] - 1
-    print(f"clip: {shown} steps ({shown * env.sim.dt:.1f} s) of the first world")
+    print(f"clip: {shown} steps ({shown * env.sim.dt:.1f} s) of one world")
     plans = {path: suite_strides(env.sim.dt, int(opt["fps"]), path.lower().endswith(".gif")) for path, opt in outputs.items()}
     writers = [VideoWriter(path, plans[path][1], opt.get("width"), plans[path][2]) for path, opt in outputs.items()]
     view = LeggedView(env.task, width, height)
