@@ -192,7 +192,7 @@ def wait(args) -> None:
         if not running:
             print("every training has ended")
             return
-        time.sleep(min(20.0, max(deadline - time.time(), 0.1)))
+        time.sleep(min(2.0, max(deadline - time.time(), 0.1)))  # a check is a few syscalls: poll often
     print(f"still running: {[(j['framework'], j['task']) for j in jobs if alive(j['pid'])]}")
 
 
