@@ -26,6 +26,7 @@ def test_each_variant_reaches_mujoco_warp(rows):
 def test_another_broadphase_or_fewer_rows_steps_the_same_physics(rows):
     for name in ("sap_tile", "njmax_300"):
         assert rows[name]["qpos_max_abs_diff"] < 1e-4, name
+        assert rows[name]["sensordata_max_abs_diff"] < 1e-3, name  # contact forces up to ~100 N: float32 rounding
         assert rows[name]["worlds_with_other_contact_counts"] == 0, name
         assert rows[name]["faults"]["solver_overflows"] == 0, name
     assert "| sap_tile |" in rs.table(list(rows.values()))

@@ -11,7 +11,8 @@ a contact sensor considers (mjlab's 500) and the CCD iterations (mjlab's 500). F
 - the peak constraint rows of a world and contacts of all worlds, and the overflow faults (a variant that drops
   constraints changes the physics);
 - its agreement with the first variant (mjlab's settings): from the same seed, the same actions for ``--check-steps``
-  control steps, the largest difference of any world's qpos and the worlds whose contact count differs.
+  control steps, the largest difference of any world's qpos and of its sensor data (the contact sensors the rewards
+  and terminations read among them), and the worlds whose contact count differs.
 
     python -m benchmarks.physics.rough_settings --tasks Go1VelocityRough-v0 G1VelocityRough-v0 --num-envs 4096 \\
         --out rough_settings.json
@@ -33,6 +34,7 @@ VARIANTS = {  # name: settings changed from the task's (mjlab's); "mjlab" first,
     "njmax_300": {"njmax": 300},
     "maxmatch_64": {"contact_sensor_maxmatch": 64},
     "ccd_50": {"ccd_iterations": 50},
+    "sap_tile_njmax_300_maxmatch_64": {"broadphase": "SAP_TILE", "njmax": 300, "contact_sensor_maxmatch": 64},
 }
 TASK_FIELDS = ("njmax", "contact_sensor_maxmatch")  # LeggedTask fields; the rest are MuJoCo Warp options
 
@@ -60,15 +62,16 @@ def broadphase_name(value) -> str:
     return mujoco_warp.BroadphaseType(int(value)).name
 
 
-def trajectory(env, steps: int) -> tuple[np.ndarray, np.ndarray]:
-    """qpos and contacts per world after ``steps`` control steps from ``reset(seed=0)`` under fixed actions."""
+def trajectory(env, steps: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """qpos, contacts per world and sensor data (the contact sensors' among them) after ``steps`` control steps from
+    ``reset(seed=0)`` under fixed actions."""
     gen = torch.Generator(device="cpu").manual_seed(0)
     env.reset(seed=0)
     for _ in range(steps):
         env.step((torch.rand(env.num_envs, env.num_actions, generator=gen) * 2 - 1).to(env.device))
     d = env.sim.d
     worlds = d.contact.worldid.numpy()[: int(d.nacon.numpy()[0])]
-    return d.qpos.numpy().copy(), np.bincount(worlds, minlength=env.num_envs)
+    return d.qpos.numpy().copy(), np.bincount(worlds, minlength=env.num_envs), d.sensordata.numpy().copy()
 
 
 def measure(task: str, name: str, num_envs: int, device: str, steps: int, warmup: int, repeats: int,
@@ -84,7 +87,8 @@ def measure(task: str, name: str, num_envs: int, device: str, steps: int, warmup
     agree = {}
     if reference is not None:
         agree = {"qpos_max_abs_diff": float(np.abs(got[0] - reference[0]).max()),
-                 "worlds_with_other_contact_counts": int((got[1] != reference[1]).sum())}
+                 "worlds_with_other_contact_counts": int((got[1] != reference[1]).sum()),
+                 "sensordata_max_abs_diff": float(np.abs(got[2] - reference[2]).max())}
 
     def env_step():
         env.step(torch.rand(num_envs, env.num_actions, device=env.device) * 2 - 1)
