@@ -43,3 +43,20 @@ def test_a_hand_edited_row_and_a_missing_block_are_reported(tmp_path, monkeypatc
     assert len(problems) == 2
     doc_tables.write()
     assert "| Ant-v5 | **8015** (7848 to 8181)" in (tmp_path / "README.md").read_text()
+
+
+def test_the_readme_speed_tables_widths_are_the_envs(ant_env, humanoid_env):
+    """benchmarks/readme_speed.py writes each task's observation and action widths by hand: they are the envs'."""
+    from benchmarks.readme_speed import ROWS
+    from warpgym.envs import make_vec_env
+    from warpgym.envs.legged import LeggedVecEnv
+
+    built = {"warpgym/Ant-v0": ant_env, "warpgym/Humanoid-v0": humanoid_env}
+    for name, widths, (kind, what, _) in ROWS:
+        if name not in built:
+            built[name] = (LeggedVecEnv(what, num_envs=1, device="cpu") if kind == "legged"
+                           else make_vec_env(what, num_envs=1, device="cpu"))
+        env = built[name]
+        obs, actions = env.single_observation_space.shape[0], env.single_action_space.shape[0]
+        critic = getattr(env, "num_critic_obs", 0)
+        assert widths == (f"{obs} (critic {critic}) / {actions}" if critic else f"{obs} / {actions}"), name
