@@ -60,7 +60,7 @@ def scaling(folder: str, task: str) -> tuple:
 
 # name: (page, module, arguments, the paragraphs of its output that make the block)
 BLOCKS = {
-    "readme-speed": ("README.md", "benchmarks.readme_speed", [], first(1)),
+    "readme-speed": ("README.md", "benchmarks.speed.readme_speed", [], first(1)),
     "readme-learning": ("README.md", "benchmarks.learning.suite_learning", SUITE_LEARNING,
                         after("The README's table:", 2)),
     "suite-learning": ("docs/benchmarks.md", "benchmarks.learning.suite_learning", SUITE_LEARNING, first(2)),

@@ -46,8 +46,8 @@ def test_a_hand_edited_row_and_a_missing_block_are_reported(tmp_path, monkeypatc
 
 
 def test_the_readme_speed_tables_widths_are_the_envs(ant_env, humanoid_env):
-    """benchmarks/readme_speed.py writes each task's observation and action widths by hand: they are the envs'."""
-    from benchmarks.readme_speed import ROWS
+    """benchmarks/speed/readme_speed.py writes each task's observation and action widths by hand: they are the envs'."""
+    from benchmarks.speed.readme_speed import ROWS
     from warpgym.envs import make_vec_env
     from warpgym.envs.legged import LeggedVecEnv
 

@@ -3,7 +3,7 @@ column: each task's env stepped with random actions, in env-steps per second, at
 of that run, and beside it what the peer ran on the same host (EnvPool on the host's cores for Gymnasium's tasks,
 mjlab 1.6's env at the same number of envs for the legged tasks: the range over every committed side by side).
 
-    python -m benchmarks.readme_speed        # benchmarks/doc_tables.py writes it into README.md
+    python -m benchmarks.speed.readme_speed        # benchmarks/doc_tables.py writes it into README.md
 """
 
 from __future__ import annotations
