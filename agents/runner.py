@@ -513,8 +513,11 @@ def progress_line(row: dict, last_iter: int | None) -> str:
         return "  -  " if v is None else f"{v:{spec}}{unit}"
 
     m, s = divmod(int(row["time_s"]), 60)
+    # the env's curriculum state (a rough task's mean terrain level), where it has one
+    curriculum = "".join(f" | {k.split('/', 1)[1].replace('_', ' ')} {v:.2f}" for k, v in row.items()
+                         if k.startswith("curriculum/"))
     line = (f"{head} | {row['samples'] / 1e6:8.2f}M samples | {row['samples_per_s'] / 1e3:7.1f}k/s | "
-            f"return {fmt('return', '8.1f')} | speed {fmt('speed', '5.2f', ' m/s')} | {m:02d}:{s:02d}")
+            f"return {fmt('return', '8.1f')} | speed {fmt('speed', '5.2f', ' m/s')}{curriculum} | {m:02d}:{s:02d}")
     if "eval/return" in row:
         line += f" | eval {row['eval/return']:.1f} @ {row['eval/speed']:.2f} m/s"
     return line

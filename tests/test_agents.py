@@ -16,6 +16,7 @@ from agents.actor_critic import ActorCritic, gaussian_kl, gaussian_log_prob
 from agents.checkpoint import load, policy_from_checkpoint, save_atomic, with_normalizer
 from agents.logger import read_metrics
 from agents.ppo import adapted_lr, surrogate_loss, value_loss
+from agents.runner import progress_line
 from agents.storage import compute_gae
 from point_mass import PointMassVecEnv
 
@@ -583,6 +584,8 @@ def test_curriculum_state_is_logged_beside_the_faults():
     assert [r["faults/glitches"] for r in history] == [0, 0, 3, 7]
     flat = OnPolicyRunner(FaultyPointMass(8), cfg, print_fn=lambda s: None).learn(max_iterations=1)
     assert not any(k.startswith("curriculum/") for k in flat[0])
+    # the progress line shows it beside the return, and nothing where there is none
+    assert "| stage 4.00 |" in progress_line(history[-1], 4) and "stage" not in progress_line(flat[0], 1)
 
 
 class _Payload:
