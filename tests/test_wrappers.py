@@ -138,3 +138,18 @@ def test_gymnasium_conventions(ant_env):
         restarted = term | trunc
         later |= restarted
     assert seen >= 6
+
+
+def test_rsl_rl_logs_a_rough_tasks_curriculum_as_isaac_lab_and_mjlab_do():
+    pytest.importorskip("rsl_rl")
+    from warpgym.envs.legged import LeggedVecEnv
+    from warpgym.wrappers.rsl_rl import RslRlVecEnv
+
+    env = LeggedVecEnv("Go1VelocityRough-v0", num_envs=2, device="cpu", seed=0)
+    adapter = RslRlVecEnv(env)
+    adapter.get_observations()
+    *_, extras = adapter.step(torch.zeros(2, env.num_actions))
+    # rsl_rl's runner logs extras["log"] every iteration, keys with a slash as they are
+    level = extras["log"]["Curriculum/terrain_level"]
+    assert float(level) == pytest.approx(float(env.info["terrain_level"].float().mean()))
+    assert set(extras) == {"time_outs", "log"}

@@ -81,6 +81,11 @@ def parse_args(argv=None):
     if args.task.lower() not in names:
         ap.error(f"--task {args.task!r}: choose one of {list(names.values())}")
     args.task = names[args.task.lower()]
+    from warpgym.tasks.registry import task_entry  # noqa: PLC0415
+
+    if task_entry(args.task).family == "legged":
+        ap.error(f"--task {args.task}: the legged tasks train with `warpgym train --task {args.task}` (the adapters do "
+                 "not yet hand their learners the critic's observation or the episode statistics they report)")
     rllib_only = [f for f in ("horizon_len", "batch_size", "repeat_times", "learning_rate") if getattr(args, f) is not None]
     rllib_only += [f for f, default in (("gpus", 1), ("env_runners", None)) if getattr(args, f) != default]
     if rllib_only and args.learner != "rllib":

@@ -48,6 +48,9 @@ class RslRlVecEnv(VecEnv):
         self._groups = [TensorDict({"policy": buf}, batch_size=[self.num_envs], device=self.device)
                         for buf in self._copies.buffers]
         self._obs = None
+        # a rough task's curriculum state, as rsl_rl logs Isaac Lab's and mjlab's: extras["log"]["Curriculum/..."]
+        curriculum = getattr(b, "curriculum", None)
+        self._curriculum = curriculum if callable(curriculum) and curriculum() else None
 
     @property
     def episode_length_buf(self) -> torch.Tensor:
@@ -75,7 +78,10 @@ class RslRlVecEnv(VecEnv):
             self.log.after_step(info)
         self._obs = self._group(obs)
         done = info["_final_obs"]  # terminated | truncated, one buffer
-        return self._obs, reward, done, {"time_outs": info["time_outs"]}
+        extras = {"time_outs": info["time_outs"]}
+        if self._curriculum is not None:
+            extras["log"] = {f"Curriculum/{name}": value for name, value in self._curriculum().items()}
+        return self._obs, reward, done, extras
 
     def close(self):
         self.env.close()
