@@ -79,3 +79,20 @@ def test_on_rough_ground_native_mujoco_scans_the_ground_as_warpgym_does_and_trac
     assert native.falls == ours.falls == 0 and list(native.falls_by_kind) == ["flat", "pyramid_stairs",
                                                                                "pyramid_stairs_inv"]
     assert abs(native.error_xy / ours.error_xy - 1) < 0.01 and abs(native.error_yaw / ours.error_yaw - 1) < 0.01
+
+
+def test_tracking_means_weigh_each_step_and_split_by_kind_of_ground():
+    """Both replays' tracking (warpgym.native_legged.tracking): every step of every episode weighs the same, so a
+    fallen episode's few steps count for little; per kind, only that kind's episodes."""
+    from types import SimpleNamespace
+
+    from warpgym.native_legged import tracking
+
+    ground = SimpleNamespace(grid=SimpleNamespace(sub_terrains=[("flat", None), ("stairs", None)]))
+    sums = [[10.0, 1.0], [2.0, 2.0], [30.0, 3.0]]  # error sums (xy, yaw) of three episodes
+    steps = [100, 10, 100]
+    got = tracking(sums, steps, [False, True, False], ground, kinds=[0, 1, 0])
+    assert (got.error_xy, got.error_yaw) == pytest.approx((42.0 / 210, 6.0 / 210))
+    assert got.errors_by_kind == {"flat": pytest.approx((0.2, 0.02)), "stairs": pytest.approx((0.2, 0.2))}
+    assert got.falls_by_kind == {"flat": (0, 2), "stairs": (1, 1)} and (got.falls, got.episodes) == (1, 3)
+    assert tracking(sums, steps, [False] * 3).errors_by_kind is None  # flat ground: no kinds

@@ -47,20 +47,20 @@ def start_patches(ground, episodes: int, level: int) -> list[tuple[int, np.ndarr
     return [(e % cols, ground.origins[level, e % cols].astype(np.float64)) for e in range(episodes)]
 
 
-def per_kind(ground, kinds: list[int], fell: list[bool]) -> dict:
-    names = [name for name, _ in ground.grid.sub_terrains]
-    return {names[k]: (sum(f for kk, f in zip(kinds, fell) if kk == k), kinds.count(k)) for k in sorted(set(kinds))}
-
-
-def errors_per_kind(ground, kinds: list[int], sums: np.ndarray, steps: np.ndarray) -> dict:
-    """Each kind's tracking errors over its episodes' steps: ``sums`` (episodes, 2) of per-step errors,
-    ``steps`` (episodes,) of steps counted."""
-    names = [name for name, _ in ground.grid.sub_terrains]
-    out = {}
-    for k in sorted(set(kinds)):
-        mine = np.asarray(kinds) == k
-        n = max(float(steps[mine].sum()), 1.0)
-        out[names[k]] = tuple(float(x) for x in sums[mine].sum(0) / n)
+def tracking(sums: np.ndarray, steps: np.ndarray, fell: list[bool], ground=None, kinds: list[int] | None = None
+             ) -> Tracking:
+    """Tracking errors from each episode's ``sums`` (episodes, 2) of per-step errors (xy, yaw) over its ``steps``
+    counted: the means over every step of every episode and, on rough ground, over each kind's (``kinds``: each
+    episode's kind of ground), with the falls per kind."""
+    sums, steps = np.asarray(sums, np.float64), np.asarray(steps, np.float64)
+    xy, yaw = sums.sum(0) / max(steps.sum(), 1.0)
+    out = Tracking(float(xy), float(yaw), int(sum(fell)), len(fell))
+    if ground is not None:
+        names = [name for name, _ in ground.grid.sub_terrains]
+        mine = {k: np.asarray(kinds) == k for k in sorted(set(kinds))}
+        out.falls_by_kind = {names[k]: (int(sum(np.asarray(fell)[m])), int(m.sum())) for k, m in mine.items()}
+        out.errors_by_kind = {names[k]: tuple(float(x) for x in sums[m].sum(0) / max(steps[m].sum(), 1.0))
+                              for k, m in mine.items()}
     return out
 
 
@@ -144,8 +144,8 @@ def native_episodes(task: LeggedTask, act, episodes: int, level: int | None = No
     r, j = idx.root_qpos, idx.joint_qpos
     illegal = idx.hit_force[idx.hit_group == ILLEGAL_CONTACT]
     starts = start_patches(ground, episodes, level) if ground is not None else [(0, np.zeros(3))] * episodes
-    errors, fell = [], []
-    sums, counted = np.zeros((episodes, 2)), np.zeros(episodes)
+    fell = []
+    sums, counted = np.zeros((episodes, 2)), np.zeros(episodes)  # each episode's error sums and steps
     for e, (yaw, (_, origin)) in enumerate(zip(start_yaws(episodes), starts)):
         mujoco.mj_resetData(m, d)
         d.qpos[r:r + 7] = start_pose(idx, yaw)
@@ -171,19 +171,13 @@ def native_episodes(task: LeggedTask, act, episodes: int, level: int | None = No
             mujoco.mj_forward(m, d)
             lin, ang = base_velocity(d.qpos[r + 3:r + 7], d.qvel[idx.root_dof:idx.root_dof + 3],
                                      d.qvel[idx.root_dof + 3:idx.root_dof + 6])
-            errors.append((math.hypot(cmd[0] - lin[0], cmd[1] - lin[1]), abs(cmd[2] - ang[2])))
-            sums[e] += errors[-1]
+            sums[e] += (math.hypot(cmd[0] - lin[0], cmd[1] - lin[1]), abs(cmd[2] - ang[2]))
             counted[e] += 1
             if touched or (task.fall_over and tilt(d.qpos[r + 3:r + 7]) > task.fall_angle):
                 ended = True
                 break
         fell.append(ended)
-    e = np.array(errors)
-    kinds = [k for k, _ in starts]
-    if ground is None:
-        return Tracking(float(e[:, 0].mean()), float(e[:, 1].mean()), sum(fell), episodes)
-    return Tracking(float(e[:, 0].mean()), float(e[:, 1].mean()), sum(fell), episodes, per_kind(ground, kinds, fell),
-                    errors_per_kind(ground, kinds, sums, counted))
+    return tracking(sums, counted, fell, ground, [k for k, _ in starts])
 
 
 def warpgym_episodes(task: LeggedTask, act, episodes: int, device: str = "cpu", level: int | None = None) -> Tracking:
@@ -235,15 +229,8 @@ def warpgym_episodes(task: LeggedTask, act, episodes: int, device: str = "cpu", 
         falls += terminated & alive
         alive &= ~terminated
     env.close()
-    n = float(counted.sum())
-    fell = [bool(f) for f in falls.cpu()]
-    total = sums.sum(0)
-    xy, yaw = float(total[0]) / n, float(total[1]) / n
-    if ground is None:
-        return Tracking(xy, yaw, int(falls.sum()), episodes)
-    kinds = [k for k, _ in starts]
-    return Tracking(xy, yaw, int(falls.sum()), episodes, per_kind(ground, kinds, fell),
-                    errors_per_kind(ground, kinds, sums.cpu().numpy(), counted.cpu().numpy()))
+    return tracking(sums.cpu().numpy(), counted.cpu().numpy(), [bool(f) for f in falls.cpu()], ground,
+                    [k for k, _ in starts])
 
 
 def rotate_to_base(quat, lin_world):

@@ -99,7 +99,7 @@ def main(argv=None) -> int:
     filming = bool(args.video or args.gif)
     n = args.num_envs or (1 if filming else 64 if device.startswith("cuda") else 4)
     if args.world and entry.clip_all_worlds:
-        raise SystemExit(f"warpgym play: error: --world {args.world}: a clip of {task} draws all its worlds; drop it")
+        parser().error(f"--world {args.world}: a clip of {task} draws all its worlds; drop it")
     if filming and n > 1 and not entry.clip_all_worlds:
         print(f"note: a clip of {task} draws world {args.world}; --num-envs {n} plays the others unseen")
     # the trained task as it was trained (episode length, substeps, physics), on this device
