@@ -1,6 +1,7 @@
 """The rough-ground settings study (benchmarks/physics/rough_settings.py): each variant reaches MuJoCo Warp, and the
 ones that only change how contacts are found step the same physics (CPU, 2 worlds)."""
 
+import numpy as np
 import pytest
 
 from benchmarks.physics import rough_settings as rs
@@ -28,5 +29,24 @@ def test_another_broadphase_or_fewer_rows_steps_the_same_physics(rows):
         assert rows[name]["qpos_max_abs_diff"] < 1e-4, name
         assert rows[name]["sensordata_max_abs_diff"] < 1e-3, name  # contact forces up to ~100 N: float32 rounding
         assert rows[name]["worlds_with_other_contact_counts"] == 0, name
+        assert rows[name]["worlds_qpos_apart"] == 0, name
         assert rows[name]["faults"]["solver_overflows"] == 0, name
     assert "| sap_tile |" in rs.table(list(rows.values()))
+
+
+def test_the_reference_is_run_twice_for_the_floor(rows):
+    # Warp's CPU backend repeats itself bit for bit: the floor is zero there (on a GPU it is not, see the module)
+    floor = rows["mjlab"]["run_to_run"]
+    assert floor["qpos_max_abs_diff"] == 0.0 and floor["worlds_qpos_apart"] == 0
+    assert "| mjlab |" in rs.table([rows["mjlab"]]) and "| (0) | (0) |" in rs.table([rows["mjlab"]])
+
+
+def test_agreement_counts_the_worlds_that_moved_apart():
+    qpos = np.zeros((3, 4))
+    moved = qpos.copy()
+    moved[1, 2] = 2 * rs.QPOS_TOL
+    moved[2, 0] = rs.QPOS_TOL / 2
+    contacts, sensors = np.array([1, 2, 3]), np.zeros((3, 2))
+    got = rs.agreement((moved, np.array([1, 2, 4]), sensors), (qpos, contacts, sensors))
+    assert got["worlds_qpos_apart"] == 1 and got["worlds_with_other_contact_counts"] == 1
+    assert got["qpos_max_abs_diff"] == 2 * rs.QPOS_TOL
