@@ -154,7 +154,7 @@ def compile_table(startup: dict) -> list[str]:
     return out
 
 
-def main() -> int:
+def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", help="folder for the runs, their logs and cold_start.json")
     ap.add_argument("--seconds", type=float, default=45.0, help="each run's --time-limit")
@@ -164,7 +164,7 @@ def main() -> int:
     ap.add_argument("--profile-warm", action="store_true",
                     help="one more warm Ant run under cProfile; its hot spots go into the JSON and the report")
     ap.add_argument("extra", nargs="*", help="more train.py flags, after --, e.g. -- --no-mathdx")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     if args.report:
         print(report(read_report(args.report, "the cold_start.json of an earlier run")))
         return 0

@@ -319,7 +319,7 @@ def main(argv=None) -> int:
                     help="print the tables of earlier runs' envs_per_gpu_<task>.json (several run alike: their rows "
                          "together) and draw the figure again")
     ap.add_argument("--figure", default=None,
-                    help="with --report: the figure's path (default: envs_per_gpu_<task>.png beside the first JSON)")
+                    help="with --report: the figure's path (default: envs_per_gpu_<task>.png beside the first JSON; -: none)")
     ap.add_argument("--task", default="Ant", choices=sorted(TARGETS))
     ap.add_argument("--envs", type=int, nargs="*", default=[2048, 4096, 8192, 16384, 32768],
                     help="sizes for the throughput table (none: skip it)")
@@ -345,8 +345,10 @@ def main(argv=None) -> int:
             doc = merged(args.report)
         except ValueError as e:
             ap.error(str(e))
-        print(f"{doc['task']}, {doc['device']}\n\n{tables(doc)}")
-        figure(doc, args.figure or os.path.join(os.path.dirname(args.report[0]), f"envs_per_gpu_{doc['task']}.png"))
+        rebuilt = " (rebuilt from the tables the run printed, rounded as there)" if doc.get("rebuilt") else ""
+        print(f"{doc['device']}, {doc.get('date', 'undated')}: {doc['task']}{rebuilt}\n\n{tables(doc)}")
+        if args.figure != "-":
+            figure(doc, args.figure or os.path.join(os.path.dirname(args.report[0]), f"envs_per_gpu_{doc['task']}.png"))
         return 0
     if not args.out:
         ap.error("--out OUT is needed to measure (or --report JSON to print the tables of an earlier run)")
