@@ -95,7 +95,7 @@ BLOCKS = {
     "scaling-humanoid": scaling("grow_kl", "Humanoid"),
     "scaling-humanoid-v5": scaling("suite", "Humanoid-v5"),
     "scaling-ant-v5": scaling("suite", "Ant-v5"),
-    "nodes": ("docs/benchmarks.md", "benchmarks.multi_gpu.nodes", ["--report", "docs/bench/multi_gpu/nodes/nodes-4.json"],
+    "nodes": ("docs/history.md", "benchmarks.multi_gpu.nodes", ["--report", "docs/bench/multi_gpu/nodes/nodes-4.json"],
               first(3)),
     "exits-cpu": ("docs/benchmarks.md", "benchmarks.reliability.exits", ["--report", "docs/bench/cpu_exits.json"],
                   lambda paragraphs: ["```\n" + paragraphs[-1] + "\n```"]),
