@@ -135,7 +135,8 @@ def test_a_float_setting_out_of_range_or_not_a_number_is_refused(name, value, ca
     ("plot", ["/nowhere/at/all"], "no metrics.jsonl in /nowhere/at/all"),
     ("bench", ["--tasks", "Hopper-v9"], "--tasks: "),
     ("train-with", ["nolearner"], "learner 'nolearner': choose one of"),
-    ("train-with", ["rsl_rl", "--task", "Go1VelocityRough-v0"], "the legged tasks train with `warpgym train"),
+    ("train-with", ["skrl", "--task", "Go1VelocityRough-v0"],
+     "only rsl_rl trains the legged tasks (its observation groups give the critic its own observation)"),
 ])
 def test_a_wrong_path_device_or_name_is_one_line(command, argv, says, capsys, monkeypatch):
     import torch

@@ -153,3 +153,47 @@ def test_rsl_rl_logs_a_rough_tasks_curriculum_as_isaac_lab_and_mjlab_do():
     level = extras["log"]["Curriculum/terrain_level"]
     assert float(level) == pytest.approx(float(env.info["terrain_level"].float().mean()))
     assert set(extras) == {"time_outs", "log"}
+
+
+def test_rsl_rl_gives_a_legged_tasks_critic_its_own_observation():
+    """The critic group is the task's critic observation, copied by turns as the policy's is: what rsl_rl holds from
+    one step is still that step's after the next one."""
+    pytest.importorskip("rsl_rl")
+    from warpgym.envs.legged import LeggedVecEnv
+    from warpgym.wrappers.rsl_rl import RslRlVecEnv
+
+    env = LeggedVecEnv("Go1VelocityFlat-v0", num_envs=2, device="cpu", seed=0)
+    adapter = RslRlVecEnv(env)
+    first = adapter.get_observations()
+    assert first["policy"].shape == (2, env.num_obs) and first["critic"].shape == (2, env.num_critic_obs)
+    assert env.num_critic_obs > env.num_obs
+    torch.testing.assert_close(first["critic"], env.info["critic_obs"])
+    kept = first["critic"].clone()
+    obs, *_ = adapter.step(torch.full((2, env.num_actions), 0.5))
+    torch.testing.assert_close(obs["critic"], env.info["critic_obs"])
+    assert obs["critic"].data_ptr() != env.info["critic_obs"].data_ptr()  # a copy, not the buffer the env rewrites
+    torch.testing.assert_close(first["critic"], kept)  # the first step's copy outlived the second step
+    assert not torch.equal(obs["critic"], kept)
+
+
+def test_rsl_rl_trains_a_legged_task_on_mjlabs_settings(tmp_path):
+    """`warpgym train-with rsl_rl` on the Go1: the actor reads the policy's 48 values, the critic its own 72, and the
+    metrics carry the tracking errors (the legged episodes have no forward speed)."""
+    pytest.importorskip("rsl_rl")
+    from warpgym.cli import train_with
+
+    from agents.logger import read_metrics
+
+    args = train_with.parse_args(["rsl_rl", "--task", "Go1VelocityFlat-v0", "--num-envs", "4", "--iterations", "2",
+                                  "--device", "cpu", "--episode-length", "12", "--run-dir", str(tmp_path), "--no-plots"])
+    args.keep_returns = True
+    assert train_with.main(args=args) == 0
+    runner = args.learner_object
+    sizes = {name: next(m for m in model.modules() if isinstance(m, torch.nn.Linear)).in_features
+             for name, model in (("actor", runner.alg.actor), ("critic", runner.alg.critic))}
+    assert sizes == {"actor": 48, "critic": 72}
+    ours = args.episode_log.returns
+    assert len(ours) >= 4
+    np.testing.assert_allclose(learner_returns("rsl_rl", runner), ours[-min(len(ours), 100):], rtol=1e-4, atol=1e-4)
+    rows = [r for r in read_metrics(str(tmp_path)) if "return" in r]
+    assert rows and all("error_vel_xy" in r and "error_vel_yaw" in r and "speed" not in r for r in rows)

@@ -9,6 +9,8 @@
 Each learner runs with its own published hyperparameters for Isaac Gym's Ant and Humanoid
 (rsl_rl: Isaac Lab's; skrl: skrl's IsaacGymEnvs examples; rl_games: IsaacGymEnvs' AntPPO and
 HumanoidPPO; SB3: its defaults scaled to the batch; RLlib: rl_games' numbers in RLlib's PPO).
+The legged tasks train with rsl_rl only, on mjlab's rl_cfg for them (the actor on the policy's
+observation, the critic on its own); the other adapters hand their learners one observation.
 Whatever the learner logs itself, the run directory gets warpgym's metrics.jsonl/csv (return, length and forward speed of the training
 episodes, samples, wall-clock time) and the two plots, so the learners compare on one figure.
 Install the learner with its extra: pip install "warpgym[rsl_rl]" (or skrl, rl_games, sb3, rllib).
@@ -36,14 +38,22 @@ HORIZON = {"rsl_rl": {"Ant": 32, "Humanoid": 32}, "skrl": {"Ant": 16, "Humanoid"
 WIDE = {"Humanoid", "Humanoid-v5", "HumanoidStandup-v5"}
 
 
+LEGGED_HORIZON = 24  # mjlab's num_steps_per_env for its velocity tasks (rsl_rl)
+
+
 def horizon_of(learner: str, task: str) -> int:
+    from warpgym.tasks.registry import task_entry  # noqa: PLC0415
+
+    if task_entry(task).family == "legged":
+        return LEGGED_HORIZON
     return HORIZON[learner].get(task, HORIZON[learner]["Humanoid"])
 
 
 def parser() -> CommandParser:
     ap = CommandParser(prog="warpgym train-with", description=__doc__)
     ap.add_argument("learner", help=f"one of {', '.join(LEARNERS)}")
-    ap.add_argument("--task", default="Ant", help="Ant, Humanoid or one of Gymnasium's suite (Hopper-v5, ...)")
+    ap.add_argument("--task", default="Ant", help="Ant, Humanoid, one of Gymnasium's suite (Hopper-v5, ...) or, with "
+                    "rsl_rl, a legged task (Go1VelocityFlat-v0, ...)")
     ap.add_argument("--num-envs", type=positive_int(4096), default=None, help="default: 4096 on a GPU, 64 on the CPU")
     ap.add_argument("--device", default=None, help="default: cuda:0 when present, else cpu")
     ap.add_argument("--seed", type=non_negative_int(0), default=0)
@@ -83,9 +93,10 @@ def parse_args(argv=None):
     args.task = names[args.task.lower()]
     from warpgym.tasks.registry import task_entry  # noqa: PLC0415
 
-    if task_entry(args.task).family == "legged":
-        ap.error(f"--task {args.task}: the legged tasks train with `warpgym train --task {args.task}` (the adapters do "
-                 "not yet hand their learners the critic's observation or the episode statistics they report)")
+    if task_entry(args.task).family == "legged" and args.learner != "rsl_rl":
+        ap.error(f"--task {args.task}: of the adapters' learners only rsl_rl trains the legged tasks (its observation "
+                 f"groups give the critic its own observation): `warpgym train-with rsl_rl --task {args.task}`, or "
+                 f"`warpgym train --task {args.task}`")
     rllib_only = [f for f in ("horizon_len", "batch_size", "repeat_times", "learning_rate") if getattr(args, f) is not None]
     rllib_only += [f for f, default in (("gpus", 1), ("env_runners", None)) if getattr(args, f) != default]
     if rllib_only and args.learner != "rllib":
@@ -104,12 +115,28 @@ def parse_args(argv=None):
 
 
 # ---------------------------------------------------------------- one function per learner
-def run_rsl_rl(env, args, horizon: int, run_dir: str) -> None:
-    from rsl_rl.runners import OnPolicyRunner  # noqa: PLC0415
+def rsl_rl_legged_cfg(horizon: int) -> dict:
+    """mjlab 1.6's rl_cfg for its velocity tasks (the Go1's and the G1's are the same): the actor on the policy's
+    observation group, the critic on the critic's."""
+    net = {"class_name": "MLPModel", "hidden_dims": [512, 256, 128], "activation": "elu", "obs_normalization": True}
+    return {
+        "num_steps_per_env": horizon, "save_interval": 10**9, "obs_groups": {"actor": ["policy"], "critic": ["critic"]},
+        "check_for_nan": False, "logger": "tensorboard", "multi_gpu": None,
+        "actor": {**net, "distribution_cfg": {"class_name": "GaussianDistribution", "init_std": 1.0,
+                                              "std_type": "scalar"}},
+        "critic": dict(net),
+        "algorithm": {"class_name": "PPO", "value_loss_coef": 1.0, "use_clipped_value_loss": True, "clip_param": 0.2,
+                      "entropy_coef": 0.01, "num_learning_epochs": 5, "num_mini_batches": 4, "learning_rate": 1e-3,
+                      "schedule": "adaptive", "gamma": 0.99, "lam": 0.95, "desired_kl": 0.01, "max_grad_norm": 1.0},
+    }
 
-    wide = args.task in WIDE
+
+def rsl_rl_cfg(task: str, horizon: int) -> dict:
+    """Isaac Lab's rsl_rl settings for the Ant and the Humanoid (the Humanoid's wider network and smaller step for
+    Gymnasium's two humanoids)."""
+    wide = task in WIDE
     net = {"class_name": "MLPModel", "hidden_dims": [400, 200, 100], "activation": "elu", "obs_normalization": True}
-    cfg = {
+    return {
         "num_steps_per_env": horizon, "save_interval": 10**9, "obs_groups": {"actor": ["policy"], "critic": ["policy"]},
         "check_for_nan": False,  # a host read per step; warpgym counts NaNs on the device (env.fault_counters)
         "logger": "tensorboard", "multi_gpu": None,
@@ -120,6 +147,15 @@ def run_rsl_rl(env, args, horizon: int, run_dir: str) -> None:
                       "learning_rate": 5e-4 if not wide else 3e-4, "schedule": "adaptive", "gamma": 0.99,
                       "lam": 0.95, "desired_kl": 0.01, "max_grad_norm": 1.0},
     }
+
+
+def run_rsl_rl(env, args, horizon: int, run_dir: str) -> None:
+    from rsl_rl.runners import OnPolicyRunner  # noqa: PLC0415
+
+    from warpgym.tasks.registry import task_entry  # noqa: PLC0415
+
+    legged = task_entry(args.task).family == "legged"
+    cfg = rsl_rl_legged_cfg(horizon) if legged else rsl_rl_cfg(args.task, horizon)
     runner = OnPolicyRunner(env, cfg, log_dir=os.path.join(run_dir, "rsl_rl"), device=str(env.device))
     try:
         runner.learn(args.iterations)
@@ -336,14 +372,14 @@ def main(argv=None, args=None) -> int:
 
 
 def summarize(rows: list[dict], args, device: str, num_envs: int, stopped: str) -> dict:
-    """Steady throughput and when the training episodes first averaged 1, 2 and 3 m/s."""
+    """Steady throughput and when the training episodes first averaged 1, 2 and 3 m/s (tasks that walk forward)."""
     from agents.logger import first_reaching, steady_median  # noqa: PLC0415
 
-    done = [r for r in rows if "speed" in r]
+    done = [r for r in rows if "return" in r]
     out = {"learner": args.learner, "task": args.task, "device": device, "num_envs": num_envs, "stopped_by": stopped,
            "iterations": len(rows), "samples": rows[-1]["samples"] if rows else 0,
            "time_s": rows[-1]["time_s"] if rows else 0.0, "samples_per_s": steady_median(rows),
-           "final_return": done[-1]["return"] if done else None, "final_speed": done[-1]["speed"] if done else None}
+           "final_return": done[-1]["return"] if done else None, "final_speed": done[-1].get("speed") if done else None}
     for v in (1, 2, 3):
         out[f"first_speed_{v}ms"] = first_reaching(rows, "speed", v)
     return out

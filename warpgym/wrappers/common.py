@@ -45,15 +45,20 @@ def base_env(env):
     return inner
 
 
+# (row name, info["episode"] key) of the statistics only some tasks report
+OPTIONAL_FIELDS = (("speed", "s"), ("error_vel_xy", "error_vel_xy"), ("error_vel_yaw", "error_vel_yaw"))
+
+
 class EpisodeLog:
     """Device-side sums of the episodes that end at each step, reported every ``every`` steps.
 
     Args:
         env: the warpgym vector env.
         every: steps between reports (a learner's rollout length is a good choice).
-        sink: called with a row ``{"samples", "episodes", "return", "length", "speed", "steps_s"}``
-            (means over the episodes that ended since the last report; ``steps_s`` the wall-clock
-            seconds since then).
+        sink: called with a row ``{"samples", "episodes", "return", "length", "steps_s", ...}``
+            (means over the episodes that ended since the last report, with ``speed`` for the tasks
+            that walk forward and the tracking errors ``error_vel_xy``, ``error_vel_yaw`` for the
+            legged ones; ``steps_s`` the wall-clock seconds since then).
         stop_after_s: raise ``TimeLimitReached`` at the first report this many seconds after
             ``start`` (default: never).
         start: the clock's origin (default: now).
@@ -68,7 +73,10 @@ class EpisodeLog:
         self.every, self.sink, self.stop_after_s = every, sink, stop_after_s
         self.start = time.time() if start is None else start
         self._last = time.time()
-        self._sums = torch.zeros(4, dtype=torch.float64, device=self.env.device)
+        # the episode statistics this task reports, under the metrics' names
+        episode = self.env.info["episode"]
+        self._fields = [(row, key) for row, key in OPTIONAL_FIELDS if key in episode]
+        self._sums = torch.zeros(3 + len(self._fields), dtype=torch.float64, device=self.env.device)
         self.steps = 0
         self.keep_returns = keep_returns
         self.returns: list[float] = []
@@ -77,8 +85,8 @@ class EpisodeLog:
         ep = info["episode"]
         done = ep["_r"]
         w = done.float()
-        # one (4, N) @ (N,) product: episodes ended, and their summed return, length and speed
-        self._sums += torch.stack((w, ep["r"], ep["l"].float(), ep["s"])) @ w
+        # one (K, N) @ (N,) product: episodes ended, and their summed return, length, speed or errors
+        self._sums += torch.stack((w, ep["r"], ep["l"].float(), *(ep[key] for _, key in self._fields))) @ w
         if self.keep_returns:  # every episode's return, in the order they ended (host reads: tests only)
             self.returns.extend(ep["r"][done].tolist())
         self.steps += 1
@@ -86,13 +94,14 @@ class EpisodeLog:
             self.report()
 
     def report(self) -> None:
-        episodes, ret, length, speed = self._sums.tolist()  # the one host read per report
+        episodes, ret, length, *more = self._sums.tolist()  # the one host read per report
         self._sums.zero_()
         now = time.time()
         row = {"samples": self.steps * self.env.num_envs, "episodes": int(episodes), "steps_s": now - self._last,
                "time_s": now - self.start}
         if episodes:
-            row.update({"return": ret / episodes, "length": length / episodes, "speed": speed / episodes})
+            row.update({"return": ret / episodes, "length": length / episodes})
+            row.update({name: total / episodes for (name, _), total in zip(self._fields, more)})
         self._last = now
         if self.sink is not None:
             self.sink(row)

@@ -26,7 +26,9 @@ from warpgym.wrappers.common import EpisodeLog, ObsCopies, base_env
 
 class RslRlVecEnv(VecEnv):
     """rsl_rl's ``VecEnv`` over a warpgym vector env. Observation groups: ``policy`` (rsl_rl's
-    default for the actor and the critic, as Isaac Lab names it).
+    default for the actor and the critic, as Isaac Lab names it) and, for a task with a critic's
+    observation of its own (the legged tasks' ``info["critic_obs"]``), ``critic``: map them with
+    ``obs_groups={"actor": ["policy"], "critic": ["critic"]}``, as mjlab's runner maps its own.
 
     Args:
         env: a warpgym ``LocomotionVecEnv`` (or a Gymnasium wrapper of one).
@@ -44,9 +46,11 @@ class RslRlVecEnv(VecEnv):
         self.device = b.device
         self.cfg = {"task": b.task.name}
         self.log = log
-        self._copies = ObsCopies(b.obs)
-        self._groups = [TensorDict({"policy": buf}, batch_size=[self.num_envs], device=self.device)
-                        for buf in self._copies.buffers]
+        # each group copied by turns (the same reason as the policy's); all toggle together
+        self._sources = {"policy": b.obs, **({"critic": b.info["critic_obs"]} if "critic_obs" in b.info else {})}
+        self._copies = {name: ObsCopies(src) for name, src in self._sources.items()}
+        self._groups = [TensorDict({name: c.buffers[i] for name, c in self._copies.items()},
+                                   batch_size=[self.num_envs], device=self.device) for i in (0, 1)]
         self._obs = None
         # a rough task's curriculum state, as rsl_rl logs Isaac Lab's and mjlab's: extras["log"]["Curriculum/..."]
         curriculum = getattr(b, "curriculum", None)
@@ -63,8 +67,11 @@ class RslRlVecEnv(VecEnv):
         self._base.episode_steps.copy_(value)
 
     def _group(self, obs: torch.Tensor) -> TensorDict:
-        self._copies(obs)
-        return self._groups[self._copies.index]
+        index = 0
+        for name, copies in self._copies.items():
+            copies(obs if name == "policy" else self._sources[name])
+            index = copies.index
+        return self._groups[index]
 
     def get_observations(self) -> TensorDict:
         if self._obs is None:
