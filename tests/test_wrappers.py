@@ -197,3 +197,20 @@ def test_rsl_rl_trains_a_legged_task_on_mjlabs_settings(tmp_path):
     np.testing.assert_allclose(learner_returns("rsl_rl", runner), ours[-min(len(ours), 100):], rtol=1e-4, atol=1e-4)
     rows = [r for r in read_metrics(str(tmp_path)) if "return" in r]
     assert rows and all("error_vel_xy" in r and "error_vel_yaw" in r and "speed" not in r for r in rows)
+
+
+def test_episode_log_reports_what_a_task_has():
+    """Reacher-v5's episodes carry no forward speed: the rows hold return and length without one (they failed on the
+    missing speed before)."""
+    from warpgym.envs import make_vec_env
+    from warpgym.wrappers.common import EpisodeLog
+
+    env = make_vec_env("Reacher-v5", num_envs=2, device="cpu", max_episode_steps=3)
+    rows = []
+    log = EpisodeLog(env, every=3, sink=rows.append)
+    env.reset(seed=0)
+    for _ in range(6):
+        *_, info = env.step(torch.zeros(2, 2))
+        log.after_step(info)
+    assert len(rows) == 2 and all(r["episodes"] == 2 and r["length"] == 3 for r in rows)
+    assert all("return" in r and "speed" not in r for r in rows)
