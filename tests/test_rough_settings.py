@@ -50,3 +50,22 @@ def test_agreement_counts_the_worlds_that_moved_apart():
     got = rs.agreement((moved, np.array([1, 2, 4]), sensors), (qpos, contacts, sensors))
     assert got["worlds_qpos_apart"] == 1 and got["worlds_with_other_contact_counts"] == 1
     assert got["qpos_max_abs_diff"] == 2 * rs.QPOS_TOL
+
+
+def test_stairs_as_heightfields_reach_the_env_and_step():
+    """The ground's variant: the env's model has the 74 geoms of the heightfield stairs and steps without faults."""
+    row, got = rs.measure("Go1VelocityRough-v0", "stairs_heightfield_5cm", 2, "cpu", steps=1, warmup=1, repeats=1,
+                          check_steps=3, reference=None)
+    assert row["settings"] == {"boxes_as_heightfield": 0.05}
+    assert row["faults"]["solver_overflows"] == 0 and row["faults"]["diverged_resets"] == 0
+    assert np.isfinite(got[0]).all()
+
+
+def test_the_ground_variant_builds_fewer_ground_geoms():
+    env = rs.build("Go1VelocityRough-v0", 1, "cpu", rs.VARIANTS["stairs_heightfield_5cm"])
+    try:
+        assert env.terrain.grid.boxes_as_heightfield == 0.05
+        names = [env.sim.mjm.geom(i).name for i in range(env.sim.mjm.ngeom)]
+        assert sum(n.startswith("terrain_") for n in names) == 74
+    finally:
+        env.close()

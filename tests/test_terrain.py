@@ -85,6 +85,8 @@ def test_kinds_are_drawn_by_their_proportions_and_difficulties_uniformly():
     (lambda: tr.TerrainGrid(sub_terrains=(("flat", tr.Flat()),), num_rows=0), "0 x 20 patches"),
     (lambda: tr.Waves(num_waves=0).patch((8.0, 8.0), 0.5, None), "num_waves=0"),
     (lambda: tr.PyramidSlope(border_width=0.05).patch((8.0, 8.0), 0.5, None), "border_width=0.05"),
+    (lambda: replace(tr.ROUGH, boxes_as_heightfield=-0.05), "boxes_as_heightfield=-0.05"),
+    (lambda: replace(tr.ROUGH, boxes_as_heightfield=3.0), "boxes_as_heightfield=3.0"),
 ])
 def test_bad_settings_name_the_value_and_the_fix(make, message):
     with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")):
@@ -138,3 +140,31 @@ def test_a_clip_of_a_rough_task_colours_only_the_ground_and_refuses_a_model_of_o
     other = tr.generate(replace(tr.ROUGH, num_rows=2, num_cols=4), seed=1)
     with pytest.raises(ValueError, match="colour the model compiled from this ground"):
         colour_ground(mjm, other)
+
+
+def test_stairs_as_heightfields_are_the_boxes_ground_but_at_the_steps_edges():
+    """``boxes_as_heightfield``: each stairs patch one heightfield (554 ground geoms to 74 on the rough tasks' grid).
+    Under rays more than a cell from any step's edge the ground is the boxes' to float32; at the edges it differs by
+    at most a step, never more."""
+    grid = replace(tr.ROUGH, curriculum=True)
+    cell = 0.05
+    boxes, boxes_model = compiled(grid, 0)
+    fields, fields_model = compiled(replace(grid, boxes_as_heightfield=cell), 0)
+    assert (boxes_model.ngeom, fields_model.ngeom) == (554, 74)
+    stairs = [c for c, (name, _) in enumerate(grid.sub_terrains) if name.startswith("pyramid_stairs")]
+    rng = np.random.default_rng(0)
+    points, step = [], 0.0
+    for c in stairs:
+        for r in range(grid.num_rows):
+            corner = boxes.corners[r, c]
+            points += [corner[:2] + rng.uniform(0.0, grid.size[0], 2) for _ in range(40)]
+            step = max(step, tr._lerp(grid.sub_terrains[c][1].step_height_range, boxes.difficulty[r, c]))
+    points = np.array(points)
+    want, got = tr.heights(boxes_model, points), tr.heights(fields_model, points)
+    # a point is on a step's edge when the boxes' ground a cell away differs from its own
+    around = [tr.heights(boxes_model, points + np.array(d)) for d in ((cell, 0), (-cell, 0), (0, cell), (0, -cell))]
+    edge = np.any([np.abs(a - want) > 1e-6 for a in around], axis=0)
+    assert 0.5 * len(points) < (~edge).sum() < len(points)  # most points lie on a tread, some at an edge
+    np.testing.assert_allclose(got[~edge], want[~edge], atol=1e-4)
+    assert np.abs(got - want).max() <= step + 1e-4
+    assert (fields.origins == boxes.origins).all()
