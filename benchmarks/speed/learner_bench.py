@@ -121,7 +121,8 @@ def main(argv=None) -> int:
     ap.add_argument("--task", default="Ant", choices=sorted(WALKING))
     ap.add_argument("--num-envs", type=int, default=4096)
     ap.add_argument("--seconds", type=float, default=120.0, help="wall-clock budget per learner, from process start")
-    ap.add_argument("--report", nargs="+", metavar="OUT", help="print the table of these OUT dirs (or kept learners.json files) instead of running")
+    ap.add_argument("--report", nargs="+", metavar="OUT",
+                    help="print the table of these OUT dirs (or kept learners.json files) instead of running")
     ap.add_argument("--figure", default=None, help="with --report: write the combined plots into this directory")
     args = ap.parse_args(argv)
     if args.report:

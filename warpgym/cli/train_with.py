@@ -41,10 +41,14 @@ WIDE = {"Humanoid", "Humanoid-v5", "HumanoidStandup-v5"}
 LEGGED_HORIZON = 24  # mjlab's num_steps_per_env for its velocity tasks (rsl_rl)
 
 
-def horizon_of(learner: str, task: str) -> int:
+def is_legged(task: str) -> bool:
     from warpgym.tasks.registry import task_entry  # noqa: PLC0415
 
-    if task_entry(task).family == "legged":
+    return task_entry(task).family == "legged"
+
+
+def horizon_of(learner: str, task: str) -> int:
+    if is_legged(task):
         return LEGGED_HORIZON
     return HORIZON[learner].get(task, HORIZON[learner]["Humanoid"])
 
@@ -91,9 +95,7 @@ def parse_args(argv=None):
     if args.task.lower() not in names:
         ap.error(f"--task {args.task!r}: choose one of {list(names.values())}")
     args.task = names[args.task.lower()]
-    from warpgym.tasks.registry import task_entry  # noqa: PLC0415
-
-    if task_entry(args.task).family == "legged" and args.learner != "rsl_rl":
+    if is_legged(args.task) and args.learner != "rsl_rl":
         ap.error(f"--task {args.task}: of the adapters' learners only rsl_rl trains the legged tasks (its observation "
                  f"groups give the critic its own observation): `warpgym train-with rsl_rl --task {args.task}`, or "
                  f"`warpgym train --task {args.task}`")
@@ -115,48 +117,32 @@ def parse_args(argv=None):
 
 
 # ---------------------------------------------------------------- one function per learner
-def rsl_rl_legged_cfg(horizon: int) -> dict:
-    """mjlab 1.6's rl_cfg for its velocity tasks (the Go1's and the G1's are the same): the actor on the policy's
-    observation group, the critic on the critic's."""
-    net = {"class_name": "MLPModel", "hidden_dims": [512, 256, 128], "activation": "elu", "obs_normalization": True}
-    return {
-        "num_steps_per_env": horizon, "save_interval": 10**9, "obs_groups": {"actor": ["policy"], "critic": ["critic"]},
-        "check_for_nan": False, "logger": "tensorboard", "multi_gpu": None,
-        "actor": {**net, "distribution_cfg": {"class_name": "GaussianDistribution", "init_std": 1.0,
-                                              "std_type": "scalar"}},
-        "critic": dict(net),
-        "algorithm": {"class_name": "PPO", "value_loss_coef": 1.0, "use_clipped_value_loss": True, "clip_param": 0.2,
-                      "entropy_coef": 0.01, "num_learning_epochs": 5, "num_mini_batches": 4, "learning_rate": 1e-3,
-                      "schedule": "adaptive", "gamma": 0.99, "lam": 0.95, "desired_kl": 0.01, "max_grad_norm": 1.0},
-    }
-
-
 def rsl_rl_cfg(task: str, horizon: int) -> dict:
-    """Isaac Lab's rsl_rl settings for the Ant and the Humanoid (the Humanoid's wider network and smaller step for
-    Gymnasium's two humanoids)."""
-    wide = task in WIDE
-    net = {"class_name": "MLPModel", "hidden_dims": [400, 200, 100], "activation": "elu", "obs_normalization": True}
+    """Isaac Lab's rsl_rl settings for the Ant and the Humanoid (a smaller step for the humanoids), or, for a legged
+    task, mjlab 1.6's rl_cfg of its velocity tasks (the Go1's and the G1's are the same: a larger network, an entropy
+    bonus, the critic on the task's own critic observation group)."""
+    legged = is_legged(task)
+    net = {"class_name": "MLPModel", "hidden_dims": [512, 256, 128] if legged else [400, 200, 100],
+           "activation": "elu", "obs_normalization": True}
+    distribution = {"class_name": "GaussianDistribution", "init_std": 1.0, **({"std_type": "scalar"} if legged else {})}
     return {
-        "num_steps_per_env": horizon, "save_interval": 10**9, "obs_groups": {"actor": ["policy"], "critic": ["policy"]},
+        "num_steps_per_env": horizon, "save_interval": 10**9,
+        "obs_groups": {"actor": ["policy"], "critic": ["critic" if legged else "policy"]},
         "check_for_nan": False,  # a host read per step; warpgym counts NaNs on the device (env.fault_counters)
         "logger": "tensorboard", "multi_gpu": None,
-        "actor": {**net, "distribution_cfg": {"class_name": "GaussianDistribution", "init_std": 1.0}},
+        "actor": {**net, "distribution_cfg": distribution},
         "critic": dict(net),
         "algorithm": {"class_name": "PPO", "value_loss_coef": 1.0, "use_clipped_value_loss": True, "clip_param": 0.2,
-                      "entropy_coef": 0.0, "num_learning_epochs": 5, "num_mini_batches": 4,
-                      "learning_rate": 5e-4 if not wide else 3e-4, "schedule": "adaptive", "gamma": 0.99,
-                      "lam": 0.95, "desired_kl": 0.01, "max_grad_norm": 1.0},
+                      "entropy_coef": 0.01 if legged else 0.0, "num_learning_epochs": 5, "num_mini_batches": 4,
+                      "learning_rate": 1e-3 if legged else 3e-4 if task in WIDE else 5e-4, "schedule": "adaptive",
+                      "gamma": 0.99, "lam": 0.95, "desired_kl": 0.01, "max_grad_norm": 1.0},
     }
 
 
 def run_rsl_rl(env, args, horizon: int, run_dir: str) -> None:
     from rsl_rl.runners import OnPolicyRunner  # noqa: PLC0415
 
-    from warpgym.tasks.registry import task_entry  # noqa: PLC0415
-
-    legged = task_entry(args.task).family == "legged"
-    cfg = rsl_rl_legged_cfg(horizon) if legged else rsl_rl_cfg(args.task, horizon)
-    runner = OnPolicyRunner(env, cfg, log_dir=os.path.join(run_dir, "rsl_rl"), device=str(env.device))
+    runner = OnPolicyRunner(env, rsl_rl_cfg(args.task, horizon), log_dir=os.path.join(run_dir, "rsl_rl"), device=str(env.device))
     try:
         runner.learn(args.iterations)
     finally:

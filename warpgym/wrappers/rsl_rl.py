@@ -67,11 +67,9 @@ class RslRlVecEnv(VecEnv):
         self._base.episode_steps.copy_(value)
 
     def _group(self, obs: torch.Tensor) -> TensorDict:
-        index = 0
         for name, copies in self._copies.items():
             copies(obs if name == "policy" else self._sources[name])
-            index = copies.index
-        return self._groups[index]
+        return self._groups[self._copies["policy"].index]
 
     def get_observations(self) -> TensorDict:
         if self._obs is None:

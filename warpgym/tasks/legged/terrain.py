@@ -232,7 +232,8 @@ class TerrainGrid:
     curriculum: bool = False
     difficulty_range: tuple[float, float] = (0.0, 1.0)
     # not mjlab's: > 0 lays each patch built of several boxes (the stairs) as one heightfield sampled every this many
-    # metres, so MuJoCo Warp's collision sees 74 ground geoms instead of 554 (a step's edge becomes a one-cell ramp)
+    # metres, so MuJoCo Warp's collision sees fewer ground geoms (the rough tasks' grid: 74 instead of 554); a step's
+    # edge becomes a ramp one cell wide
     boxes_as_heightfield: float = 0.0
 
     def __post_init__(self):
