@@ -95,6 +95,8 @@ BLOCKS = {
     "scaling-humanoid": scaling("grow_kl", "Humanoid"),
     "scaling-humanoid-v5": scaling("suite", "Humanoid-v5"),
     "scaling-ant-v5": scaling("suite", "Ant-v5"),
+    "scaling-g1-flat": scaling("legged", "G1VelocityFlat-v0"),
+    "scaling-go1-rough": scaling("legged", "Go1VelocityRough-v0"),
     "nodes": ("docs/history.md", "benchmarks.multi_gpu.nodes", ["--report", "docs/bench/multi_gpu/nodes/nodes-4.json"],
               first(3)),
     "exits-cpu": ("docs/benchmarks.md", "benchmarks.reliability.exits", ["--report", "docs/bench/cpu_exits.json"],

@@ -4,6 +4,7 @@ the time to a target read from a run's rows, and the benchmark's job packing and
 import json
 import math
 import os
+import shutil
 import subprocess
 import sys
 
@@ -119,6 +120,17 @@ def test_time_to_target_leaves_out_the_evaluations_before_it():
     assert time_to_target(rows, "eval/speed", 9.0) is None
 
 
+def test_time_to_target_over_smoothed_rows_waits_for_the_mean_and_skips_rows_without_the_key():
+    rows = [{"iteration": i, "samples": 10 * i, "time_s": float(i), **({"return": v} if v is not None else {})}
+            for i, v in enumerate([5.0, 12.0, None, 6.0, 11.0, 12.0, 13.0], start=1)]
+    assert time_to_target(rows, "return", 10.0)["iteration"] == 2  # one row: the spike counts
+    hit = time_to_target(rows, "return", 10.0, smooth=3)  # (6 + 11 + 12) / 3 < 10, (11 + 12 + 13) / 3 = 12
+    assert hit["iteration"] == 7 and hit["return"] == pytest.approx(12.0)
+    assert time_to_target(rows, "return", 12.5, smooth=3) is None
+    with pytest.raises(ValueError, match="smooth=0"):
+        time_to_target(rows, "return", 1.0, smooth=0)
+
+
 def test_jobs_share_the_gpus_side_by_side_and_never_overtake(tmp_path):
     """Four jobs on two 'GPUs': two 1-GPU jobs side by side, then a 2-GPU job alone, then a 1-GPU job; each
     child sees only its own GPUs and cores."""
@@ -142,13 +154,13 @@ def test_jobs_share_the_gpus_side_by_side_and_never_overtake(tmp_path):
         gpu_jobs.run_jobs([gpu_jobs.Job("big", 4, ["true"], str(tmp_path / "big.log"))], 2, cores=[0, 1])
 
 
-def fake_run(folder, name, speeds, first=20.0, step=1.0, eval_s=0.5, rate=1e6):
-    """A run directory as `warpgym train` leaves it: an evaluation each row, speeds as given."""
+def fake_run(folder, name, speeds, first=20.0, step=1.0, eval_s=0.5, rate=1e6, key="eval/speed"):
+    """A run directory as `warpgym train` leaves it: an evaluation each row, speeds as given (under ``key``)."""
     d = folder / name
     d.mkdir(parents=True)
     rows, t = [], first
     for i, v in enumerate(speeds, 1):
-        rows.append({"iteration": i, "samples": 1000 * i, "time_s": t + eval_s, "eval_s": eval_s, "eval/speed": v})
+        rows.append({"iteration": i, "samples": 1000 * i, "time_s": t + eval_s, "eval_s": eval_s, key: v})
         t += step + eval_s
     (d / "metrics.jsonl").write_text("".join(json.dumps(r) + "\n" for r in rows))
     (d / "summary.json").write_text(json.dumps({
@@ -308,11 +320,39 @@ def test_a_benchmark_stopped_by_sigterm_keeps_the_rows_of_the_runs_it_stopped(tm
     assert (tmp_path / "out" / "checkpoints" / "gpu1-seed0.pt").read_bytes() == b"weights"
 
 
+def test_a_smoothed_target_is_timed_over_rows_and_the_runs_stop_only_where_asked(tmp_path, monkeypatch):
+    """A training return is read over --smooth rows, so a run must not stop at its first single row past the target:
+    without --stop it trains --seconds, with --stop it stops there; the table says how the target was read."""
+    seen = {}
+
+    def fake_jobs(jobs, gpus, on_done=None, say=print, **_):
+        if jobs[0].name == "warmup":
+            (tmp_path / "out" / "runs_Ant" / "warmup").mkdir(parents=True, exist_ok=True)
+            return {"warmup": 0}
+        seen[len(seen)] = jobs[0].cmd
+        fake_run(tmp_path / "out" / "runs_Ant", jobs[0].name, [1, 9, 1, 9, 9, 9], key="speed")  # a spike at row 2
+        on_done(jobs[0], 0)
+        return {jobs[0].name: 0}
+
+    monkeypatch.setattr(scaling, "run_jobs", fake_jobs)
+    for extra in ([], ["--stop", "12"]):
+        shutil.rmtree(tmp_path / "out", ignore_errors=True)
+        assert scaling.main(["--out", str(tmp_path / "out"), "--gpus", "1", "--seeds", "0", "--targets", "speed=9",
+                             "--smooth", "3", "--device", "cpu", "--seconds", "30", *extra]) == 0
+    assert "--target" not in seen[0] and seen[1][seen[1].index("--target") + 1] == "speed=12"
+    doc = json.loads((tmp_path / "out" / "scaling_Ant.json").read_text())
+    assert doc["smooth"] == 3 and doc["runs"][0]["to_target"]["9"]["iteration"] == 6  # rows 4-6, not the spike
+    assert "read from the training rows (the mean of 3 rows)" in (tmp_path / "out" / "scaling_Ant.md").read_text()
+
+
 def test_the_benchmark_names_a_wrong_flag_before_it_starts_anything():
     for flags, says in ((["--gpus", "0", "2"], "--gpus 0 2: each is a number of GPUs, 1 or more"),
                         (["--targets", "eval/speed"], "--targets 'eval/speed': write KEY=V1,V2"),
                         (["--task", "Hopper"], "--task Hopper: choose one of Ant, Humanoid"),
-                        (["--repeat", "0"], "--repeat 0: the run's number among runs of the same seeds, 1 or more")):
+                        (["--repeat", "0"], "--repeat 0: the run's number among runs of the same seeds, 1 or more"),
+                        (["--smooth", "0"], "--smooth 0: the number of logged values averaged, 1 or more"),
+                        (["--targets", "return=40,50", "--smooth", "3", "--stop", "45"],
+                         "--stop 45 is below the last target 50")):
         done = subprocess.run([sys.executable, "-m", "benchmarks.multi_gpu.scaling", "--out", "/nowhere", *flags],
                               cwd=ROOT, capture_output=True, text=True, timeout=120)
         assert done.returncode == 2 and says in done.stderr, done.stderr[-2000:]

@@ -2,6 +2,8 @@
 
     python -m benchmarks.multi_gpu.scaling --out OUT --task Ant --gpus 1 2 4 --modes split grow-batch --seeds 0 1
     python -m benchmarks.multi_gpu.scaling --out OUT --task Humanoid-v5 --gpus 1 4 --seconds 600
+    python -m benchmarks.multi_gpu.scaling --out OUT --task G1VelocityFlat-v0 --gpus 1 2 --targets return=36.55 \
+        --smooth 3 --stop 40 --seconds 450 --eval-gap 60 --num-envs 4096   # a training return, as mjlab's is read
     python -m benchmarks.multi_gpu.scaling --report OUT [OUT2 ...]   # the table and figures again, runs joined
     python -m benchmarks.multi_gpu.scaling --report docs/bench/multi_gpu --task Humanoid   # a folder of several tasks
 
@@ -12,7 +14,9 @@ baselines run side by side with each other and with multi-GPU jobs, as busy a ho
 evaluates (64 envs, deterministic policy) every --eval-gap seconds and stops at its last target (`train
 --target`) or after --seconds. The time to each target (agents.logger.time_to_target) is read two ways:
 from the process start (wall-clock, start-up and evaluations included) and the learning time, from the first
-iteration with the evaluations left out; the goal's ratio is G GPUs' median learning time over one GPU's.
+iteration with the evaluations left out; the goal's ratio is G GPUs' median learning time over one GPU's. A
+target on a training row (``return``: the mean of the episodes that ended in one iteration) is read over the mean of
+--smooth rows, so a single lucky row does not end a run: give --stop a little past it.
 
 Writes, as the runs end, OUT/scaling_<task>.json (every run: its times, samples/s, phases, last evaluation)
 and at the end OUT/scaling_<task>.md (the table, and each seed's iterations to the last target: what one iteration
@@ -90,10 +94,12 @@ def parse_name(name: str) -> tuple[int, str, int]:
     return int(gpus[3:]), (setting if not setting.startswith("+") else "-" + setting) or "-", int(seed.split("-r")[0])
 
 
-def jobs_for(args, runs: str, key: str, last: float) -> list[Job]:
-    """The 1-GPU baselines first (one per --baseline-seeds), then each GPU count's modes and seeds."""
+def jobs_for(args, runs: str, key: str, stop: float | None) -> list[Job]:
+    """The 1-GPU baselines first (one per --baseline-seeds), then each GPU count's modes and seeds; each run stops
+    when ``key`` reaches ``stop`` (None: after --seconds)."""
     flags = ["--task", args.task, "--time-limit", str(args.seconds), "--eval-gap", str(args.eval_gap),
-             "--target", f"{key}={last:g}", "--no-plots", *(["--num-envs", str(args.num_envs)] if args.num_envs else []),
+             *(["--target", f"{key}={stop:g}"] if stop is not None else []), "--no-plots",
+             *(["--num-envs", str(args.num_envs)] if args.num_envs else []),
              *args.train_flags.split()]
     plan = [(1, args.modes[0], s) for s in args.baseline_seeds] if 1 in args.gpus else []
     plan += [(g, m, s) for g in sorted(set(args.gpus) - {1}) for m in args.modes for s in args.seeds]
@@ -109,7 +115,7 @@ def jobs_for(args, runs: str, key: str, last: float) -> list[Job]:
     return jobs
 
 
-def run_row(run_dir: str, key: str, values: tuple[float, ...]) -> dict:
+def run_row(run_dir: str, key: str, values: tuple[float, ...], smooth: int = 1) -> dict:
     """One run's times to each target, throughput and last evaluation, from its files."""
     from agents.logger import learning_clock, read_metrics, time_to_target  # noqa: PLC0415
 
@@ -130,7 +136,7 @@ def run_row(run_dir: str, key: str, values: tuple[float, ...]) -> dict:
         "phase_ms": {k[len("phase/"):-2]: 1e3 * v for k, v in (summary.get("steady_phase_s_median") or {}).items()
                      if k.startswith("phase/") and v is not None},
         "first_iteration_s": summary.get("first_iteration_time_s"),
-        "to_target": {f"{v:g}": time_to_target(rows, key, v) for v in values},
+        "to_target": {f"{v:g}": time_to_target(rows, key, v, smooth) for v in values},
         # the learning time the whole run had: a target it missed lies beyond it
         "learned_s": learning_clock(rows)[-1] if rows else 0.0,
         "last": {k: evals[-1].get(k) for k in ("time_s", "samples", key)} if evals else None,
@@ -165,7 +171,7 @@ def stopped_rows(doc: dict, runs_dir: str) -> list[str]:
         name = os.path.basename(d)
         if name in known or not os.path.isfile(os.path.join(d, "summary.json")):
             continue
-        row = run_row(d, key, values)
+        row = run_row(d, key, values, doc.get("smooth", 1))
         if "error" in row:
             continue
         row.update(exit_code=None, num_envs=doc.get("num_envs"), train_flags=doc.get("train_flags", ""),
@@ -362,13 +368,20 @@ def days(doc: dict) -> str:
     return dates[0] if len(dates) == 1 else f"{dates[0]} to {dates[-1]}"
 
 
+def timed_by(doc: dict) -> str:
+    """How the table's targets are read: evaluations at a gap, or the training rows (their running mean)."""
+    key, smooth = doc["targets"]["key"], doc.get("smooth", 1)
+    mean = f" (the mean of {smooth} rows)" if smooth > 1 else ""
+    return f"evaluated every {doc['eval_gap']:g} s{mean}" if key.startswith("eval/") else f"read from the training rows{mean}"
+
+
 def markdown(doc: dict, lines: list[dict]) -> str:
     key, values = doc["targets"]["key"], doc["targets"]["values"]
     devices = sorted({r.get("device") for r in doc["runs"] if r.get("device")})
     lengths = [r.get("seconds", doc["seconds"]) for r in doc["runs"]]
     limits = (min(lengths), max(lengths)) if lengths else ()
     out = [f"{doc['task']}: time to {key} " + " and ".join(f"{v:g}" for v in values)
-           + f"; runs of at most {interval(*limits, ' s', 0) if limits else ''}, evaluated every {doc['eval_gap']:g} s; "
+           + f"; runs of at most {interval(*limits, ' s', 0) if limits else ''}, " + timed_by(doc) + "; "
            f"{', '.join(devices)} ({doc['host_gpus']} GPUs of one host), {days(doc)}", "",
            "| GPUs | mode | envs per GPU | samples/s | x 1 GPU | iteration ms | first iteration | "
            + " | ".join(f"{key} {v:g}: learning time, each seed | median (ratio; goal)" for v in values) + " |",
@@ -384,8 +397,10 @@ def markdown(doc: dict, lines: list[dict]) -> str:
     notes = [f"{r['name']}: {r['note']}" for r in doc["runs"] if r.get("note")]
     flags = sorted({(r["mode"], r.get("num_envs"), r.get("train_flags", "")) for r in doc["runs"]
                     if r.get("num_envs") or r.get("train_flags")})
-    out += ["", "Learning time: from the run's first iteration to the start of the first evaluation that reached the "
-            "target, evaluations left out; \"> T\": a seed that missed it in the T s of learning it had, and a median "
+    reached = ("the start of the first evaluation that reached the target" if doc["targets"]["key"].startswith("eval/")
+               else f"the first training row whose mean over {doc.get('smooth', 1)} rows reached the target")
+    out += ["", f"Learning time: from the run's first iteration to {reached}, evaluations left out; "
+            "\"> T\": a seed that missed it in the T s of learning it had, and a median "
             "that falls on such seeds, a lower bound (a ratio against it an upper bound, \"<\"); where runs of several "
             "lengths are joined, \"A-B s\": the median lies between. "
             "From the process start (wall-clock, start-up and evaluations included), medians: "
@@ -393,7 +408,8 @@ def markdown(doc: dict, lines: list[dict]) -> str:
                         + ", ".join(seconds(ln['targets'][f'{v:g}']['median_time_s']) for v in values)
                         for ln in lines) + "."]
     out.append(iterations_line(doc, lines, values[-1], grouped))
-    out += [b for b in [by_iteration_line(doc, lines, values[-1], grouped)] if b]
+    if doc["targets"]["key"].startswith("eval/"):  # a training row's value is in the table already
+        out += [b for b in [by_iteration_line(doc, lines, values[-1], grouped)] if b]
     out += [u for u in [update_line(lines, grouped)] if u]
     out += [f"{mode}: --num-envs {n or 'default'} {f}".rstrip() + "." for mode, n, f in flags]
     out += [f"{n}." for n in notes]
@@ -472,8 +488,9 @@ def report(folders: list[str], task: str = "Ant", targets: str | None = None) ->
         with open(task_json(folder, task)) as f:
             docs.append((folder, json.load(f)))
     first = docs[0][1]
-    same = ("task", "targets", "eval_gap")  # runs of other lengths join: each run's misses are bounds of its own
+    same = ("task", "targets", "eval_gap", "smooth")  # runs of other lengths join: each run's misses bound them
     for _, doc in docs:
+        doc.setdefault("smooth", 1)
         for r in doc["runs"]:
             r.setdefault("seconds", doc["seconds"])
     for folder, doc in docs[1:]:
@@ -499,7 +516,7 @@ def report(folders: list[str], task: str = "Ant", targets: str | None = None) ->
         first["targets"] = {"key": key, "values": list(values)}
     key, values = first["targets"]["key"], tuple(first["targets"]["values"])
     for r in first["runs"]:  # read again from the runs' files, as this version of the script reads them
-        r.update(run_row(os.path.join(runs_dir, r["name"]), key, values))
+        r.update(run_row(os.path.join(runs_dir, r["name"]), key, values, first.get("smooth", 1)))
     print(write_report(first, runs_dir, out), flush=True)
     if len(docs) > 1 or not first_packed:  # the first output now holds every run: its report can be drawn again alone
         pack_runs(runs_dir, out, first["task"])
@@ -577,6 +594,13 @@ def main(argv=None) -> int:
                          "the suite's evaluations take 40-47 %% of a run at --eval-gap 20: give the learning time "
                          "a target needs about twice)")
     ap.add_argument("--eval-gap", type=float, default=5.0, help="seconds between evaluations (default 5)")
+    ap.add_argument("--smooth", type=int, default=1, metavar="N",
+                    help="a target is reached when the mean of the key's last N logged values reaches it (default "
+                         "1; 3 for a training return, as mjlab_side_by_side reads it)")
+    ap.add_argument("--stop", type=float, default=None, metavar="VALUE",
+                    help="each run stops once the key reaches VALUE in one logged row (default: the last target, "
+                         "with --smooth 1; with --smooth N, none: give a value past the last target, or the runs "
+                         "train --seconds)")
     ap.add_argument("--train-flags", default="", help="more `warpgym train` flags for every run, quoted")
     ap.add_argument("--label", default="", help="a name for runs made with other flags (--num-envs, --train-flags), "
                                                "added to their setting (split+LABEL), so --report keeps them apart")
@@ -610,6 +634,12 @@ def main(argv=None) -> int:
     except ValueError as e:
         ap.error(str(e))
     args.baseline_seeds = args.baseline_seeds or args.seeds
+    if args.smooth < 1:
+        ap.error(f"--smooth {args.smooth}: the number of logged values averaged, 1 or more")
+    if args.stop is None and args.smooth == 1:
+        args.stop = max(values)
+    elif args.stop is not None and args.stop < max(values):
+        ap.error(f"--stop {args.stop:g} is below the last target {max(values):g}: the runs would stop before it")
     args.modes = args.modes or [preset_mode(args.task)]
     if args.repeat < 1:
         ap.error(f"--repeat {args.repeat}: the run's number among runs of the same seeds, 1 or more")
@@ -631,7 +661,8 @@ def main(argv=None) -> int:
     runs = os.path.join(out, f"runs_{args.task}")
     os.makedirs(runs, exist_ok=True)
     say = lambda s: print(f"[{time.strftime('%H:%M:%S')}] {s}", flush=True)  # noqa: E731
-    doc = {"task": args.task, "targets": {"key": key, "values": list(values)}, "seconds": args.seconds,
+    doc = {"task": args.task, "targets": {"key": key, "values": list(values)}, "smooth": args.smooth,
+           "stop": args.stop, "seconds": args.seconds,
            "eval_gap": args.eval_gap, "num_envs": args.num_envs, "train_flags": args.train_flags,
            "host_gpus": available, "date": time.strftime("%Y-%m-%d"), "runs": []}
 
@@ -647,7 +678,7 @@ def main(argv=None) -> int:
     shutil.rmtree(warm)
 
     def done(job: Job, code: int) -> None:
-        row = run_row(os.path.join(runs, job.name), key, values)
+        row = run_row(os.path.join(runs, job.name), key, values, args.smooth)
         row.update(exit_code=code, num_envs=args.num_envs, train_flags=args.train_flags, seconds=args.seconds)
         doc["runs"].append(row)
         write_json(os.path.join(out, f"scaling_{args.task}.json"), doc)  # what ended is kept, whatever follows
@@ -655,7 +686,7 @@ def main(argv=None) -> int:
         say(f"{job.name}: {hits or row.get('error')}")
 
     try:
-        run_jobs(jobs_for(args, runs, key, max(values)), available, on_done=done, say=say)
+        run_jobs(jobs_for(args, runs, key, args.stop), available, on_done=done, say=say)
     finally:  # also when stopped (SIGTERM): the runs it stopped still count, as far as they went
         for name in stopped_rows(doc, runs):
             say(f"{name}: stopped with the benchmark; its rows up to the stop are kept")
