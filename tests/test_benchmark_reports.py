@@ -1142,11 +1142,21 @@ def test_the_physics_tables_are_what_fidelity_prints_from_todays_defaults_runs(c
     root = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
     runs = ["h100_ant_seed0_600s", "h100_ant_seed1_600s", "h100_ant_8192envs_seed0_300s",
             "h100_humanoid_3x8_motor25_armature0.1_seed0_600s", "h100_humanoid_3x8_motor25_armature0.1_seed1_600s"]
-    assert fidelity.main(["--report", *(os.path.join(root, "docs", "bench", "fidelity", f"{r}.json") for r in runs)]) == 0
-    rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| ") and "---" not in line]
+    paths = [os.path.join(root, "docs", "bench", "fidelity", f"{r}.json") for r in runs]
+
+    def rows(*flags):
+        assert fidelity.main(["--report", *paths, *flags]) == 0
+        return [line for line in capsys.readouterr().out.splitlines() if line.startswith("| ") and "---" not in line]
+
     with open(os.path.join(root, "docs", "benchmarks.md")) as f:
         page = set(f.read().splitlines())
-    assert len(rows) == 2 + 19 + 5 and [r for r in rows if r not in page] == []
+    shown, every = rows("--marks", "120", "end"), rows()
+    assert len(shown) == 2 + 10 + 5 and [r for r in shown if r not in page] == []
+    # the page leaves out the policies kept at 60 s and 300 s, and only those
+    assert len(every) == 2 + 19 + 5 and all(" | 60 s (it " in r or " | 300 s (it " in r for r in set(every) - set(shown))
+    with pytest.raises(SystemExit):
+        fidelity.main(["--report", *paths, "--marks", "two"])
+    assert "--marks two: each is a number of seconds or 'end'" in capsys.readouterr().err
 
 
 def test_the_suite_speed_table_is_what_suite_speed_prints_from_the_committed_runs(capsys):

@@ -276,13 +276,16 @@ def paid_in(row: dict) -> str:
     return f"{power['integrator']:.0f} W{share}"
 
 
-def tables(doc: dict) -> str:
+def tables(doc: dict, marks: list[str] | None = None) -> str:
+    """The replays' table (only the policies kept at ``marks``, "120 s" or "end", where given) and the runs'."""
     lines = ["| task | candidate | seed | policy | speed at the step | 4x finer | native | native 4x finer | "
              "torso height | no foot on ground (native) | longest flight (native) | falls (warpgym) | "
              "paid in by the step (native, at the step / 4x finer) | holds |",
              "|---|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"]
     for run in doc.get("runs", []):
         for p in run["policies"]:
+            if marks and p["label"] not in marks:
+                continue
             r = p["rows"]
             lines.append(
                 f"| {run['task']} | {candidate_label(run)} | {'-' if run['seed'] is None else run['seed']} | {p['label']} (it {p['iteration']}) | "
@@ -339,7 +342,15 @@ def main(argv=None) -> int:
     ap.add_argument("--device", default=None)
     ap.add_argument("--workers", type=int, default=None, help="native MuJoCo processes (default: cores - 2)")
     ap.add_argument("--report", nargs="+", metavar="OUT", help="print the tables of these outputs")
+    ap.add_argument("--marks", nargs="+", default=None, metavar="MARK",
+                    help="with --report: only the policies kept at these marks, seconds or 'end' (e.g. 120 end)")
     args = ap.parse_args(argv)
+    marks = None
+    if args.marks:
+        try:
+            marks = [m if m == "end" else f"{float(m):g} s" for m in args.marks]
+        except ValueError:
+            ap.error(f"--marks {' '.join(args.marks)}: each is a number of seconds or 'end', e.g. --marks 120 end")
     if args.report:
         doc = {"runs": [], "probes": []}
         for out in args.report:
@@ -349,7 +360,7 @@ def main(argv=None) -> int:
                 part = json.load(f)
             doc["runs"] += part.get("runs", [])
             doc["probes"] += part.get("probes", [])
-        print(tables(doc))
+        print(tables(doc, marks))
         return 0
     if not args.out:
         ap.error("--out is required (or --report)")
