@@ -754,3 +754,31 @@ def test_a_run_with_background_evaluations_logs_them_on_later_rows_and_ends_with
     assert recorded.background is None and any("stay synchronous" in line for line in said)
     with pytest.raises(ValueError, match="eval_background='yes' must be True or False"):
         Config(eval_background="yes").validated()
+
+
+def test_the_curves_add_a_panel_for_a_logged_curriculum_under_the_return(tmp_path):
+    """A rough task logs curriculum/terrain_level each row: the run's figures draw it under the return, on the same
+    axis of time or samples; a run without one keeps the single panel."""
+    import json
+
+    import matplotlib.image
+
+    from agents.plotting import curriculum_keys, plot_runs
+
+    def run(name, curriculum):
+        d = tmp_path / name
+        d.mkdir()
+        rows = [{"iteration": i, "samples": 100 * i, "time_s": float(i), "return": float(i),
+                 **({"curriculum/terrain_level": 2.5 - 0.1 * i} if curriculum else {})} for i in range(1, 6)]
+        (d / "metrics.jsonl").write_text("".join(json.dumps(r) + "\n" for r in rows))
+        return str(d)
+
+    flat, rough = run("flat", False), run("rough", True)
+    assert curriculum_keys([[{"return": 1.0, "curriculum/terrain_level": 1.0}], [{"return": 2.0}]]) == \
+        ["curriculum/terrain_level"]
+    heights = {}
+    for name, dirs in (("flat", [flat]), ("both", [flat, rough])):
+        paths = plot_runs(dirs, str(tmp_path / f"out_{name}"))
+        assert [os.path.basename(p) for p in paths] == ["reward_vs_time.png", "reward_vs_samples.png"]
+        heights[name] = matplotlib.image.imread(paths[0]).shape[0]
+    assert heights["both"] > 1.3 * heights["flat"]  # 4.5 inches and 6.7: the level's panel is there
