@@ -1,4 +1,5 @@
-"""The ``warpgym`` command: ``warpgym train``, ``play``, ``plot``, ``sim2sim``, ``train-with``, ``bench`` and ``eval``.
+"""The ``warpgym`` command: ``warpgym train``, ``play``, ``plot``, ``sim2sim``, ``train-with``, ``bench``, ``eval`` and
+``export``.
 
 The one package of warpgym that imports ``agents``: the commands sit on top of both sides (the
 environment and the learner), so neither side imports the other. ``scripts/*.py`` in a source checkout
@@ -20,6 +21,7 @@ COMMANDS = {  # subcommand: (module, what it does)
     "train-with": ("train_with", "train with another learner through its adapter (rsl_rl, skrl, rl_games, sb3, rllib)"),
     "bench": ("bench", "env-steps per second of the simulation layers"),
     "eval": ("eval", "score a policy where its task is judged (Gymnasium's env, native MuJoCo) beside warpgym's env"),
+    "export": ("export", "write a trained policy as TorchScript and ONNX, with what a controller needs around it"),
 }
 
 

@@ -32,7 +32,7 @@ from warpgym.sim.rays import RayCaster, Scan, ScanFrames
 from warpgym.tasks.legged import LeggedTask, get_legged_task
 from warpgym.tasks.legged.base import TERM_NAMES
 from warpgym.tasks.legged.levels import bounds, start_levels
-from warpgym.tasks.legged.model import compile_task_scene, kernel_structs, resolve
+from warpgym.tasks.legged.model import compile_task_scene, kernel_structs, policy_terms, resolve
 from warpgym.tasks.legged.scan import normal_picks
 
 # the model fields randomised per world, and those MuJoCo Warp's set_const derives from them (mjlab's list)
@@ -83,7 +83,7 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
         self.num_actions = a = sim.nu
         joints, feet = len(idx.joint_names), len(idx.foot_site)
         scan = 0 if task.height_scan is None else len(task.height_scan.offsets)
-        self.num_obs = o = 12 + 2 * joints + a + scan
+        self.num_obs = o = sum(size for _, size, _ in policy_terms(task, idx, a))
         self.num_critic_obs = c = o + 6 * feet
         self.max_episode_steps = task.episode_length
         self.metadata = {**self.metadata, "render_fps": int(round(1.0 / (task.decimation * task.timestep)))}

@@ -153,6 +153,25 @@ def resolve(task: LeggedTask, mjm) -> RobotIndex:
     )
 
 
+def policy_terms(task: LeggedTask, idx: RobotIndex, num_actions: int) -> list[tuple[str, int, str]]:
+    """The policy's observation term by term, in order: (name, size, what it holds), as mjlab's velocity config
+    lists its policy group. The env's observation and the native replay's are laid out so (tests/test_export.py)."""
+    joints = len(idx.joint_names)
+    terms = [("base_lin_vel", 3, "the base's linear velocity in its own frame, from its IMU [m/s]"),
+             ("base_ang_vel", 3, "the base's angular velocity in its own frame, from its IMU [rad/s]"),
+             ("projected_gravity", 3, "the unit gravity vector in the base's frame"),
+             ("joint_pos", joints, "each joint's position minus its default [rad]"),
+             ("joint_vel", joints, "each joint's velocity [rad/s]"),
+             ("actions", num_actions, "the previous action, as the policy gave it"),
+             ("command", 3, "the velocity command: forward, sideways [m/s], yaw rate [rad/s], in the base's frame")]
+    if task.height_scan is not None:
+        scan = task.height_scan
+        terms.append(("height_scan", len(scan.offsets),
+                      f"the base's height above each ray's hit over the reach, {scan.max_distance:g} m (a miss reads "
+                      "1), the rays under the base and turned with its heading"))
+    return terms
+
+
 def compile_task_scene(task: LeggedTask):
     """MuJoCo's compile of the task's scene with its generated ground (rough tasks; none on the flat floor):
     ``(CompiledModel, Terrain or None)``, the same model for the env, its drawings and native MuJoCo."""
