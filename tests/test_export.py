@@ -102,13 +102,13 @@ def test_the_observations_of_every_legged_task_add_up_to_mjlabs_widths():
     from warpgym.tasks.legged.model import compile_task_scene, policy_terms, resolve
 
     # mjlab 1.6's actor observations (its env's observation_manager, built in CI's mjlab environment)
-    widths = {"Go1VelocityFlat-v0": 48, "G1VelocityFlat-v0": 99}
+    widths = {"Go1VelocityFlat-v0": 48, "G1VelocityFlat-v0": 99, "Go1VelocityRough-v0": 235, "G1VelocityRough-v0": 286}
     for name, width in widths.items():
         task = get_legged_task(name)
         idx = resolve(task, compile_task_scene(task)[0].mjm)
         terms = policy_terms(task, idx, len(idx.joint_actuator))
         assert sum(size for _, size, _ in terms) == width, name
-        assert [n for n, _, _ in terms][-1] == "command"
+        assert [n for n, _, _ in terms][-1] == ("height_scan" if "Rough" in name else "command")
 
 
 def test_bad_input_is_one_line_and_a_failed_write_keeps_the_previous_file(run, tmp_path, capsys, monkeypatch):
