@@ -21,7 +21,7 @@ COMMANDS = {  # subcommand: (module, what it does)
     "train-with": ("train_with", "train with another learner through its adapter (rsl_rl, skrl, rl_games, sb3, rllib)"),
     "bench": ("bench", "env-steps per second of the simulation layers"),
     "eval": ("eval", "score a policy where its task is judged (Gymnasium's env, native MuJoCo) beside warpgym's env"),
-    "export": ("export", "write a trained policy as TorchScript and ONNX, with what a controller needs around it"),
+    "export": ("export", "write a trained policy as ONNX and a torch.export program, with what a controller needs around it"),
 }
 
 
