@@ -36,7 +36,7 @@ def test_version_is_the_projects():
 def test_every_subcommand_answers_help_under_its_own_name():
     from warpgym.cli import COMMANDS
 
-    assert set(COMMANDS) == {"train", "play", "plot", "sim2sim", "train-with", "bench", "eval"}
+    assert set(COMMANDS) == {"train", "play", "plot", "sim2sim", "train-with", "bench", "eval", "export"}
     for pair in (list(COMMANDS)[i:i + 2] for i in range(0, len(COMMANDS), 2)):  # two at a time: two cores
         for name, proc in [(name, start(name, "--help")) for name in pair]:
             done = finish(proc)
