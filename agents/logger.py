@@ -144,22 +144,30 @@ def learning_clock(rows: list[dict]) -> list[float]:
     return out
 
 
-def time_to_target(rows: list[dict], key: str, value: float, smooth: int = 1) -> dict | None:
-    """When a run's logged ``key`` (``eval/return``, ``eval/speed``, ``speed``, ...) first reached ``value``, or None.
-
-    ``smooth``: the key's mean over its last ``smooth`` logged values must reach ``value`` (a training return is
-    the mean of the episodes that ended in one iteration, noisier than an evaluation's). ``time_s``: seconds since
-    the process started, up to the moment that row's evaluation began (wall-clock, everything counted);
-    ``learning_s``: its ``learning_clock``; the run's start-up is ``time_s - learning_s``."""
+def first_window(rows: list[dict], key: str, value: float, smooth: int = 1) -> list[int] | None:
+    """The indices of the first ``smooth`` consecutive rows holding ``key`` (rows without it skipped) whose mean of
+    ``key`` reaches ``value``, the reaching row last; None if no window does. A training return is the mean of the
+    episodes that ended in one iteration, noisier than an evaluation's: a window keeps one lucky row from counting."""
     if not isinstance(smooth, int) or smooth < 1:
         raise ValueError(f"smooth={smooth!r}: the number of logged values averaged, 1 or more")
     have = [i for i, r in enumerate(rows) if r.get(key) is not None]
-    reached = (j for j in range(smooth - 1, len(have))
-               if sum(rows[i][key] for i in have[j - smooth + 1:j + 1]) / smooth >= value)
-    j = next(reached, None)
-    if j is None:
+    for j in range(smooth - 1, len(have)):
+        window = have[j - smooth + 1:j + 1]
+        if sum(rows[i][key] for i in window) / smooth >= value:
+            return window
+    return None
+
+
+def time_to_target(rows: list[dict], key: str, value: float, smooth: int = 1) -> dict | None:
+    """When a run's logged ``key`` (``eval/return``, ``eval/speed``, ``speed``, ...), averaged over ``smooth`` rows
+    (``first_window``), first reached ``value``, or None; ``key`` holds that mean.
+
+    ``time_s``: seconds since the process started, up to the moment that row's evaluation began (wall-clock,
+    everything counted); ``learning_s``: its ``learning_clock``; the run's start-up is ``time_s - learning_s``."""
+    window = first_window(rows, key, value, smooth)
+    if window is None:
         return None
-    hit = have[j]
-    row = {**rows[hit], key: sum(rows[i][key] for i in have[j - smooth + 1:j + 1]) / smooth}
+    hit = window[-1]
+    row = rows[hit]
     return {"time_s": round(row["time_s"] - row.get("eval_s", 0.0), 3), "learning_s": learning_clock(rows[:hit + 1])[-1],
-            "samples": row["samples"], "iteration": row["iteration"], key: row[key]}
+            "samples": row["samples"], "iteration": row["iteration"], key: sum(rows[i][key] for i in window) / smooth}

@@ -241,15 +241,16 @@ def at_mark(rows: list[dict], mark: float) -> dict:
 
 
 def first_reaching(rows: list[dict], target: float) -> dict | None:
-    """The first row whose return, averaged with the SMOOTH - 1 before it, reaches ``target``."""
-    have = [r for r in rows if r.get("return") is not None]
-    for i in range(SMOOTH - 1, len(have)):
-        window = have[i - SMOOTH + 1 : i + 1]
-        if statistics.fmean(r["return"] for r in window) >= target:
-            return {"time_s": have[i]["time_s"], "iteration": have[i]["iteration"],
-                    "error_vel_xy": mean_of(window, "error_vel_xy"), "error_vel_yaw": mean_of(window, "error_vel_yaw"),
-                    "terrain_level": mean_of(window, "terrain_level")}
-    return None
+    """The first row whose return, averaged with the SMOOTH - 1 before it, reaches ``target`` (agents.logger's
+    first_window, the rule scaling.py's --smooth reads too), with the window's tracking errors and level."""
+    from agents.logger import first_window  # noqa: PLC0415
+
+    found = first_window(rows, "return", target, SMOOTH)
+    if found is None:
+        return None
+    window, last = [rows[i] for i in found], rows[found[-1]]
+    return {"time_s": last["time_s"], "iteration": last["iteration"], "error_vel_xy": mean_of(window, "error_vel_xy"),
+            "error_vel_yaw": mean_of(window, "error_vel_yaw"), "terrain_level": mean_of(window, "terrain_level")}
 
 
 def curve(rows: list[dict], key: str = "return", every: float = CURVE_EVERY) -> list[list[float]]:

@@ -155,7 +155,9 @@ def resolve(task: LeggedTask, mjm) -> RobotIndex:
 
 def policy_terms(task: LeggedTask, idx: RobotIndex, num_actions: int) -> list[tuple[str, int, str]]:
     """The policy's observation term by term, in order: (name, size, what it holds), as mjlab's velocity config
-    lists its policy group. The env's observation and the native replay's are laid out so (tests/test_export.py)."""
+    lists its policy group. The env sizes its observation by it, and tests/test_export.py checks the env's slices
+    against it; warpgym.native_legged builds the same order by hand (tests/test_native_legged.py plays one policy in
+    both and compares their tracking)."""
     joints = len(idx.joint_names)
     terms = [("base_lin_vel", 3, "the base's linear velocity in its own frame, from its IMU [m/s]"),
              ("base_ang_vel", 3, "the base's angular velocity in its own frame, from its IMU [rad/s]"),
