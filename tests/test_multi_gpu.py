@@ -154,7 +154,7 @@ def test_jobs_share_the_gpus_side_by_side_and_never_overtake(tmp_path):
         gpu_jobs.run_jobs([gpu_jobs.Job("big", 4, ["true"], str(tmp_path / "big.log"))], 2, cores=[0, 1])
 
 
-def fake_run(folder, name, speeds, first=20.0, step=1.0, eval_s=0.5, rate=1e6, key="eval/speed"):
+def fake_run(folder, name, speeds, first=20.0, step=1.0, eval_s=0.5, rate=1e6, key="eval/speed", num_envs=64):
     """A run directory as `warpgym train` leaves it: an evaluation each row, speeds as given (under ``key``)."""
     d = folder / name
     d.mkdir(parents=True)
@@ -164,7 +164,7 @@ def fake_run(folder, name, speeds, first=20.0, step=1.0, eval_s=0.5, rate=1e6, k
         t += step + eval_s
     (d / "metrics.jsonl").write_text("".join(json.dumps(r) + "\n" for r in rows))
     (d / "summary.json").write_text(json.dumps({
-        "device": "GPU", "num_envs": 64, "num_envs_total": 64, "iterations": len(rows),
+        "device": "GPU", "num_envs": num_envs, "num_envs_total": num_envs, "iterations": len(rows),
         "steady_samples_per_s_median": rate, "steady_phase_s_median": {"iteration_s": 0.1, "phase/collect_s": 0.08},
         "first_iteration_time_s": first + eval_s}))
     return str(d)
@@ -210,6 +210,15 @@ def test_every_line_is_measured_against_the_plain_one_gpu_runs_not_a_labelled_co
     assert lines[(1, "-+kl16")]["ratio"] == (pytest.approx(2.0), pytest.approx(2.0))
     assert lines[(2, "grow-steps+kl16")]["ratio"] == (pytest.approx(0.5), pytest.approx(0.5))
     assert [ln["samples_speedup"] for ln in summary][0] == 1.0
+
+
+def test_labelled_controls_follow_the_plain_line_in_order_of_envs_per_gpu(tmp_path):
+    doc = {"task": "G1", "targets": {"key": "eval/speed", "values": [6.0]}, "seconds": 60, "eval_gap": 1,
+           "host_gpus": 1, "date": "2026-11-29", "runs": []}
+    # "-+16k" sorts before "-+8k" as text; more envs a GPU come later
+    for name, envs in {"gpu1-+16k-seed0": 16384, "gpu1-+8k-seed0": 8192, "gpu1-seed0": 4096}.items():
+        doc["runs"].append(scaling.run_row(fake_run(tmp_path, name, [1, 6], num_envs=envs), "eval/speed", (6.0,)))
+    assert [ln["mode"] for ln in scaling.summarize(doc)] == ["-", "-+8k", "-+16k"]
 
 
 def test_a_seeds_second_run_is_named_apart_and_counted_beside_the_first():

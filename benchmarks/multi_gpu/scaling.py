@@ -210,7 +210,10 @@ def groups(doc: dict) -> dict[tuple[int, str], list[dict]]:
     for r in doc["runs"]:
         if "error" not in r:
             out.setdefault((r["gpus"], r["mode"]), []).append(r)
-    return dict(sorted(out.items()))
+    # by GPUs; the plain 1-GPU line (the baseline) before its labelled controls; then by envs per GPU, so "-+8k"
+    # comes before "-+16k" in the table and the figures' legends
+    return dict(sorted(out.items(), key=lambda item: (
+        item[0][0], item[0][1] != "-", min(r.get("num_envs_per_gpu") or 0 for r in item[1]), item[0][1])))
 
 
 def summarize(doc: dict) -> list[dict]:
@@ -220,9 +223,7 @@ def summarize(doc: dict) -> list[dict]:
     lines = []
     base: dict[str, dict] = {}
     base_rate = math.nan
-    # the plain 1-GPU line first, whatever its labelled controls sort as
-    ordered = sorted(groups(doc).items(), key=lambda item: (item[0][0], item[0][1] != "-", item[0][1]))
-    for (gpus, mode), runs in ordered:
+    for (gpus, mode), runs in groups(doc).items():
         line = {"gpus": gpus, "mode": mode, "seeds": sorted(r["seed"] for r in runs),
                 "samples_per_s": statistics.median(r["samples_per_s"] or 0.0 for r in runs),
                 "iteration_ms": statistics.median(r["iteration_ms"] for r in runs),
@@ -446,7 +447,7 @@ def figures(doc: dict, runs_dir: str, out: str) -> list[str]:
         for v in values:
             ax.axhline(v, color="grey", ls=":", lw=0.8)
         ax.set_xlabel(label)
-        ax.set_ylabel(f"{key} (deterministic policy)")
+        ax.set_ylabel(f"{key} (deterministic policy)" if key.startswith("eval/") else f"{key} (training episodes)")
         ax.set_title(f"{doc['task']}: PPO on 1 to {max(r['gpus'] for r in doc['runs'])} GPUs")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
