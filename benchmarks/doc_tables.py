@@ -34,6 +34,9 @@ FIDELITY = [f"docs/bench/fidelity/{r}.json" for r in (
 RLLIB = [f"docs/bench/rllib/h200_rllib_{r}.json" for r in (
     "vs_warpgym_1gpu", "8runners_1gpu", "vs_warpgym_2gpu_warpgym", "vs_warpgym_2gpu_rllib", "vs_warpgym_2gpu_rllib_humanoid",
     "vs_warpgym_4gpu_ant", "vs_warpgym_4gpu_humanoid")]
+ENVS_ANT = ["--report", "docs/bench/envs_per_gpu/h100_envs_per_gpu_ant.json", "--figure", "-"]
+ENVS_HUMANOID = ["--report", "docs/bench/envs_per_gpu/h100_envs_per_gpu_humanoid_seed0.json",
+                 "docs/bench/envs_per_gpu/h100_envs_per_gpu_humanoid_seed1.json", "--figure", "-"]
 SUITE_LEARNING = ["--report", "docs/bench/suite_learning", "docs/bench/suite_sb3"]
 
 
@@ -47,6 +50,11 @@ def after(marker: str, count: int):
 
 def first(count: int, start: int = 0):
     return lambda paragraphs: paragraphs[start : start + count]
+
+
+def only(*indices: int):
+    """The printed paragraphs at ``indices``: a page shows part of a report, the log the rest."""
+    return lambda paragraphs: [paragraphs[i] for i in indices]
 
 
 def last(count: int):
@@ -75,7 +83,7 @@ BLOCKS = {
                         ["--report", "docs/bench/legged/side_by_side_g1_15min_2026-11-29.json"], first(3)),
     "legged-go1-rough-9min": ("docs/benchmarks.md", "benchmarks.learning.mjlab_side_by_side",
                               ["--report", "docs/bench/legged/side_by_side_go1_rough_9min_2026-11-29.json"], first(3)),
-    "physics": ("docs/benchmarks.md", "benchmarks.physics.fidelity", ["--report", *FIDELITY, "--marks", "120", "end"],
+    "physics": ("docs/benchmarks.md", "benchmarks.physics.fidelity", ["--report", *FIDELITY, "--marks", "end"],
                 first(2)),
     "robot-steps": ("docs/benchmarks.md", "benchmarks.speed.robot_steps",
                     ["--report", "docs/bench/h100_env_steps_humanoid_motors.json"], first(2)),
@@ -83,14 +91,13 @@ BLOCKS = {
                    ["--report", "docs/bench/cold_start/h100_cold_start_humanoid_motors.json"], first(2)),
     "learners-ant": ("docs/benchmarks.md", "benchmarks.speed.learner_bench",
                      ["--report", "docs/bench/learners/h100_learners_ant.json"], first(2)),
-    "learners-humanoid": ("docs/benchmarks.md", "benchmarks.speed.learner_bench",
+    "learners-humanoid": ("docs/history.md", "benchmarks.speed.learner_bench",
                           ["--report", "docs/bench/learners/h100_learners_humanoid.json"], first(2)),
-    "envs-per-gpu-ant": ("docs/benchmarks.md", "benchmarks.speed.envs_per_gpu",
-                         ["--report", "docs/bench/envs_per_gpu/h100_envs_per_gpu_ant.json", "--figure", "-"], first(3)),
-    "envs-per-gpu-humanoid": ("docs/benchmarks.md", "benchmarks.speed.envs_per_gpu",
-                              ["--report", "docs/bench/envs_per_gpu/h100_envs_per_gpu_humanoid_seed0.json",
-                               "docs/bench/envs_per_gpu/h100_envs_per_gpu_humanoid_seed1.json", "--figure", "-"],
-                              first(3)),
+    # the page: each size's time to the speeds; the log: each size's throughput and memory
+    "envs-per-gpu-ant": ("docs/benchmarks.md", "benchmarks.speed.envs_per_gpu", ENVS_ANT, only(0, 2)),
+    "envs-per-gpu-humanoid": ("docs/benchmarks.md", "benchmarks.speed.envs_per_gpu", ENVS_HUMANOID, only(0, 2)),
+    "envs-per-gpu-ant-throughput": ("docs/history.md", "benchmarks.speed.envs_per_gpu", ENVS_ANT, only(0, 1)),
+    "envs-per-gpu-humanoid-throughput": ("docs/history.md", "benchmarks.speed.envs_per_gpu", ENVS_HUMANOID, only(0, 1)),
     "rllib": ("docs/benchmarks.md", "benchmarks.multi_gpu.rllib_vs_warpgym", ["--report", *RLLIB], first(2)),
     "scaling-ant": scaling("grow_kl", "Ant"),
     "scaling-humanoid": scaling("grow_kl", "Humanoid"),
@@ -100,7 +107,7 @@ BLOCKS = {
     "scaling-go1-rough": scaling("legged", "Go1VelocityRough-v0"),
     "nodes": ("docs/history.md", "benchmarks.multi_gpu.nodes", ["--report", "docs/bench/multi_gpu/nodes/nodes-4.json"],
               first(3)),
-    "exits-cpu": ("docs/benchmarks.md", "benchmarks.reliability.exits", ["--report", "docs/bench/cpu_exits.json"],
+    "exits-cpu": ("docs/history.md", "benchmarks.reliability.exits", ["--report", "docs/bench/cpu_exits.json"],
                   lambda paragraphs: ["```\n" + paragraphs[-1] + "\n```"]),
     "exits-gpu": ("docs/benchmarks.md", "benchmarks.reliability.exits",
                   ["--report", "docs/bench/gpu_exits.json", "docs/bench/reliability/gpu_exits_h200.json",

@@ -266,7 +266,7 @@ def readme_table(runs: list[dict], marked: set[str] = frozenset()) -> str:
     """The README's table: each task's return in Gymnasium's env at its last mark (the mean of the seeds and their
     range), the published figure, and each seed's minutes to it by the training's evaluations (``minutes_to``); the
     ``marked`` rows (made on another card) get a ‡."""
-    lines = ["| task | return in `gymnasium.make` after 10 min: mean (range) | published | minutes to it, each seed |",
+    lines = ["| task | return in `gymnasium.make` after 10 min: mean (range) | published, SAC | minutes to it, each seed |",
              "|---|---|---|---|"]
     for task, rs in by_task_of(runs).items():
         last = rs[0]["marks_s"][-1]
@@ -277,7 +277,7 @@ def readme_table(runs: list[dict], marked: set[str] = frozenset()) -> str:
                  else "not scored yet (`--score OUT`)")  # a --no-score run, scored later on any machine
         short = "" if last >= 600 else f" at {last / 60:g} min"  # the small tasks' budget
         source, version = REFERENCE_SOURCE[rs[0]["task"]], REFERENCE_VERSION[rs[0]["task"]]
-        lines.append(f"| {shown(task, marked)} | {score}{short} | {ref:g} ({source}, {version}) | "
+        lines.append(f"| {shown(task, marked)} | {score}{short} | {ref:g} ({source.removesuffix(' SAC')}, {version}) | "
                      f"{minutes_to(rs, ref)} |")
     return "\n".join(lines)
 
@@ -363,8 +363,11 @@ def row_cards(runs: list[dict]) -> tuple[str, dict[str, str]]:
 
 def card_note(main: str, other: dict[str, str]) -> str:
     """The note under a table whose rows ran on more than one card."""
-    return f"‡ made on another card than the other rows' {main}: " + "; ".join(
-        f"{row} on {card}" for row, card in sorted(other.items()))
+    by_card: dict[str, list[str]] = {}
+    for row, card in sorted(other.items()):
+        by_card.setdefault(card, []).append(row)
+    return "‡ on " + "; ".join(f"{card}: {', '.join(rows)}" for card, rows in sorted(by_card.items())) \
+        + f" (the other rows: {main})"
 
 
 def report(folders: list[str], figure: str | None = None) -> int:
