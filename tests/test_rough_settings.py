@@ -52,19 +52,22 @@ def test_agreement_counts_the_worlds_that_moved_apart():
     assert got["qpos_max_abs_diff"] == 2 * rs.QPOS_TOL
 
 
-def test_stairs_as_heightfields_reach_the_env_and_step():
-    """The ground's variant: the env's model has the 74 geoms of the heightfield stairs and steps without faults."""
-    row, got = rs.measure("Go1VelocityRough-v0", "stairs_heightfield_5cm", 2, "cpu", steps=1, warmup=1, repeats=1,
+@pytest.mark.parametrize("variant", ["stairs_heightfield_5cm", "ground_heightfield_5cm"])
+def test_the_ground_variants_reach_the_env_and_step(variant):
+    """The ground's variants: the env steps them without faults."""
+    row, got = rs.measure("Go1VelocityRough-v0", variant, 2, "cpu", steps=1, warmup=1, repeats=1,
                           check_steps=3, reference=None)
     assert row["faults"]["solver_overflows"] == 0 and row["faults"]["diverged_resets"] == 0
     assert np.isfinite(got[0]).all()
 
 
-def test_the_ground_variant_builds_fewer_ground_geoms():
-    env = rs.build("Go1VelocityRough-v0", 1, "cpu", rs.VARIANTS["stairs_heightfield_5cm"])
+@pytest.mark.parametrize("variant, field, ground_geoms", [("stairs_heightfield_5cm", "boxes_as_heightfield", 74),
+                                                           ("ground_heightfield_5cm", "ground_as_heightfield", 5)])
+def test_the_ground_variants_build_fewer_ground_geoms(variant, field, ground_geoms):
+    env = rs.build("Go1VelocityRough-v0", 1, "cpu", rs.VARIANTS[variant])
     try:
-        assert env.terrain.grid.boxes_as_heightfield == 0.05
+        assert getattr(env.terrain.grid, field) == 0.05
         names = [env.sim.mjm.geom(i).name for i in range(env.sim.mjm.ngeom)]
-        assert sum(n.startswith("terrain_") for n in names) == 74
+        assert sum(n.startswith("terrain_") for n in names) == ground_geoms
     finally:
         env.close()

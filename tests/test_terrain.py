@@ -87,6 +87,8 @@ def test_kinds_are_drawn_by_their_proportions_and_difficulties_uniformly():
     (lambda: tr.PyramidSlope(border_width=0.05).patch((8.0, 8.0), 0.5, None), "border_width=0.05"),
     (lambda: replace(tr.ROUGH, boxes_as_heightfield=-0.05), "boxes_as_heightfield=-0.05"),
     (lambda: replace(tr.ROUGH, boxes_as_heightfield=3.0), "boxes_as_heightfield=3.0"),
+    (lambda: replace(tr.ROUGH, ground_as_heightfield=-0.05), "ground_as_heightfield=-0.05"),
+    (lambda: replace(tr.ROUGH, boxes_as_heightfield=0.05, ground_as_heightfield=0.05), "give one of them"),
 ])
 def test_bad_settings_name_the_value_and_the_fix(make, message):
     with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")):
@@ -168,3 +170,49 @@ def test_stairs_as_heightfields_are_the_boxes_ground_but_at_the_steps_edges():
     np.testing.assert_allclose(got[~edge], want[~edge], atol=1e-4)
     assert np.abs(got - want).max() <= step + 1e-4
     assert (fields.origins == boxes.origins).all()
+
+
+def test_the_whole_ground_as_one_heightfield_is_the_patches_ground_at_its_nodes():
+    """``ground_as_heightfield``: the grid inside the border as one heightfield (554 ground geoms to 5). At its
+    nodes, away from a step's edge, MuJoCo's rays find the patches' ground to float32 (the heightfield patches
+    included: the resampling reads them as MuJoCo does, two triangles a cell); between nodes it is resampled, so it
+    parts from the patches' ground by at most a step at a step's edge and by millimetres on the heightfield kinds."""
+    import mujoco
+
+    grid = replace(tr.ROUGH, curriculum=True)
+    cell = 0.05
+    patches, patches_model = compiled(grid, 0)
+    whole, whole_model = compiled(replace(grid, ground_as_heightfield=cell), 0)
+    assert (patches_model.ngeom, whole_model.ngeom) == (554, 5)
+    assert whole_model.geom_type[0] == mujoco.mjtGeom.mjGEOM_HFIELD and (whole.origins == patches.origins).all()
+    rng = np.random.default_rng(0)
+    corner = patches.corners[0, 0, :2]
+    extent = np.array([grid.num_rows * grid.size[0], grid.cols * grid.size[1]])
+    nodes = corner + cell * rng.integers(0, np.rint(extent / cell).astype(int) + 1, (600, 2))
+    want, got = tr.heights(patches_model, nodes), tr.heights(whole_model, nodes)
+    # a step's edge: a node of a stairs patch whose ground a cell away is another step's
+    stairs = {k for k, (name, _) in enumerate(grid.sub_terrains) if "stairs" in name}
+    row_col = np.minimum(((nodes - corner) // grid.size[0]).astype(int), [grid.num_rows - 1, grid.cols - 1])
+    on_stairs = np.isin(patches.kinds[row_col[:, 0], row_col[:, 1]], list(stairs))
+    around = [tr.heights(patches_model, nodes + np.array(d)) for d in ((cell, 0), (-cell, 0), (0, cell), (0, -cell))]
+    edge = on_stairs & np.any([np.abs(a - want) > 1e-6 for a in around], axis=0)
+    assert 0.9 * len(nodes) < (~edge).sum() < len(nodes)
+    np.testing.assert_allclose(got[~edge], want[~edge], atol=1e-4)
+    anywhere = corner + rng.uniform(0.0, 1.0, (600, 2)) * extent
+    err = np.abs(tr.heights(whole_model, anywhere) - tr.heights(patches_model, anywhere))
+    steepest = max(tr._lerp(sub.step_height_range, 1.0) for name, sub in grid.sub_terrains if "stairs" in name)
+    assert np.median(err) < 1e-3 and err.max() <= steepest + 1e-4
+
+
+def test_the_whole_ground_heightfield_is_drawn_in_one_colour():
+    from warpgym.media.ground_colours import BORDER, PALETTE, colour_ground
+
+    ground = tr.generate(replace(tr.ROUGH, num_rows=2, num_cols=4, ground_as_heightfield=0.1), seed=1)
+    import mujoco
+
+    spec = mujoco.MjSpec()
+    tr.add_to_spec(spec, ground)
+    mjm = spec.compile()
+    colour_ground(mjm, ground)
+    np.testing.assert_allclose(mjm.geom_rgba[0, :3], PALETTE[0], atol=1e-6)
+    np.testing.assert_allclose(mjm.geom_rgba[1:, :3], np.tile(BORDER, (4, 1)), atol=1e-6)

@@ -5,7 +5,8 @@ on an H200, against 457 k on flat ground), so the settings that decide how it fi
 levers: the broadphase (MuJoCo Warp picks its all-pairs kind, NXN, for these scenes: 30 robot geoms against 554
 ground geoms; SAP_TILE and SAP_SEGMENTED sort and sweep), the constraint rows per world (mjlab's 1500), the contacts
 a contact sensor considers (mjlab's 500) and the CCD iterations (mjlab's 500); and, not a setting, the ground's
-geometry: the stairs as heightfields (``TerrainGrid.boxes_as_heightfield``: 74 ground geoms). For each variant:
+geometry: the stairs as heightfields (``TerrainGrid.boxes_as_heightfield``: 74 ground geoms) or the whole grid as one
+(``ground_as_heightfield``: 5). For each variant:
 
 - env-steps/s of the bare step (uniform random actions in [-1, 1], as ``warpgym bench --legged``) and of MuJoCo
   Warp's step alone, the median of ``--repeats``;
@@ -44,9 +45,11 @@ VARIANTS = {  # name: settings changed from the task's (mjlab's); "mjlab" first,
     # not a setting but the ground's geometry: each stairs patch one heightfield (74 ground geoms instead of 554);
     # it differs from mjlab's ground at the steps' edges by design, so its agreement columns are not a check
     "stairs_heightfield_5cm": {"boxes_as_heightfield": 0.05},
+    # the whole grid as one heightfield (5 ground geoms): every patch resampled every 5 cm
+    "ground_heightfield_5cm": {"ground_as_heightfield": 0.05},
 }
 TASK_FIELDS = ("njmax", "contact_sensor_maxmatch")  # LeggedTask fields
-TERRAIN_FIELDS = ("boxes_as_heightfield",)  # TerrainGrid fields; the rest are MuJoCo Warp options
+TERRAIN_FIELDS = ("boxes_as_heightfield", "ground_as_heightfield")  # TerrainGrid fields; the rest are MuJoCo Warp options
 QPOS_TOL = 1e-3  # [m or rad] a world whose qpos moved further apart than this counts as diverged
 
 
