@@ -254,3 +254,25 @@ def test_one_conversion_per_step_moves_the_robot_as_newtons_step_does():
             scale = max(1.0, b.abs().max().item())
             assert (a - b).abs().max() < rel * scale, (step, name)
     assert after[1, len(torques) - 1][-1].abs().max() > 1.0  # the feet pushed on the ground
+
+
+@pytest.mark.parametrize("cells, lost", [(8, False), (200, True)])
+def test_a_geom_over_more_heightfield_prisms_than_mujoco_keeps_is_counted(cells, lost):
+    """A 0.6-m box 1 cm into a 1-m heightfield of ``cells`` x ``cells`` nodes: at 8 the prisms under it fit
+    MuJoCo's 50 contacts a pair; at 200 (5 mm cells) MuJoCo Warp drops the rest, and the sim counts it as lost
+    contacts (as a full constraint buffer is), not a silent step."""
+    import mujoco
+
+    from warpgym.sim.gym_model import CompiledModel
+    from warpgym.sim.mjw_sim import MjwSim
+
+    spec = mujoco.MjSpec()
+    field = spec.add_hfield(name="ground", size=[0.5, 0.5, 0.01, 0.1], nrow=cells, ncol=cells,
+                            userdata=[0.0] * (cells * cells))
+    spec.worldbody.add_geom(type=mujoco.mjtGeom.mjGEOM_HFIELD, hfieldname=field.name)
+    box = spec.worldbody.add_body(pos=[0, 0, 0.04])
+    box.add_freejoint()
+    box.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.3, 0.3, 0.05], mass=1.0)
+    sim = MjwSim(CompiledModel(spec.compile(), "hfield"), num_envs=2, device="cpu", njmax=1024, nconmax=256)
+    sim.simulate()
+    assert (sim.solver_overflows.numpy() > 0).tolist() == [lost, lost]
