@@ -2,7 +2,8 @@
 
 A world whose constraint rows (``nefc``) exceed ``njmax``, or a batch whose contacts exceed
 ``naconmax``, loses constraints for that substep: less ground under a tumbling robot. MuJoCo Warp
-flags it in ``Data.overflow`` (sticky bits); these kernels turn the flags into counts."""
+flags it in ``Data.overflow`` (sticky bits), as it does a geom over more heightfield prisms than MuJoCo keeps
+contacts for; these kernels turn the flags into counts."""
 
 import warp as wp
 

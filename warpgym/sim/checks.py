@@ -1,4 +1,5 @@
-"""Input checks shared by the Tensor API and the environments: each error names the value and the fix."""
+"""Input checks shared by the Tensor API and the environments (each error names the value and the fix), and which of
+MuJoCo Warp's overflow flags the sims count as lost physics."""
 
 from __future__ import annotations
 
@@ -43,3 +44,14 @@ def check_env_ids(name: str, ids, device: torch.device, num_envs: int, check_ran
             bad = lo if lo < 0 else hi
             raise IndexError(f"{name} holds index {bad}, outside [0, {num_envs - 1}]: pass indices of existing envs")
     return ids.to(torch.int32).contiguous()
+
+
+def solver_overflow_bits() -> tuple[int, int]:
+    """MuJoCo Warp's overflow flags as two masks: those that mean constraints or contacts were dropped (counted on
+    the device every substep, ``kernels.solver_load``, and reported once), and those it may still print per world
+    (``opt.warn_overflow &= quiet``). The iteration caps are a deliberate speed/accuracy trade, not an error."""
+    from mujoco_warp import OverflowType as OF  # noqa: PLC0415
+
+    # HFIELD: a geom over more heightfield prisms than MuJoCo's mjMAXCONPAIR loses the rest as contacts
+    drop = int(OF.NEFC | OF.NJMAX_NNZ | OF.BROADPHASE | OF.NARROWPHASE | OF.HFIELD)
+    return drop, ~int(OF.ITERATIONS | OF.LS_ITERATIONS | drop)

@@ -21,7 +21,7 @@ import warp as wp
 
 from kernels.solver_load import track_solver_load
 from warpgym.compile.preload import compile_ahead
-from warpgym.sim.checks import check_env_ids, check_float_tensor, check_positive_int
+from warpgym.sim.checks import check_env_ids, check_float_tensor, check_positive_int, solver_overflow_bits
 from warpgym.sim.device import resolve_device
 from warpgym.sim.gym_model import CompiledModel, compile_model
 from warpgym.sim.mjw_internals import mujoco_contact_frames
@@ -76,11 +76,7 @@ class MjwSim(CapturedLaunches):
         self.body_names = [mujoco.mj_id2name(mjm, mujoco.mjtObj.mjOBJ_BODY, b) or "" for b in range(mjm.nbody)]
         self.ctrl_range = np.asarray(mjm.actuator_ctrlrange, np.float32).copy()
 
-        from mujoco_warp import OverflowType as OF  # noqa: PLC0415
-
-        # HFIELD: a geom over more heightfield prisms than MuJoCo's mjMAXCONPAIR loses the rest as contacts
-        self._drop_bits = int(OF.NEFC | OF.NJMAX_NNZ | OF.BROADPHASE | OF.NARROWPHASE | OF.HFIELD)
-        quiet = ~int(OF.ITERATIONS | OF.LS_ITERATIONS | self._drop_bits)
+        self._drop_bits, quiet = solver_overflow_bits()
         self.m.opt.warn_overflow = int(self.m.opt.warn_overflow) & quiet
         if contact_sensor_maxmatch is not None:
             self.m.opt.contact_sensor_maxmatch = check_positive_int(

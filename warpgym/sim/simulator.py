@@ -19,7 +19,7 @@ from kernels import tensor_api as k_api
 from kernels.solver_load import track_solver_load
 from warpgym.compile.preload import Preload, compile_ahead
 from warpgym.sim import newton_internals
-from warpgym.sim.checks import check_positive_int
+from warpgym.sim.checks import check_positive_int, solver_overflow_bits
 from warpgym.sim.device import resolve_device
 from warpgym.sim.physics import Physics, exact_damping_scale, motor_damping
 from warpgym.sim.robots import RobotSpec, hinge_joint_names, mjcf_path, motor_gears, robot_spec
@@ -163,14 +163,7 @@ class Sim(TensorAPI, CapturedLaunches):
     def _solver_settings(self, path: str) -> None:
         """Which of MuJoCo Warp's overflow flags count as dropped constraints, which it may stop printing, and
         the motors' gears that motor damping is scaled by."""
-        # The iteration caps are a deliberate speed/accuracy trade, not an error worth a printf per
-        # world. Dropped constraints and contacts are errors, but they are counted on the device
-        # every substep (solver_overflows, solver_load()) and reported once, not printed per world.
-        from mujoco_warp import OverflowType as OF  # noqa: PLC0415
-
-        # HFIELD: a geom over more heightfield prisms than MuJoCo's mjMAXCONPAIR loses the rest as contacts
-        self._drop_bits = int(OF.NEFC | OF.NJMAX_NNZ | OF.BROADPHASE | OF.NARROWPHASE | OF.HFIELD)
-        self._quiet_bits = ~int(OF.ITERATIONS | OF.LS_ITERATIONS | self._drop_bits)
+        self._drop_bits, self._quiet_bits = solver_overflow_bits()
         self._gears_by_joint = motor_gears(path)
         self._hinge_gears = [self._gears_by_joint.get(name, 0.0) for name in hinge_joint_names(path)]
 
