@@ -83,8 +83,11 @@ BLOCKS = {
                         ["--report", "docs/bench/legged/side_by_side_g1_15min_2026-11-29.json"], first(3)),
     "legged-go1-rough-9min": ("docs/benchmarks.md", "benchmarks.learning.mjlab_side_by_side",
                               ["--report", "docs/bench/legged/side_by_side_go1_rough_9min_2026-11-29.json"], first(3)),
+    # the page: each policy's speeds in both simulators; the log: its training run
     "physics": ("docs/benchmarks.md", "benchmarks.physics.fidelity", ["--report", *FIDELITY, "--marks", "end"],
-                first(2)),
+                first(1)),
+    "physics-training": ("docs/history.md", "benchmarks.physics.fidelity", ["--report", *FIDELITY, "--marks", "end"],
+                         only(1)),
     "robot-steps": ("docs/benchmarks.md", "benchmarks.speed.robot_steps",
                     ["--report", "docs/bench/h100_env_steps_humanoid_motors.json"], first(2)),
     "cold-start": ("docs/benchmarks.md", "benchmarks.speed.cold_start",

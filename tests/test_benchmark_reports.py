@@ -1138,8 +1138,9 @@ def test_the_suite_gif_caption_gives_the_drawn_policies_scores_and_cards_from_th
 
 
 def test_the_physics_tables_are_what_fidelity_prints_from_todays_defaults_runs(capsys):
-    """docs/benchmarks.md's "Physics at convergence" tables, row for row, as ``fidelity.py --report`` prints them
-    from the committed runs of today's defaults (the page's table was once edited by hand)."""
+    """docs/benchmarks.md's "Physics at convergence" table and the log's table of its training runs, row for row, as
+    ``fidelity.py --report`` prints them from the committed runs of today's defaults (the page's table was once
+    edited by hand)."""
     from benchmarks.physics import fidelity
 
     root = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
@@ -1151,8 +1152,10 @@ def test_the_physics_tables_are_what_fidelity_prints_from_todays_defaults_runs(c
         assert fidelity.main(["--report", *paths, *flags]) == 0
         return [line for line in capsys.readouterr().out.splitlines() if line.startswith("| ") and "---" not in line]
 
-    with open(os.path.join(root, "docs", "benchmarks.md")) as f:
-        page = set(f.read().splitlines())
+    page = set()
+    for name in ("benchmarks.md", "history.md"):  # the policies' table on the page, their training runs' in the log
+        with open(os.path.join(root, "docs", name)) as f:
+            page |= set(f.read().splitlines())
     shown, every = rows("--marks", "end"), rows()
     assert len(shown) == 2 + 5 + 5 and [r for r in shown if r not in page] == []
     # the page leaves out the policies kept at 60, 120 and 300 s (the log has them), and only those
