@@ -81,7 +81,7 @@ def launch_moves(ground, start_level, kind, walked, command, done, force_all=0, 
     out = StepOutputs()
     for name in ("terminated", "truncated", "time_outs", "done"):
         setattr(out, name, wp.array(np.asarray(done, bool), dtype=wp.bool))
-    rng = wp.array(np.full(1, seed, np.int32), dtype=wp.int32)
+    rng = wp.array(np.array([seed, steps], np.int32), dtype=wp.int32)  # (seed, step counter), as the env's
     wp.launch(move_levels, dim=n, inputs=[t, r, d, st, force_all, rng, out])
     return t.level.numpy(), t.origin.numpy()
 
