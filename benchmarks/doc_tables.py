@@ -108,6 +108,8 @@ BLOCKS = {
     "scaling-ant-v5": scaling("suite", "Ant-v5"),
     "scaling-g1-flat": scaling("legged", "G1VelocityFlat-v0"),
     "scaling-go1-rough": scaling("legged", "Go1VelocityRough-v0"),
+    # the table only: the compile times under it differ from run to run
+    "ground-resampling": ("docs/history.md", "benchmarks.physics.ground_resampling", [], first(1)),
     "nodes": ("docs/history.md", "benchmarks.multi_gpu.nodes", ["--report", "docs/bench/multi_gpu/nodes/nodes-4.json"],
               first(3)),
     "exits-cpu": ("docs/history.md", "benchmarks.reliability.exits", ["--report", "docs/bench/cpu_exits.json"],

@@ -207,12 +207,7 @@ def test_the_whole_ground_as_one_heightfield_is_the_patches_ground_at_its_nodes(
 def test_the_whole_ground_heightfield_is_drawn_in_one_colour():
     from warpgym.media.ground_colours import BORDER, PALETTE, colour_ground
 
-    ground = tr.generate(replace(tr.ROUGH, num_rows=2, num_cols=4, ground_as_heightfield=0.1), seed=1)
-    import mujoco
-
-    spec = mujoco.MjSpec()
-    tr.add_to_spec(spec, ground)
-    mjm = spec.compile()
+    ground, mjm = compiled(replace(tr.ROUGH, num_rows=2, num_cols=4, ground_as_heightfield=0.1), 1)
     colour_ground(mjm, ground)
     np.testing.assert_allclose(mjm.geom_rgba[0, :3], PALETTE[0], atol=1e-6)
     np.testing.assert_allclose(mjm.geom_rgba[1:, :3], np.tile(BORDER, (4, 1)), atol=1e-6)

@@ -20,9 +20,11 @@ def colour_ground(mjm, ground) -> None:
     body = mujoco.mj_name2id(mjm, mujoco.mjtObj.mjOBJ_BODY, "terrain")
     geoms = np.flatnonzero(mjm.geom_bodyid == body)
     g = ground.grid
-    kinds = [int(ground.kinds[r, c]) for r in range(g.num_rows) for c in range(g.cols) for _ in ground.patches[r][c].geoms]
     if g.ground_as_heightfield > 0.0:
         kinds = [0]  # every patch in one heightfield: one colour, its kinds cannot be told apart
+    else:
+        kinds = [int(ground.kinds[r, c]) for r in range(g.num_rows) for c in range(g.cols)
+                 for _ in ground.patches[r][c].geoms]
     if len(geoms) != len(kinds) + 4:
         raise ValueError(f"the terrain body holds {len(geoms)} geoms, the ground {len(kinds)} and a border of 4: "
                          "colour the model compiled from this ground")
