@@ -34,6 +34,8 @@ FIDELITY = [f"docs/bench/fidelity/{r}.json" for r in (
 RLLIB = [f"docs/bench/rllib/h200_rllib_{r}.json" for r in (
     "vs_warpgym_1gpu", "8runners_1gpu", "vs_warpgym_2gpu_warpgym", "vs_warpgym_2gpu_rllib", "vs_warpgym_2gpu_rllib_humanoid",
     "vs_warpgym_4gpu_ant", "vs_warpgym_4gpu_humanoid")]
+LEGGED = [f"docs/bench/legged/side_by_side_{r}.json" for r in (
+    "go1_15min_2026-11-28", "g1_15min_2026-11-29", "go1_rough_9min_2026-11-29", "g1_rough_15min_2026-11-29")]
 ENVS_ANT = ["--report", "docs/bench/envs_per_gpu/h100_envs_per_gpu_ant.json", "--figure", "-"]
 ENVS_HUMANOID = ["--report", "docs/bench/envs_per_gpu/h100_envs_per_gpu_humanoid_seed0.json",
                  "docs/bench/envs_per_gpu/h100_envs_per_gpu_humanoid_seed1.json", "--figure", "-"]
@@ -77,12 +79,9 @@ BLOCKS = {
     "suite-speed": ("docs/benchmarks.md", "benchmarks.speed.suite_speed",
                     ["--report", "docs/bench/suite_speed_h100_same_states.json", "docs/bench/suite_speed_h100_cpu.json"],
                     first(1)),
-    "legged-go1-15min": ("docs/benchmarks.md", "benchmarks.learning.mjlab_side_by_side",
-                         ["--report", "docs/bench/legged/side_by_side_go1_15min_2026-11-28.json"], first(3)),
-    "legged-g1-15min": ("docs/benchmarks.md", "benchmarks.learning.mjlab_side_by_side",
-                        ["--report", "docs/bench/legged/side_by_side_g1_15min_2026-11-29.json"], first(3)),
-    "legged-go1-rough-9min": ("docs/benchmarks.md", "benchmarks.learning.mjlab_side_by_side",
-                              ["--report", "docs/bench/legged/side_by_side_go1_rough_9min_2026-11-29.json"], first(3)),
+    "legged": ("docs/benchmarks.md", "benchmarks.learning.mjlab_side_by_side", ["--report", *LEGGED], first(3)),
+    "legged-7min": ("docs/history.md", "benchmarks.learning.mjlab_side_by_side",
+                    ["--report", "docs/bench/legged/side_by_side_2026-11-28.json"], first(3)),
     # the page: each policy's speeds in both simulators; the log: its training run
     "physics": ("docs/benchmarks.md", "benchmarks.physics.fidelity", ["--report", *FIDELITY, "--marks", "end"],
                 first(1)),
@@ -98,7 +97,7 @@ BLOCKS = {
                           ["--report", "docs/bench/learners/h100_learners_humanoid.json"], first(2)),
     # the page: each size's time to the speeds; the log: each size's throughput and memory
     "envs-per-gpu-ant": ("docs/benchmarks.md", "benchmarks.speed.envs_per_gpu", ENVS_ANT, only(0, 2)),
-    "envs-per-gpu-humanoid": ("docs/benchmarks.md", "benchmarks.speed.envs_per_gpu", ENVS_HUMANOID, only(0, 2)),
+    "envs-per-gpu-humanoid": ("docs/history.md", "benchmarks.speed.envs_per_gpu", ENVS_HUMANOID, only(0, 2)),
     "envs-per-gpu-ant-throughput": ("docs/history.md", "benchmarks.speed.envs_per_gpu", ENVS_ANT, only(0, 1)),
     "envs-per-gpu-humanoid-throughput": ("docs/history.md", "benchmarks.speed.envs_per_gpu", ENVS_HUMANOID, only(0, 1)),
     "rllib": ("docs/benchmarks.md", "benchmarks.multi_gpu.rllib_vs_warpgym", ["--report", *RLLIB], first(2)),

@@ -64,7 +64,7 @@ def test_warpgyms_time_is_its_first_smoothed_row_at_the_target_and_a_seed_short_
     table = sbs.table(sbs.summarize(str(out), mark=445.0))
     # a quarter of 445 s is 111 s: 220 s is not met, and the table says which mark it judged
     assert "220 (0.49x) not met" in table
-    assert "return at 445 s" in table and "not reached" in table
+    assert "| 445 (the mark) |" in table and "not reached" in table
 
 
 def test_without_a_mark_the_15_minute_mark_is_the_target_and_a_run_that_ended_before_it_has_none(out):
@@ -78,6 +78,7 @@ def test_without_a_mark_the_15_minute_mark_is_the_target_and_a_run_that_ended_be
     ("side_by_side_go1_15min_2026-11-28.json", 2 + 1 + 4),  # the Go1's 15-minute run: one speed row, mjlab, 3 seeds
     ("side_by_side_g1_15min_2026-11-29.json", 2 + 1 + 2),  # the G1's on one GPU: one speed row, mjlab, seed 0
     ("side_by_side_go1_rough_9min_2026-11-29.json", 2 + 1 + 2),  # the Go1 on rough ground, mjlab's first 9 minutes
+    ("side_by_side_g1_rough_15min_2026-11-29.json", 2 + 1 + 2),  # the G1 on rough ground, mjlab's 15 minutes
 ])
 def test_the_published_tables_are_what_the_report_prints_from_the_committed_summary(name, rows_expected):
     """The legged tables of docs/benchmarks.md (and, for the runs it no longer shows, of the log, docs/history.md),
@@ -94,6 +95,31 @@ def test_the_published_tables_are_what_the_report_prints_from_the_committed_summ
     rows = [line for line in sbs.table(summary).splitlines() if line.startswith("| ")]
     assert len(rows) == rows_expected
     assert [r for r in rows if r not in page] == []
+
+
+def test_several_runs_make_one_table_each_row_dated_and_judged_at_its_own_runs_mark(out, tmp_path, capsys):
+    import copy
+
+    early = sbs.summarize(str(out), mark=445.0)
+    late = copy.deepcopy(early) | {"date": "2026-12-01", "mark_s": 1000.0}
+    rows = [line for line in sbs.table(early, late).splitlines() if line.startswith("| Go1")]
+    assert len(rows) == 2 * (1 + 2)  # per run (no bare steps timed here): mjlab's row and two seeds'
+    # seed 0's 220 s is 0.49x of the first run's 445-s mark (not met) and 0.22x of the second's 1000 s (met)
+    seed0 = [r for r in rows if "warpgym seed 0" in r]
+    assert "| 2026-11-28 |" in seed0[0] and "220 (0.49x) not met" in seed0[0]
+    assert "| 2026-12-01 |" in seed0[1] and "220 (0.22x) met" in seed0[1]
+    assert "| 1000 (the mark) |" in [r for r in rows if "mjlab" in r][1]
+    paths = [tmp_path / "a.json", tmp_path / "b.json"]
+    for path, summary in zip(paths, (early, late)):
+        path.write_text(json.dumps(summary))
+    assert sbs.main(["--report", *map(str, paths)]) == 0
+    assert capsys.readouterr().out.strip() == sbs.table(early, late)
+    with pytest.raises(SystemExit):  # one figure is one run's
+        sbs.main(["--report", *map(str, paths), "--figure", str(tmp_path / "f.png")])
+    assert "give one --report (got 2)" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        sbs.main(["--report", str(tmp_path / "missing")])
+    assert "neither a run folder nor a summary.json" in capsys.readouterr().err
 
 
 def test_the_curves_are_thinned_to_one_point_per_interval_and_drawn(out, tmp_path):
@@ -164,7 +190,7 @@ def test_a_summary_reports_at_its_own_mark_and_refuses_another(out, tmp_path, ca
     path = tmp_path / "summary.json"
     path.write_text(json.dumps(summary))
     assert sbs.main(["--report", str(path)]) == 0
-    assert "return at 445 s" in capsys.readouterr().out
+    assert "| 445 (the mark) |" in capsys.readouterr().out
     with pytest.raises(SystemExit):
         sbs.main(["--report", str(path), "--mark", "600"])
     assert "summarised at 445 s" in capsys.readouterr().err

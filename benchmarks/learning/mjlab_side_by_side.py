@@ -13,10 +13,10 @@ Two measures, each both frameworks:
 
 Runs span several machine calls: ``--start`` measures the bare steps (both at once, each on its own GPU), then
 starts the trainings in sessions of their own (they outlive the call); ``--wait SECONDS`` waits for them; ``--report``
-writes ``summary.json`` (each run's curve in it) and prints the table, ``--figure PNG`` draws the curves. A task needs
-two GPUs: mjlab on the first, warpgym on the second; with ``--one-gpu`` they take turns on one (the bare steps one
-after the other, then mjlab's training, then warpgym's seeds, all in one session of their own; ``--ours-first``
-swaps the trainings).
+writes ``summary.json`` (each run's curve in it) and prints the tables (of several runs at once: a dated row each),
+``--figure PNG`` draws the curves. A task needs two GPUs: mjlab on the first, warpgym on the second; with
+``--one-gpu`` they take turns on one (the bare steps one after the other, then mjlab's training, then warpgym's
+seeds, all in one session of their own; ``--ours-first`` swaps the trainings).
 ``--pack DIR`` ends any call by writing what the runs have so far into DIR (the logs, metrics and mjlab's event
 files as ``runs.tar.gz``; the policies without optimiser state as ``policies.tar.gz``): a machine taken back between
 calls then loses only what came after. mjlab's packages for the GPU machine: benchmarks/learning/mjlab_stage.sh.
@@ -328,40 +328,49 @@ def level(d: dict | None) -> str:
     return "" if x is None else f" (level {x:.2f})"
 
 
-def table(summary: dict) -> str:
-    lines = [f"{summary['device']}, {summary['date']}, {summary['num_envs']} envs for training.", "",
-             "| task | envs | mjlab env-steps/s | warpgym env-steps/s | MuJoCo Warp's steps + forward alone | "
-             "warpgym / mjlab (goal 5x) |", "|---|---|---|---|---|---|"]
-    for task, e in summary["tasks"].items():
-        by = {(r["framework"], r["num_envs"]): r for r in e["speed"]}
-        for n in sorted({k[1] for k in by}):
-            m = by.get(("mjlab", n), {}).get("env_steps_per_s")
-            o = by.get(("warpgym", n), {}).get("env_steps_per_s")
-            c = by.get(("warpgym", n), {}).get("mjwarp_steps_per_s")
-            ratio = o / m if m and o else None
-            met = "" if ratio is None else (", met" if ratio >= GOAL_SPEED else ", not met")
-            lines.append(f"| {task} | {n} | {fmt(m and m / 1e3)} k | {fmt(o and o / 1e3)} k | {fmt(c and c / 1e3)} k "
-                         f"| {fmt(ratio, '.1f')}x{met} |")
-    at = "15 min" if summary.get("mark_s", MARK) == MARK else f"{summary['mark_s']:.0f} s"
-    lines += ["", f"| task | framework | samples/s | return at {at} | error xy / yaw at {at} | time to mjlab's return at {at} "
-              f"(goal <= {GOAL_TIME * summary.get('mark_s', MARK):.0f} s) | error xy / yaw there |", "|---|---|---|---|---|---|---|"]
-    mark = summary.get("mark_s", MARK)
-    for task, e in summary["tasks"].items():
-        m = e["mjlab"]
-        a = m["at_mark"]
-        lines.append(f"| {task} | mjlab (seed 42) | {fmt(m['samples_per_s_median'] and m['samples_per_s_median'] / 1e3)} k "
-                     f"| {fmt(a['return'], '.2f')}{level(a)} | {fmt(a['error_vel_xy'], '.3f')} / {fmt(a['error_vel_yaw'], '.3f')} "
-                     f"| {mark:.0f} | |")
-        for r in e["warpgym"]:
-            got = r["reached"]
-            when = "not reached" if got is None else f"{got['time_s']:.0f} ({got['time_s'] / mark:.2f}x){level(got)}"
-            met = "" if got is None else (" met" if got["time_s"] <= GOAL_TIME * mark else " not met")
-            err = "" if got is None else f"{fmt(got['error_vel_xy'], '.3f')} / {fmt(got['error_vel_yaw'], '.3f')}"
-            end = r["at_end"] or {}
-            lines.append(f"| {task} | warpgym seed {r['seed']} | {fmt(r['samples_per_s_median'] and r['samples_per_s_median'] / 1e3)} k "
-                         f"| {fmt(end.get('return'), '.2f')}{level(end)} at {fmt(r['last_time_s'])} s | "
-                         f"{fmt(end.get('error_vel_xy'), '.3f')} / {fmt(end.get('error_vel_yaw'), '.3f')} at the end "
-                         f"| {when}{met} | {err} |")
+def table(*summaries: dict) -> str:
+    """One speed table and one training table for the runs of several side-by-side summaries, each row dated. Each
+    summary has its own mark: warpgym's time is judged against a quarter of it."""
+    devices = sorted({s["device"] for s in summaries})
+    envs = sorted({s["num_envs"] for s in summaries})
+    lines = [f"{', '.join(devices)}, {', '.join(map(str, envs))} envs for training; the target: mjlab's return at its "
+             f"mark, times from each process's start.", "",
+             "| task | date | envs | mjlab env-steps/s | warpgym env-steps/s | MuJoCo Warp's steps + forward alone | "
+             "warpgym / mjlab (goal 5x) |", "|---|---|---|---|---|---|---|"]
+    for summary in summaries:
+        for task, e in summary["tasks"].items():
+            by = {(r["framework"], r["num_envs"]): r for r in e["speed"]}
+            for n in sorted({k[1] for k in by}):
+                m = by.get(("mjlab", n), {}).get("env_steps_per_s")
+                o = by.get(("warpgym", n), {}).get("env_steps_per_s")
+                c = by.get(("warpgym", n), {}).get("mjwarp_steps_per_s")
+                ratio = o / m if m and o else None
+                met = "" if ratio is None else (", met" if ratio >= GOAL_SPEED else ", not met")
+                lines.append(f"| {task} | {summary['date']} | {n} | {fmt(m and m / 1e3)} k | {fmt(o and o / 1e3)} k "
+                             f"| {fmt(c and c / 1e3)} k | {fmt(ratio, '.1f')}x{met} |")
+    lines += ["", "| task | date | framework | samples/s | return (mjlab: at its mark; warpgym: at its end) | "
+              "error xy / yaw then | time to mjlab's return, s (goal: a quarter of the mark) | error xy / yaw there |",
+              "|---|---|---|---|---|---|---|---|"]
+    for summary in summaries:
+        mark = summary.get("mark_s", MARK)
+        for task, e in summary["tasks"].items():
+            m = e["mjlab"]
+            a = m["at_mark"]
+            lines.append(f"| {task} | {summary['date']} | mjlab (seed 42) "
+                         f"| {fmt(m['samples_per_s_median'] and m['samples_per_s_median'] / 1e3)} k "
+                         f"| {fmt(a['return'], '.2f')}{level(a)} "
+                         f"| {fmt(a['error_vel_xy'], '.3f')} / {fmt(a['error_vel_yaw'], '.3f')} | {mark:.0f} (the mark) | |")
+            for r in e["warpgym"]:
+                got = r["reached"]
+                when = "not reached" if got is None else f"{got['time_s']:.0f} ({got['time_s'] / mark:.2f}x){level(got)}"
+                met = "" if got is None else (" met" if got["time_s"] <= GOAL_TIME * mark else " not met")
+                err = "" if got is None else f"{fmt(got['error_vel_xy'], '.3f')} / {fmt(got['error_vel_yaw'], '.3f')}"
+                end = r["at_end"] or {}
+                lines.append(f"| {task} | {summary['date']} | warpgym seed {r['seed']} "
+                             f"| {fmt(r['samples_per_s_median'] and r['samples_per_s_median'] / 1e3)} k "
+                             f"| {fmt(end.get('return'), '.2f')}{level(end)} at {fmt(r['last_time_s'])} s "
+                             f"| {fmt(end.get('error_vel_xy'), '.3f')} / {fmt(end.get('error_vel_yaw'), '.3f')} "
+                             f"| {when}{met} | {err} |")
     return "\n".join(lines)
 
 
@@ -457,8 +466,8 @@ def main(argv=None) -> int:
     ap.add_argument("--out", help="folder for the runs, logs and JSON")
     ap.add_argument("--start", action="store_true", help="measure the bare steps, then start the trainings")
     ap.add_argument("--wait", type=float, help="wait up to this many seconds for the trainings")
-    ap.add_argument("--report", metavar="OUT", help="summarise OUT: summary.json and the table (or print the table "
-                    "of a summary.json again)")
+    ap.add_argument("--report", metavar="OUT", nargs="+", help="summarise each run folder OUT into its summary.json "
+                    "(or read a summary.json written before) and print the runs' tables, one row each")
     ap.add_argument("--tasks", nargs="+", default=["Go1VelocityFlat-v0"], choices=sorted(MIRRORS))
     ap.add_argument("--one-gpu", action="store_true", help="mjlab and warpgym take turns on one GPU (one task): the "
                     "bare steps one after the other, then mjlab's training, then warpgym's seeds")
@@ -479,18 +488,25 @@ def main(argv=None) -> int:
     ap.add_argument("--pack", metavar="DIR", help="at the end, write the runs so far into DIR (a machine call's $OUT)")
     args = ap.parse_args(argv)
     if args.report:
-        if os.path.isfile(args.report):  # a summary.json written before: its table again, at the mark it was made at
-            with open(args.report) as f:
-                summary = json.load(f)
-            if args.mark != MARK and args.mark != summary.get("mark_s", MARK):
-                ap.error(f"--mark {args.mark:g}: {args.report} was summarised at {summary.get('mark_s', MARK):g} s; "
-                         f"give its run folder to judge another mark")
-        else:
-            summary = summarize(args.report, args.mark)
-            write_json(os.path.join(args.report, "summary.json"), summary)
-        print(table(summary))
+        summaries = []
+        for path in args.report:
+            if os.path.isfile(path):  # a summary.json written before: its table again, at the mark it was made at
+                with open(path) as f:
+                    summary = json.load(f)
+                if args.mark != MARK and args.mark != summary.get("mark_s", MARK):
+                    ap.error(f"--mark {args.mark:g}: {path} was summarised at {summary.get('mark_s', MARK):g} s; "
+                             f"give its run folder to judge another mark")
+            elif os.path.isdir(path):
+                summary = summarize(path, args.mark)
+                write_json(os.path.join(path, "summary.json"), summary)
+            else:
+                ap.error(f"--report {path}: neither a run folder nor a summary.json")
+            summaries.append(summary)
+        if args.figure and len(summaries) > 1:
+            ap.error(f"--figure draws one run's curves; give one --report (got {len(summaries)})")
+        print(table(*summaries))
         if args.figure:
-            draw(summary, args.figure)
+            draw(summaries[0], args.figure)
         return 0
     if not args.out:
         ap.error("--out is required (or --report OUT)")

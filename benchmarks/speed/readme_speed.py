@@ -25,6 +25,7 @@ ROWS = [
     ("warpgym/Go1VelocityFlat-v0", "48 (critic 72) / 12", ("legged", "Go1VelocityFlat-v0", 4096)),
     ("warpgym/G1VelocityFlat-v0", "99 (critic 111) / 29", ("legged", "G1VelocityFlat-v0", 4096)),
     ("warpgym/Go1VelocityRough-v0", "235 (critic 259) / 12", ("legged", "Go1VelocityRough-v0", 4096)),
+    ("warpgym/G1VelocityRough-v0", "286 (critic 298) / 29", ("legged", "G1VelocityRough-v0", 4096)),
 ]
 SUITE_GPU = "suite_speed_h100_same_states.json"  # warpgym's steps of the suite on the GPU
 SUITE_CPU = "suite_speed_h100_cpu.json"  # EnvPool's on the same host's cores
