@@ -16,12 +16,8 @@ HERE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "data", "legged"
 
 
 def compiled(grid, seed):
-    import mujoco
-
-    spec = mujoco.MjSpec()
     ground = tr.generate(grid, seed)
-    tr.add_to_spec(spec, ground)
-    return ground, spec.compile()
+    return ground, tr.compile_alone(ground)
 
 
 @pytest.fixture(scope="module")
@@ -192,8 +188,7 @@ def test_the_whole_ground_as_one_heightfield_is_the_patches_ground_at_its_nodes(
     want, got = tr.heights(patches_model, nodes), tr.heights(whole_model, nodes)
     # a step's edge: a node of a stairs patch whose ground a cell away is another step's
     stairs = {k for k, (name, _) in enumerate(grid.sub_terrains) if "stairs" in name}
-    row_col = np.minimum(((nodes - corner) // grid.size[0]).astype(int), [grid.num_rows - 1, grid.cols - 1])
-    on_stairs = np.isin(patches.kinds[row_col[:, 0], row_col[:, 1]], list(stairs))
+    on_stairs = np.isin(patches.kinds_at(nodes), list(stairs))
     around = [tr.heights(patches_model, nodes + np.array(d)) for d in ((cell, 0), (-cell, 0), (0, cell), (0, -cell))]
     edge = on_stairs & np.any([np.abs(a - want) > 1e-6 for a in around], axis=0)
     assert 0.9 * len(nodes) < (~edge).sum() < len(nodes)
@@ -211,3 +206,16 @@ def test_the_whole_ground_heightfield_is_drawn_in_one_colour():
     colour_ground(mjm, ground)
     np.testing.assert_allclose(mjm.geom_rgba[0, :3], PALETTE[0], atol=1e-6)
     np.testing.assert_allclose(mjm.geom_rgba[1:, :3], np.tile(BORDER, (4, 1)), atol=1e-6)
+
+
+def test_kinds_at_finds_each_patch_by_its_own_length_and_width():
+    """A point's patch on a grid of 8 x 4-m patches (rows along x, columns along y): a patch's start and points
+    just inside its corners give its kind; reading both axes by the patch's length would give another patch's."""
+    grid = replace(tr.ROUGH, num_rows=3, num_cols=4, size=(8.0, 4.0), curriculum=True)
+    ground = tr.generate(grid, 0)
+    assert len(np.unique(ground.kinds)) > 1  # else any lookup would pass
+    starts = ground.origins.reshape(-1, 3)
+    inside = np.concatenate([ground.corners.reshape(-1, 3)[:, :2] + d for d in ([0.01, 0.01], [7.99, 3.99])])
+    want = ground.kinds.reshape(-1)
+    np.testing.assert_array_equal(ground.kinds_at(starts), want)
+    np.testing.assert_array_equal(ground.kinds_at(inside), np.concatenate([want, want]))

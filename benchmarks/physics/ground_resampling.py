@@ -17,15 +17,11 @@ import numpy as np
 
 def compile_ground(grid, seed: int):
     """(Terrain, MjModel, seconds to generate and compile it)."""
-    import mujoco  # noqa: PLC0415
-
     from warpgym.tasks.legged import terrain as tr  # noqa: PLC0415
 
     start = time.perf_counter()
-    spec = mujoco.MjSpec()
     ground = tr.generate(grid, seed)
-    tr.add_to_spec(spec, ground)
-    model = spec.compile()
+    model = tr.compile_alone(ground)
     return ground, model, time.perf_counter() - start
 
 
@@ -39,8 +35,7 @@ def differences(cells: list[float], points: int, seed: int) -> list[dict]:
     extent = np.array([grid.num_rows * grid.size[0], grid.cols * grid.size[1]])
     at = corner + np.random.default_rng(seed).uniform(0.0, 1.0, (points, 2)) * extent
     want = tr.heights(reference, at)
-    row_col = np.minimum(((at - corner) // grid.size[0]).astype(int), [grid.num_rows - 1, grid.cols - 1])
-    kinds = ground.kinds[row_col[:, 0], row_col[:, 1]]
+    kinds = ground.kinds_at(at)
     rows = []
     for cell in cells:
         _, model, seconds = compile_ground(replace(grid, ground_as_heightfield=cell), seed)

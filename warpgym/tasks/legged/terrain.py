@@ -292,6 +292,14 @@ class Terrain:
     origins: np.ndarray  # (rows, cols, 3)
     patches: list[list[Patch]]
 
+    def kinds_at(self, points: np.ndarray) -> np.ndarray:
+        """The kind (an index into ``grid.sub_terrains``) of the patch under each (x, y) of ``points``, world frame;
+        a point on the border counts as the nearest patch's."""
+        g = self.grid
+        rc = np.floor((np.asarray(points)[:, :2] - self.corners[0, 0, :2]) / np.asarray(g.size)).astype(int)
+        rc = np.clip(rc, 0, [g.num_rows - 1, g.cols - 1])
+        return self.kinds[rc[:, 0], rc[:, 1]]
+
     def boxes_and_fields(self):
         """Every geom in the world frame: the patches' in row-major order (or, with ``ground_as_heightfield``, the one
         heightfield of them all), then the outer border's four boxes."""
@@ -430,6 +438,15 @@ def add_to_spec(spec, terrain: Terrain, body_name: str = "terrain") -> None:
                                  ncol=g.data.shape[1], userdata=g.data.flatten().tolist())
             body.add_geom(name=f"terrain_{i}", type=mujoco.mjtGeom.mjGEOM_HFIELD, hfieldname=hf.name,
                           pos=list(g.pos), mass=0)
+
+
+def compile_alone(terrain: Terrain):
+    """The terrain alone (no robot, no light) compiled by MuJoCo: the model ``heights`` casts its rays onto."""
+    import mujoco  # noqa: PLC0415
+
+    spec = mujoco.MjSpec()
+    add_to_spec(spec, terrain)
+    return spec.compile()
 
 
 def heights(mjm, points: np.ndarray, top: float = 10.0, bodyexclude: int = -1) -> np.ndarray:
