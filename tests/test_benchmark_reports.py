@@ -866,6 +866,26 @@ def test_the_published_multi_gpu_table_is_what_scaling_prints_from_the_committed
         assert len(by) == 1 and by[0] in {line.strip() for line in page}
 
 
+def test_a_packed_outputs_report_reads_its_runs_outside_it_and_leaves_it_as_it_was(tmp_path, capsys, monkeypatch):
+    """The docs' checks report committed folders, two at once under pytest-xdist: a report unpacks into a folder of
+    its own, not into the output, and removes it after."""
+    root = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
+    from benchmarks.multi_gpu import scaling
+
+    out = tmp_path / "grow_kl"
+    shutil.copytree(os.path.join(root, "docs", "bench", "multi_gpu", "grow_kl"), out)
+    before = sorted(os.listdir(out))
+    seen = []
+    gather = scaling.gather_runs
+    monkeypatch.setattr(scaling, "gather_runs", lambda folder, doc, runs_dir: (seen.append(runs_dir),
+                                                                             gather(folder, doc, runs_dir)))
+    assert scaling.main(["--report", str(out), "--task", "Humanoid"]) == 0
+    assert capsys.readouterr().out.startswith("Humanoid: ")
+    assert len(seen) == 1 and not os.path.abspath(seen[0]).startswith(str(out))
+    assert not os.path.exists(os.path.dirname(seen[0]))
+    assert sorted(os.listdir(out)) == before
+
+
 def test_a_folder_of_several_tasks_asks_which(tmp_path):
     from benchmarks.multi_gpu import scaling
 

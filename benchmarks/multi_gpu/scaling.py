@@ -499,8 +499,19 @@ def report(folders: list[str], task: str = "Ant", targets: str | None = None) ->
             raise SystemExit(f"--report: {folder} has {', '.join(f'{k} {doc[k]}' for k in same)} and the first output "
                              f"{', '.join(f'{k} {first[k]}' for k in same)}: join runs timed alike")
     out = docs[0][0]
-    runs_dir = os.path.join(out, f"runs_{first['task']}")
-    first_packed = os.path.exists(runs_dir + ".tar.gz")
+    loose = os.path.join(out, f"runs_{first['task']}")
+    first_packed = os.path.exists(loose + ".tar.gz")
+    # a packed output's runs are read from a folder of this call's own: two reports of one committed folder at once
+    # (the docs' checks run beside each other) must not unpack into, and remove, the same folder
+    runs_dir = os.path.join(tempfile.mkdtemp(prefix="scaling-"), f"runs_{first['task']}") if first_packed else loose
+    try:
+        return joined_report(docs, first, out, runs_dir, first_packed, targets)
+    finally:
+        if first_packed:
+            shutil.rmtree(os.path.dirname(runs_dir), ignore_errors=True)
+
+
+def joined_report(docs: list, first: dict, out: str, runs_dir: str, first_packed: bool, targets: str | None) -> int:
     for folder, doc in docs:
         gather_runs(folder, doc, runs_dir)
     names = {r["name"] for r in first["runs"]}
@@ -521,7 +532,8 @@ def report(folders: list[str], task: str = "Ant", targets: str | None = None) ->
     print(write_report(first, runs_dir, out), flush=True)
     if len(docs) > 1 or not first_packed:  # the first output now holds every run: its report can be drawn again alone
         pack_runs(runs_dir, out, first["task"])
-    shutil.rmtree(runs_dir)
+    if not first_packed:  # its loose runs are in the archive now (a report that fails keeps them)
+        shutil.rmtree(runs_dir)
     return 0
 
 
