@@ -35,7 +35,8 @@ RLLIB = [f"docs/bench/rllib/h200_rllib_{r}.json" for r in (
     "vs_warpgym_1gpu", "8runners_1gpu", "vs_warpgym_2gpu_warpgym", "vs_warpgym_2gpu_rllib", "vs_warpgym_2gpu_rllib_humanoid",
     "vs_warpgym_4gpu_ant", "vs_warpgym_4gpu_humanoid")]
 LEGGED = [f"docs/bench/legged/side_by_side_{r}.json" for r in (
-    "go1_15min_2026-11-28", "g1_15min_2026-11-29", "go1_rough_9min_2026-11-29", "g1_rough_15min_2026-11-29")]
+    "go1_15min_2026-11-28", "g1_15min_2026-11-29", "go1_rough_9min_2026-11-29", "g1_rough_15min_2026-11-29",
+    "g1_rough_15min_seed1_2026-11-29")]
 ENVS_ANT = ["--report", "docs/bench/envs_per_gpu/h100_envs_per_gpu_ant.json", "--figure", "-"]
 ENVS_HUMANOID = ["--report", "docs/bench/envs_per_gpu/h100_envs_per_gpu_humanoid_seed0.json",
                  "docs/bench/envs_per_gpu/h100_envs_per_gpu_humanoid_seed1.json", "--figure", "-"]
@@ -107,6 +108,10 @@ BLOCKS = {
     "scaling-ant-v5": scaling("suite", "Ant-v5"),
     "scaling-g1-flat": scaling("legged", "G1VelocityFlat-v0"),
     "scaling-go1-rough": scaling("legged", "Go1VelocityRough-v0"),
+    "rough-settings-contacts": ("docs/history.md", "benchmarks.physics.rough_settings",
+                                ["--report", "docs/bench/legged/rough_settings_Go1VelocityRough-v0_2026-11-29.json"], first(2)),
+    "rough-settings-ground": ("docs/history.md", "benchmarks.physics.rough_settings",
+                              ["--report", "docs/bench/legged/rough_settings_heightfields_2026-11-29.json"], first(2)),
     # the table only: the compile times under it differ from run to run
     "ground-resampling": ("docs/history.md", "benchmarks.physics.ground_resampling", [], first(1)),
     "nodes": ("docs/history.md", "benchmarks.multi_gpu.nodes", ["--report", "docs/bench/multi_gpu/nodes/nodes-4.json"],

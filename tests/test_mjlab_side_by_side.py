@@ -79,6 +79,7 @@ def test_without_a_mark_the_15_minute_mark_is_the_target_and_a_run_that_ended_be
     ("side_by_side_g1_15min_2026-11-29.json", 2 + 1 + 2),  # the G1's on one GPU: one speed row, mjlab, seed 0
     ("side_by_side_go1_rough_9min_2026-11-29.json", 2 + 1 + 2),  # the Go1 on rough ground, mjlab's first 9 minutes
     ("side_by_side_g1_rough_15min_2026-11-29.json", 2 + 1 + 2),  # the G1 on rough ground, mjlab's 15 minutes
+    ("side_by_side_g1_rough_15min_seed1_2026-11-29.json", 2 + 1 + 2),  # again, both frameworks' seed 1, 2-GPU host
 ])
 def test_the_published_tables_are_what_the_report_prints_from_the_committed_summary(name, rows_expected):
     """The legged tables of docs/benchmarks.md (and, for the runs it no longer shows, of the log, docs/history.md),
@@ -120,6 +121,16 @@ def test_several_runs_make_one_table_each_row_dated_and_judged_at_its_own_runs_m
     with pytest.raises(SystemExit):
         sbs.main(["--report", str(tmp_path / "missing")])
     assert "neither a run folder nor a summary.json" in capsys.readouterr().err
+
+
+def test_mjlabs_row_names_the_seed_its_run_was_started_with(out):
+    # a run started before jobs.json kept the seed used mjlab's default
+    assert "| mjlab seed 42 |" in sbs.table(sbs.summarize(str(out)))
+    jobs = json.loads((out / "jobs.json").read_text())
+    (out / "jobs.json").write_text(json.dumps(jobs | {"mjlab_seed": 7}))
+    summary = sbs.summarize(str(out))
+    assert summary["mjlab_seed"] == 7
+    assert "| mjlab seed 7 |" in sbs.table(summary) and "seed 42" not in sbs.table(summary)
 
 
 def test_the_curves_are_thinned_to_one_point_per_interval_and_drawn(out, tmp_path):

@@ -71,3 +71,20 @@ def test_the_ground_variants_build_fewer_ground_geoms(variant, field, ground_geo
         assert sum(n.startswith("terrain_") for n in names) == ground_geoms
     finally:
         env.close()
+
+
+def test_the_report_prints_a_written_studys_table(rows, tmp_path, capsys):
+    import json
+
+    path = tmp_path / "study.json"
+    path.write_text(json.dumps({"device": "cpu", "date": "2026-11-29", "rows": list(rows.values())}))
+    assert rs.main(["--report", str(path)]) == 0
+    printed = capsys.readouterr().out
+    assert printed.startswith("cpu, 2026-11-29: 2 worlds, env-steps/s the median of 1 timings; in brackets")
+    assert printed.strip().endswith(rs.table(list(rows.values())))
+    # a study without the reference's second run has no floor to bracket
+    path.write_text(json.dumps({"device": "cpu", "date": "2026-11-29",
+                                "rows": [{k: v for k, v in r.items() if k != "run_to_run"} for r in rows.values()]}))
+    assert rs.main(["--report", str(path)]) == 0
+    assert "in brackets" not in capsys.readouterr().out
+

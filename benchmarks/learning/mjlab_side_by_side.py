@@ -49,6 +49,7 @@ WINDOW = 30.0  # its rows in the last WINDOW seconds before the mark make its ta
 SMOOTH = 3  # warpgym's rows a return is averaged over before it is compared
 GOAL_SPEED = 5.0  # the issue's goals: 5x mjlab's env-steps/s, its 15-minute quality in a quarter of the time
 GOAL_TIME = 0.25
+MJLAB_SEED = 42  # mjlab's rl_cfg default
 CURVE_EVERY = 5.0  # seconds between the points of a run's curve kept in summary.json
 
 
@@ -293,7 +294,9 @@ def speed_rows(out: str, task: str) -> list[dict]:
 def summarize(out: str, mark: float = MARK) -> dict:
     with open(os.path.join(out, "jobs.json")) as f:
         jobs = json.load(f)
-    summary = {"device": jobs["device"], "date": jobs["date"], "num_envs": jobs["num_envs"], "mark_s": mark, "tasks": {}}
+    # runs started before jobs.json kept mjlab's seed all used its default
+    summary = {"device": jobs["device"], "date": jobs["date"], "num_envs": jobs["num_envs"], "mark_s": mark,
+               "mjlab_seed": jobs.get("mjlab_seed", MJLAB_SEED), "tasks": {}}
     for task in sorted({j["task"] for j in jobs["jobs"]}):
         mj_job = next(j for j in jobs["jobs"] if j["task"] == task and j["framework"] == "mjlab")
         started = mj_job["started"]
@@ -356,7 +359,7 @@ def table(*summaries: dict) -> str:
         for task, e in summary["tasks"].items():
             m = e["mjlab"]
             a = m["at_mark"]
-            lines.append(f"| {task} | {summary['date']} | mjlab (seed 42) "
+            lines.append(f"| {task} | {summary['date']} | mjlab seed {summary.get('mjlab_seed', MJLAB_SEED)} "
                          f"| {fmt(m['samples_per_s_median'] and m['samples_per_s_median'] / 1e3)} k "
                          f"| {fmt(a['return'], '.2f')}{level(a)} "
                          f"| {fmt(a['error_vel_xy'], '.3f')} / {fmt(a['error_vel_yaw'], '.3f')} | {mark:.0f} (the mark) | |")
@@ -478,7 +481,7 @@ def main(argv=None) -> int:
     ap.add_argument("--mjlab-python", default=sys.executable, help="the interpreter that imports mjlab")
     ap.add_argument("--mjlab-path", default="", help="mjlab's packages, first on its PYTHONPATH")
     ap.add_argument("--mjlab-budget", type=float, default=MARK + 60.0)
-    ap.add_argument("--mjlab-seed", type=int, default=42, help="mjlab's rl_cfg seed (its default)")
+    ap.add_argument("--mjlab-seed", type=int, default=MJLAB_SEED, help="mjlab's rl_cfg seed (its default)")
     ap.add_argument("--ours-budget", type=float, default=300.0)
     ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
     ap.add_argument("--save-at", type=float, nargs="+", default=[120.0, 225.0, 300.0])

@@ -22,6 +22,7 @@ geometry: the stairs as heightfields (``TerrainGrid.boxes_as_heightfield``: 74 g
 
     python -m benchmarks.physics.rough_settings --tasks Go1VelocityRough-v0 G1VelocityRough-v0 --num-envs 4096 \\
         --out rough_settings.json
+    python -m benchmarks.physics.rough_settings --report rough_settings.json     # its table again
 """
 
 from __future__ import annotations
@@ -165,6 +166,20 @@ def table(rows: list[dict]) -> str:
     return "\n".join(lines)
 
 
+def report(path: str) -> str:
+    """A written study's table under the line that says where and how it ran."""
+    import json  # noqa: PLC0415
+
+    with open(path) as f:
+        doc = json.load(f)
+    rows = doc["rows"]
+    r = rows[0]
+    head = f"{doc['device']}, {doc['date']}: {r['num_envs']} worlds, env-steps/s the median of {len(r['env_steps_per_s'])} timings"
+    if any("run_to_run" in row for row in rows):  # studies before the floor was run have none
+        head += "; in brackets, mjlab's settings against a second run of themselves"
+    return head + "\n\n" + table(rows)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--tasks", nargs="+", default=["Go1VelocityRough-v0", "G1VelocityRough-v0"])
@@ -177,7 +192,11 @@ def main(argv=None) -> int:
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--check-steps", type=int, default=5, help="control steps of the agreement check")
     ap.add_argument("--out", help="JSON file to write")
+    ap.add_argument("--report", metavar="JSON", help="print the table of a study written before (its --out)")
     args = ap.parse_args(argv)
+    if args.report:
+        print(report(args.report))
+        return 0
     from warpgym.cli import write_json  # noqa: PLC0415
 
     rows = []
