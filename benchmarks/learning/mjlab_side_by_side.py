@@ -294,7 +294,7 @@ def speed_rows(out: str, task: str) -> list[dict]:
 def summarize(out: str, mark: float = MARK) -> dict:
     with open(os.path.join(out, "jobs.json")) as f:
         jobs = json.load(f)
-    # runs started before jobs.json kept mjlab's seed all used its default
+    # a jobs.json written before it kept mjlab's seed has none: those runs used mjlab's default
     summary = {"device": jobs["device"], "date": jobs["date"], "num_envs": jobs["num_envs"], "mark_s": mark,
                "mjlab_seed": jobs.get("mjlab_seed", MJLAB_SEED), "tasks": {}}
     for task in sorted({j["task"] for j in jobs["jobs"]}):

@@ -503,12 +503,10 @@ def report(folders: list[str], task: str = "Ant", targets: str | None = None) ->
     first_packed = os.path.exists(loose + ".tar.gz")
     # a packed output's runs are read from a folder of this call's own: two reports of one committed folder at once
     # (the docs' checks run beside each other) must not unpack into, and remove, the same folder
-    runs_dir = os.path.join(tempfile.mkdtemp(prefix="scaling-"), f"runs_{first['task']}") if first_packed else loose
-    try:
-        return joined_report(docs, first, out, runs_dir, first_packed, targets)
-    finally:
-        if first_packed:
-            shutil.rmtree(os.path.dirname(runs_dir), ignore_errors=True)
+    if not first_packed:
+        return joined_report(docs, first, out, loose, first_packed, targets)
+    with tempfile.TemporaryDirectory(prefix="scaling-") as tmp:
+        return joined_report(docs, first, out, os.path.join(tmp, f"runs_{first['task']}"), first_packed, targets)
 
 
 def joined_report(docs: list, first: dict, out: str, runs_dir: str, first_packed: bool, targets: str | None) -> int:

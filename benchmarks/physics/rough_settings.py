@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import json
 import statistics
 import time
 
@@ -168,8 +169,6 @@ def table(rows: list[dict]) -> str:
 
 def report(path: str) -> str:
     """A written study's table under the line that says where and how it ran."""
-    import json  # noqa: PLC0415
-
     with open(path) as f:
         doc = json.load(f)
     rows = doc["rows"]
