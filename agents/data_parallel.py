@@ -32,7 +32,7 @@ Every mode trains one policy, its gradients averaged over the processes at each 
 ``grow-kl`` is the default (DEFAULT) and the preset of warpgym's Ant and Humanoid: on 2 GPUs it brought the
 Humanoid to 6 m/s in at most 0.53x of one GPU's learning time, where grow-steps took 1.08x and split 1.50x; the same
 wider target on one GPU was no sooner. On 4 H200s it took the Ant to 9.5 m/s in 0.30x and the Humanoid to 6 m/s in
-0.33x. Gymnasium's tasks preset ``split-horizon`` (agents.config): there an iteration under grow-kl learnt only
+0.33x. Gymnasium's tasks preset ``split-horizon`` (warpgym.tasks.presets): there an iteration under grow-kl learnt only
 1.1-2.1x what one GPU's did, while split-horizon's 4 H200s took Ant-v5 to 5850 in 0.26x and Humanoid-v5 to 10000 in
 under 0.45x. docs/benchmarks.md, "Several GPUs: time to target", has what each mode gave on each task.
 With one process every mode is the same run.

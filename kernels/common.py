@@ -1,5 +1,5 @@
-"""What both families of tasks use alike: the outputs a step returns, the reset noise's random state,
-and the running counts of faults (agents.protocol)."""
+"""What every family of tasks uses alike: the outputs a step returns, the reset noise's random state,
+the running counts of faults (agents.protocol) and the layout of an observation group of terms."""
 
 import warp as wp
 
@@ -78,3 +78,15 @@ def count_faults(
         wp.atomic_add(totals, 1, wp.int64(1))
     if overflowed[env] > 0:
         wp.atomic_add(totals, 2, wp.int64(overflowed[env]))
+
+
+@wp.struct
+class ObsLayout:
+    """How each observation term of a group is written, by the term's place in its table."""
+
+    size: wp.array[wp.int32]  # (K,) entries
+    noise: wp.array[float]  # (K,) uniform noise in [-noise, noise] (0: none)
+    clip: wp.array[wp.int32]  # (K,) 1: clamp into [lo, hi]
+    lo: wp.array[float]  # (K,)
+    hi: wp.array[float]  # (K,)
+    scale: wp.array[float]  # (K,) after noise and clip, as mjlab orders them

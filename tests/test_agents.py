@@ -12,6 +12,8 @@ import pytest
 import torch
 
 from agents import Config, OnPolicyRunner, RunningMeanStd
+
+from warpgym.tasks.presets import PRESETS
 from agents.actor_critic import ActorCritic, gaussian_kl, gaussian_log_prob
 from agents.checkpoint import load, policy_from_checkpoint, save_atomic, with_normalizer
 from agents.logger import read_metrics
@@ -187,7 +189,7 @@ def test_config_validation_names_the_value_and_the_fix():
     with pytest.raises(ValueError, match="exceeds"):
         Config(minibatch_size=4096, horizon_len=16).check_batch(64)
     assert Config(minibatch_size=256, horizon_len=16).check_batch(64) == 4
-    assert Config.for_task("Humanoid").net_dims == (400, 200, 100)
+    assert Config.from_preset(PRESETS["Humanoid"]).net_dims == (400, 200, 100)
 
 
 def test_ppo_learns_a_point_mass_within_seconds():
@@ -293,7 +295,7 @@ def test_minibatch_size_is_read_under_its_earlier_name_too():
     """Configs and checkpoints saved before the rename wrote ``batch_size``; they load as they were."""
     assert Config.renamed({"batch_size": 8, "gamma": 0.9}) == {"minibatch_size": 8, "gamma": 0.9}
     assert Config.renamed({"batch_size": 8, "minibatch_size": 16}) == {"minibatch_size": 16}
-    assert Config.for_task("Ant").replace(batch_size=512).minibatch_size == 512
+    assert Config.from_preset(PRESETS["Ant"]).replace(batch_size=512).minibatch_size == 512
 
 
 def test_an_episode_that_ends_on_its_own_at_the_time_limit_is_not_bootstrapped():

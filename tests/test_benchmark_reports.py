@@ -230,7 +230,7 @@ def test_suite_learning_gives_a_candidate_presets_runs_a_row_of_their_own(tmp_pa
 
 
 def test_suite_learning_promotes_a_candidates_rows_once_the_preset_holds_its_settings(tmp_path, capsys, monkeypatch):
-    """``--promote OUT --into DIR``: refused while agents/config.py's preset lacks the candidate's settings, while a run
+    """``--promote OUT --into DIR``: refused while warpgym/tasks/presets.py's preset lacks the candidate's settings, while a run
     is not scored, and while DIR holds the rows they replace; then written as the preset's rows (``config`` empty, the
     settings kept as ``made_with``), which the table names as the task alone and --score and suite_versions still
     find in the run's own folder."""
@@ -261,7 +261,7 @@ def test_suite_learning_promotes_a_candidates_rows_once_the_preset_holds_its_set
         doc(src, seed, ["gamma=0.991"])
     doc(dest, 0, [])  # the row the candidate would replace
     argv = ["--promote", str(src), "--into", str(dest)]
-    with pytest.raises(SystemExit, match="which Swimmer-v5's preset in agents/config.py does not hold; change the "
+    with pytest.raises(SystemExit, match="which Swimmer-v5's preset in warpgym/tasks/presets.py does not hold; change the "
                                          "preset first"):
         sl.main(argv)
     presets = dict(agents_config.PRESETS)

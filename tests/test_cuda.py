@@ -80,9 +80,10 @@ def test_captured_rollout_matches_the_eager_one(task):
     step by step give: same seeds, same numbers. Newton's Ant and a suite task (MuJoCo Warp's step,
     Gymnasium's observation and reward)."""
     from agents import Config, OnPolicyRunner
+    from warpgym.tasks.presets import PRESETS
     from warpgym.envs import make_vec_env
 
-    cfg = Config.for_task(task, horizon_len=8, minibatch_size=256)
+    cfg = Config.from_preset(PRESETS[task], horizon_len=8, minibatch_size=256)
     names = ("raw_obs", "actions", "rewards", "dones", "truncated", "final_obs", "advantages", "returns")
     runs = []
     for graph in ("off", "step", "rollout"):
@@ -110,11 +111,12 @@ def test_background_evaluation_replayed_on_its_side_stream_matches_a_synchronous
     ``beside()`` between the main stream's work, while the main stream changes the policy and works; the result is
     the synchronous evaluation's of the weights at the start, read without a wait."""
     from agents import Config, OnPolicyRunner
+    from warpgym.tasks.presets import PRESETS
     from agents.background_eval import BackgroundEvaluation
     from agents.evaluate import evaluate
     from warpgym.envs import make_vec_env
 
-    cfg = Config.for_task("Hopper-v5", horizon_len=8, minibatch_size=256)
+    cfg = Config.from_preset(PRESETS["Hopper-v5"], horizon_len=8, minibatch_size=256)
     runner = OnPolicyRunner(make_vec_env("Hopper-v5", num_envs=32, device=DEV, seed=1), cfg, print_fn=lambda s: None)
     runner.collect()  # a normaliser with statistics
     policy, normalizer = runner.policy, runner.normalizer

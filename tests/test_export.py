@@ -20,11 +20,12 @@ def run(tmp_path_factory):
     """A run directory holding a checkpoint of the Go1's shape as the runner saves it: random weights and a
     normaliser whose statistics are far from zero mean and unit variance (so the export's normaliser matters)."""
     from agents import Config
+    from warpgym.tasks.presets import PRESETS
     from agents.actor_critic import ActorCritic
     from agents.normalizer import RunningMeanStd
 
     torch.manual_seed(0)
-    cfg = Config.for_task(TASK, env_args={"task": TASK})
+    cfg = Config.from_preset(PRESETS[TASK], env_args={"task": TASK})
     policy = ActorCritic(48, 12, cfg.net_dims, cfg.activation, num_critic_obs=72)
     norm = RunningMeanStd(48, cfg.obs_clip)
     norm.update(torch.randn(512, 48) * torch.linspace(0.1, 4.0, 48) + torch.linspace(-2.0, 2.0, 48))

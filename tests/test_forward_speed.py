@@ -130,8 +130,9 @@ def test_a_clip_spanning_a_reset_reports_the_conveyor_speed(conveyor):
 
 def test_training_rows_report_the_conveyor_speed(conveyor):
     from agents import Config, OnPolicyRunner
+    from warpgym.tasks.presets import PRESETS
 
-    cfg = Config.for_task("Ant", horizon_len=16, minibatch_size=16, seed=0)
+    cfg = Config.from_preset(PRESETS["Ant"], horizon_len=16, minibatch_size=16, seed=0)
     runner = OnPolicyRunner(conveyor, cfg, print_fn=lambda s: None)
     rows = runner.learn(max_iterations=4)
     ended = [r for r in rows if r["episodes"]]

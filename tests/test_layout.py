@@ -75,6 +75,21 @@ def test_only_the_registry_asks_which_family_a_task_belongs_to():
     assert not found, found
 
 
+def test_no_module_asks_which_family_a_task_is_by_name():
+    """A command reaches what differs by family through the task's registry entry (its callables and flags), never
+    by comparing the family's or the judge's name (``entry.family == "legged"``)."""
+    asks = re.compile(r"\.family\s*[!=]=|\.scored_in\s*[!=]=|\bfamily\s*[!=]=\s*[\"']|[\"'](robots|suite|legged)[\"']\s*[!=]=")
+    own = os.path.join("warpgym", "tasks", "registry.py")
+    found = []
+    for top in ("warpgym", "agents", "kernels", "benchmarks", "scripts"):
+        for folder, _, files in os.walk(os.path.join(ROOT, top)):
+            for name in files:
+                rel = os.path.relpath(os.path.join(folder, name), ROOT)
+                if name.endswith(".py") and rel != own:
+                    found += [f"{rel}:{i}" for i, line in enumerate(open(os.path.join(ROOT, rel)), 1) if asks.search(line)]
+    assert not found, found
+
+
 def test_every_task_of_the_registry_is_a_gymnasium_id_with_its_entry_points():
     import gymnasium as gym
 

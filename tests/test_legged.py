@@ -53,7 +53,8 @@ def test_widths_and_terms(go1):
     ({"lin_vel_x": (1.0, -1.0)}, "lin_vel_x=(1.0, -1.0) must be a (low, high) pair"),
     ({"push_interval": (-1.0, 3.0)}, "push_interval=(-1.0, 3.0) must be positive seconds"),
     ({"foot_sites": ("robot/FR", "robot/XX", "robot/RR", "robot/RL")}, "has no site 'robot/XX'; its sites are"),
-    ({"reward_weights": {"fly": 1.0}}, "reward_weights names no term ['fly']"),
+    ({"rewards": {"fly": 1.0}}, "rewards: no term 'fly'; its terms are"),
+    ({"rewards": {"pose": {"params": {"std_walking": 0.3}}}}, "std_walking=0.3"),
     ({"flying": True}, "has no argument(s) ['flying']"),
     ({"rel_standing_envs": 1.5}, "rel_standing_envs=1.5 is a share of the worlds"),
 ])

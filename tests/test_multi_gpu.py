@@ -65,16 +65,16 @@ def test_grow_kl_widens_the_kl_target_with_the_processes_and_the_rate_rule_follo
 
 
 def test_gymnasiums_tasks_preset_split_horizon_and_warpgyms_robots_grow_kl_as_the_benchmark_defaults_to():
-    from agents.config import PRESETS
+    from warpgym.tasks.presets import PRESETS
     from agents.data_parallel import DEFAULT
 
     suite = [t for t in PRESETS if t.endswith("-v5")]
-    assert len(suite) == 11 and {Config.for_task(t).multi_gpu for t in suite} == {"split-horizon"}
-    assert Config.for_task("Ant").multi_gpu == Config.for_task("Humanoid").multi_gpu == DEFAULT == "grow-kl"
+    assert len(suite) == 11 and {Config.from_preset(PRESETS[t]).multi_gpu for t in suite} == {"split-horizon"}
+    assert Config.from_preset(PRESETS["Ant"]).multi_gpu == Config.from_preset(PRESETS["Humanoid"]).multi_gpu == DEFAULT == "grow-kl"
     assert [scaling.preset_mode(t) for t in ("Ant", "Humanoid-v5")] == ["grow-kl", "split-horizon"]
     # each preset's horizon splits over 2, 4 and 8 GPUs, its mini-batches too
     for t in suite:
-        cfg = Config.for_task(t)
+        cfg = Config.from_preset(PRESETS[t])
         assert all(cfg.check_batch(4096, g) == cfg.check_batch(4096, 1) for g in (2, 4, 8)), t
 
 

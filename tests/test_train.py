@@ -153,8 +153,9 @@ def test_fidelity_replays_a_probe_in_four_settings_and_reports_it(tmp_path, caps
 def test_every_task_has_defaults_and_the_gpu_default_trains_as_it_was_measured():
     """The GPU default envs were picked by benchmarks/speed/envs_per_gpu.py, which trains with the preset's
     mini-batch: a default whose rollout does not split into that mini-batch would train differently."""
-    from agents.config import PRESETS, Config
-    from warpgym.tasks.registry import task_names
+    from agents.config import Config
+    from warpgym.tasks.presets import PRESETS
+    from warpgym.tasks.registry import task_entry, task_names
 
     assert set(PRESETS) == set(task_names())  # every task the registry has, PPO has a preset for
     for task in PRESETS:
@@ -163,7 +164,7 @@ def test_every_task_has_defaults_and_the_gpu_default_trains_as_it_was_measured()
             assert envs > 0 and iterations > 0, (task, kind)
         envs = run_setup.default_envs_and_iterations("cuda", task)[0]
         cfg = run_setup.build_config(train.parse_args(["--task", task]), task, envs, "cuda:0")
-        preset = Config.for_task(task)
+        preset = Config.from_preset(task_entry(task).preset)
         assert cfg.minibatch_size == preset.minibatch_size, (task, envs)
         assert (envs * cfg.horizon_len) % cfg.minibatch_size == 0
         assert cfg.env_args["num_envs"] == envs

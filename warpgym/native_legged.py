@@ -127,6 +127,58 @@ def tilt(quat) -> float:
     return math.acos(max(-1.0, min(1.0, 1 - 2 * (x * x + y * y))))
 
 
+class PolicyView:
+    """The policy's observation of a native MuJoCo state, written by the task's own table of terms: a one-world env
+    on the CPU (nominal: no noise, bias or randomisation) whose MuJoCo data are copied from ``MjData`` (float64 to
+    float32) and observed by the task's observation kernel, without a forward pass of its own. A user's own
+    observation term is read in native MuJoCo as in warpgym."""
+
+    FIELDS = ("qpos", "qvel", "xpos", "xquat", "cvel", "subtree_com", "site_xpos", "sensordata")
+
+    def __init__(self, task: LeggedTask):
+        from warpgym.envs.legged import LeggedVecEnv  # noqa: PLC0415  (the env above this layer, built on demand)
+
+        self.env = LeggedVecEnv(task, num_envs=1, device="cpu", seed=0, randomize=False, pushes=False,
+                                observation_noise=False)
+
+    def __call__(self, d, action: np.ndarray, command: np.ndarray, scan: np.ndarray | None = None) -> np.ndarray:
+        env = self.env
+        for name in self.FIELDS:
+            getattr(env.sim.d, name).assign(np.asarray(getattr(d, name), np.float32)[None])
+        st = env._state
+        st.action.assign(np.asarray(action, np.float32)[None])
+        st.command.assign(np.asarray(command, np.float32)[None])
+        if scan is not None:
+            st.scan.assign(np.asarray(scan, np.float32)[None])
+        env._launch_observe()
+        return env.obs.numpy()[0].copy()
+
+    def close(self) -> None:
+        self.env.close()
+
+
+def ends_episode(task: LeggedTask, idx, d, touched: bool) -> bool:
+    """Whether the task's terminations (those that are no time-out) end an episode at native MuJoCo's state:
+    the tilt past a termination's limit (``bad_orientation``), an illegal contact felt in the step (``touched``)."""
+    from kernels.legged.terminations import bad_orientation, illegal_contact  # noqa: PLC0415
+
+    r = idx.root_qpos
+    for name, term in task.terminations.items():
+        if term.time_out:
+            continue
+        if term.func is bad_orientation:
+            if tilt(d.qpos[r + 3:r + 7]) > dict(term.params)["limit_angle"]:
+                return True
+        elif term.func is illegal_contact:
+            if touched:
+                return True
+        else:
+            raise ValueError(f"{task.name}: terminations[{name!r}] ({term.func.key}) has no native MuJoCo "
+                             "counterpart in warpgym.native_legged.ends_episode: add one there, or drop the term "
+                             "for the replay")
+    return False
+
+
 def native_episodes(task: LeggedTask, act, episodes: int, level: int | None = None) -> Tracking:
     """``act``: a function from the policy's observation (numpy float32, (obs,)) to its action. ``level``: the rough
     ground's level the episodes start on (default: the curriculum's highest first level)."""
@@ -139,6 +191,7 @@ def native_episodes(task: LeggedTask, act, episodes: int, level: int | None = No
     m = compiled.mjm
     d = mujoco.MjData(m)
     idx = resolve(task, m)
+    observe = PolicyView(task)
     steps, dt = task.episode_length, task.decimation * task.timestep
     schedule = commands(steps, dt)
     r, j = idx.root_qpos, idx.joint_qpos
@@ -156,13 +209,8 @@ def native_episodes(task: LeggedTask, act, episodes: int, level: int | None = No
         ended = False
         for t in range(steps):
             cmd = schedule[t]
-            quat = d.xquat[idx.root_body]
-            gravity = base_velocity(quat, [0.0, 0.0, -1.0], [0.0, 0.0, 0.0])[0]
-            parts = [d.sensordata[idx.imu_lin_vel:idx.imu_lin_vel + 3], d.sensordata[idx.imu_ang_vel:idx.imu_ang_vel + 3],
-                     gravity, d.qpos[j] - idx.default_joint_pos, d.qvel[idx.joint_dof], action, cmd]
-            if task.height_scan is not None:  # mjlab scales the scan by 1 / its reach
-                parts.append(height_scan(mujoco, m, d, idx.root_body, task.height_scan) / task.height_scan.max_distance)
-            action = np.asarray(act(np.concatenate(parts).astype(np.float32)), np.float32)
+            scan = None if task.height_scan is None else height_scan(mujoco, m, d, idx.root_body, task.height_scan)
+            action = np.asarray(act(observe(d, action, cmd, scan)), np.float32)
             d.ctrl[idx.joint_actuator] = action * idx.action_scale + idx.default_joint_pos
             touched = False
             for _ in range(task.decimation):
@@ -173,10 +221,11 @@ def native_episodes(task: LeggedTask, act, episodes: int, level: int | None = No
                                      d.qvel[idx.root_dof + 3:idx.root_dof + 6])
             sums[e] += (math.hypot(cmd[0] - lin[0], cmd[1] - lin[1]), abs(cmd[2] - ang[2]))
             counted[e] += 1
-            if touched or (task.fall_over and tilt(d.qpos[r + 3:r + 7]) > task.fall_angle):
+            if ends_episode(task, idx, d, touched):
                 ended = True
                 break
         fell.append(ended)
+    observe.close()
     return tracking(sums, counted, fell, ground, [k for k, _ in starts])
 
 

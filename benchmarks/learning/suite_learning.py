@@ -18,7 +18,7 @@ than the others is marked ‡ and named in a note).
 ``--config NAME=VALUE`` (``warpgym train --config``) makes a candidate preset's row: its runs and JSON carry the
 setting in their names (``Swimmer-v5-gamma=0.999-seed0.json``), and the table gives them a row of their own
 ("Swimmer-v5 (gamma=0.999)") beside the preset's, so that a preset changes only after its row is measured. Once
-agents/config.py's preset holds the settings, ``--promote OUT [OUT2 ...] --into docs/bench/suite_learning`` writes
+warpgym/tasks/presets.py's preset holds the settings, ``--promote OUT [OUT2 ...] --into docs/bench/suite_learning`` writes
 the candidate's JSON there as the preset's rows (``Swimmer-v5-seed0.json``, the settings kept as ``made_with``),
 after the rows they replace have moved to ``superseded/``.
 
@@ -411,7 +411,7 @@ def report(folders: list[str], figure: str | None = None) -> int:
 
 def promote(srcs: list[str], dest: str) -> int:
     """A candidate preset's rows (``<task>-<settings>-seed<k>.json`` under ``srcs``, scored) as the preset's rows in
-    ``dest`` (``<task>-seed<k>.json``), once agents/config.py's preset holds the settings: ``config`` emptied, the
+    ``dest`` (``<task>-seed<k>.json``), once warpgym/tasks/presets.py's preset holds the settings: ``config`` emptied, the
     settings kept as ``made_with``. Refused, naming the fix, where the preset does not hold them yet, a run is
     not scored, two candidates of one task are there, or ``dest`` still has the rows they replace."""
     from warpgym.cli import write_json  # noqa: PLC0415
@@ -429,7 +429,7 @@ def promote(srcs: list[str], dest: str) -> int:
                              f"(--score {os.path.dirname(path) or '.'})")
         if not is_preset(task, list(config)):
             raise SystemExit(f"--promote: {path} was made with {' '.join(config)}, which {task}'s preset in "
-                             "agents/config.py does not hold; change the preset first")
+                             "warpgym/tasks/presets.py does not hold; change the preset first")
         if settings.setdefault(task, config) != config:
             raise SystemExit(f"--promote: {' '.join(srcs)} hold two candidates of {task} "
                              f"({' '.join(settings[task])}; {' '.join(config)}); promote one candidate's folders")
@@ -594,7 +594,7 @@ def main(argv=None) -> int:
     ap.add_argument("--score", metavar="OUT", help="score the kept policies of the runs under OUT not yet scored")
     ap.add_argument("--promote", nargs="+", metavar="OUT",
                     help="a candidate's scored rows under OUT... as its task's preset rows (--into), once "
-                         "agents/config.py's preset holds its settings")
+                         "warpgym/tasks/presets.py's preset holds its settings")
     ap.add_argument("--into", metavar="DIR", help="with --promote: the table's folder, e.g. docs/bench/suite_learning")
     ap.add_argument("--gpus", type=int, default=1,
                     help="seeds at once, one process per GPU with an equal share of the cores (default 1)")

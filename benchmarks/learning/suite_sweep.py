@@ -5,7 +5,7 @@ and its final policy is scored by ``warpgym eval`` in ``gymnasium.make``'s env: 
 the reset seeds 0, 1 and 2 by default, as the learning table scores (where episodes end by falls, 5 do not
 rank two settings). The table ranks the combinations by that return (mean over seeds), beside each seed's minutes
 to the task's published figure by its own evaluations (the learning table's measure) and the training's
-throughput; the best row is the candidate preset for agents/config.py.
+throughput; the best row is the candidate preset for warpgym/tasks/presets.py.
 
     python -m benchmarks.learning.suite_sweep --out OUT --task Hopper-v5 --seconds 120 \\
         --grid num_envs=4096,8192 --grid horizon_len=16,32 --grid gamma=0.99,0.995

@@ -73,10 +73,12 @@ def parse_targets(text: str) -> tuple[str, tuple[float, ...]]:
 
 
 def preset_mode(task: str) -> str:
-    """The --multi-gpu mode `warpgym train` gives the task when none is named: its preset's (agents.config)."""
+    """The --multi-gpu mode `warpgym train` gives the task when none is named: its preset's
+    (warpgym.tasks.presets)."""
     from agents.config import Config  # noqa: PLC0415
+    from warpgym.tasks.registry import task_entry  # noqa: PLC0415
 
-    return Config.for_task(task).multi_gpu
+    return Config.from_preset(task_entry(task).preset).multi_gpu
 
 
 def run_name(gpus: int, mode: str, seed: int, label: str = "", repeat: int = 1) -> str:
@@ -636,7 +638,7 @@ def main(argv=None) -> int:
         ap.error(f"--gpus {' '.join(map(str, args.gpus))}: each is a number of GPUs, 1 or more")
     if not (args.seconds > 0 and args.eval_gap > 0) or (args.num_envs is not None and args.num_envs < 1):
         ap.error(f"--seconds {args.seconds}, --eval-gap {args.eval_gap}, --num-envs {args.num_envs}: must be positive")
-    from agents.config import PRESETS  # noqa: PLC0415
+    from warpgym.tasks.presets import PRESETS  # noqa: PLC0415
 
     if args.task not in PRESETS:
         ap.error(f"--task {args.task}: choose one of {', '.join(PRESETS)}")

@@ -55,7 +55,7 @@ def measure(task: str, num_envs: int | None, eval_envs: int, iterations: int, re
 
     dev = torch.device(device)
     num_envs = num_envs or task_entry(task).defaults("cuda" if dev.type == "cuda" else "cpu")[0]  # warpgym train's
-    cfg = Config.for_task(task)
+    cfg = Config.from_preset(task_entry(task).preset)
     cfg = cfg.replace(minibatch_size=min(cfg.minibatch_size, num_envs * cfg.horizon_len))  # a smoke run's few envs
     env = make_vec_env(task, num_envs=num_envs, device=device, seed=0)
     runner = OnPolicyRunner(env, cfg, print_fn=lambda s: None)

@@ -114,7 +114,7 @@ BATCH: dict[str, int] = {}  # --batch-size: the mini-batch at 4096 envs, instead
 
 
 def batch_size(task: str, num_envs: int, scale: bool) -> int:
-    from agents.config import PRESETS  # noqa: PLC0415
+    from warpgym.tasks.presets import PRESETS  # noqa: PLC0415
 
     base = BATCH.get(task, PRESETS[task]["minibatch_size"])
     return max(1, base * num_envs // BASE_ENVS) if scale else base
@@ -366,7 +366,7 @@ def main(argv=None) -> int:
     if args.throughput_iterations < MIN_ITERATIONS:
         ap.error(f"--throughput-iterations {args.throughput_iterations}: a throughput run needs at least "
                  f"{MIN_ITERATIONS} iterations to time")
-    from agents.config import PRESETS  # noqa: PLC0415
+    from warpgym.tasks.presets import PRESETS  # noqa: PLC0415
 
     if args.batch_size is not None:
         if args.batch_size < 1:

@@ -56,7 +56,9 @@ def time_mode(task: str, num_envs: int, mode: str, args, device) -> dict:
     from agents.ppo import PPO  # noqa: PLC0415
 
     opts = MODES[mode]
-    cfg = Config.for_task(task, compile_update=opts["compile_update"],
+    from warpgym.tasks.registry import task_entry  # noqa: PLC0415
+
+    cfg = Config.from_preset(task_entry(task).preset, compile_update=opts["compile_update"],
                           **({"minibatch_size": args.batch_size} if args.batch_size else {}))
     minibatches = cfg.check_batch(num_envs)
     torch.manual_seed(0)

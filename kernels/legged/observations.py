@@ -1,7 +1,9 @@
-"""What the policy and the critic see (mjlab's velocity config, "actor" and "critic" groups), written once per
-world: the base's velocities from the IMU sensors, gravity in the base's frame, joint positions (the policy's
-through the randomised encoder bias) and velocities, the last action, the command; the critic also the feet's
-heights, air times, contacts and contact forces, and neither noise nor bias.
+"""The observation terms of the legged velocity tasks (mjlab's velocity config, "actor" and "critic" groups), one
+Warp function each, entry by entry: ``(env: LeggedEnv, w: int, i: int[, p: Params]) -> float``. A task's tables
+(``warpgym.tasks.legged.base``) list them in order with their sizes, noise and scales: the base's velocities from
+the IMU sensors, gravity in the base's frame, joint positions (the policy's through the randomised encoder bias)
+and velocities, the last action, the command; the critic also the feet's heights, air times, contacts and contact
+forces, and neither noise nor bias.
 
 On rough ground both also see the height scan (the base's height above the ground under a grid of rays, after
 the command; the policy's with noise), and the feet's heights are the foot height scan's (``kernels.legged.scan``:
@@ -11,10 +13,8 @@ height, so the scan is the site's height clamped into [0, range], which is what 
 
 import warp as wp
 
-from kernels.common import stream
-from kernels.legged.frames import projected_gravity, sensor3
-from kernels.legged.params import LeggedParams, LeggedRobot, LeggedState, MjLegged
-from kernels.legged.random import OBSERVATION
+from kernels.legged.frames import projected_gravity
+from kernels.legged.params import LeggedEnv, MjLegged
 
 wp.set_module_options({"enable_backward": False})
 
@@ -28,79 +28,108 @@ def foot_height(d: MjLegged, w: int, site: int):
 
 
 @wp.func
-def foot_height_now(p: LeggedParams, r: LeggedRobot, d: MjLegged, st: LeggedState, w: int, f: int):
-    """A foot's height: scanned on rough ground (the scan this observation made), the site's on the flat floor."""
-    if p.foot_scan != 0:
-        return st.foot_clear[w, f]
-    return foot_height(d, w, r.foot_site[f])
-
-
-@wp.func
 def signed_log(x: float):
     return wp.sign(x) * wp.log(1.0 + wp.abs(x))
 
 
+# Observation terms: (env, w, i[, p]) -> float, entry i of the term for world w; a task's table
+# (warpgym.tasks.terms.Observation) gives each its size, noise, clip and scale.
+
+
+@wp.struct
+class Encoder:
+    biased: int  # 1: read through the world's randomised encoder bias (the policy's), 0: the true position
+
+
 @wp.func
-def write_observation(p: LeggedParams, r: LeggedRobot, d: MjLegged, st: LeggedState, w: int, rng: wp.uint32,
-                      actor: wp.array2d[float], critic: wp.array2d[float]):
-    """The policy's (``actor``, with noise) and the critic's observation of world ``w`` from MuJoCo's data as it
-    is now. (Warp's random draws advance the state they are given in place: ``rng`` is drawn from here directly,
-    never through a helper function, which would draw from a copy.)"""
-    lin = sensor3(d, w, r.imu_lin_vel)
-    ang = sensor3(d, w, r.imu_ang_vel)
-    g = projected_gravity(d.xquat[w, r.root_body])
-    for i in range(3):
-        actor[w, i] = lin[i] + wp.randf(rng, -p.noise_lin_vel, p.noise_lin_vel)
-        actor[w, 3 + i] = ang[i] + wp.randf(rng, -p.noise_ang_vel, p.noise_ang_vel)
-        actor[w, 6 + i] = g[i] + wp.randf(rng, -p.noise_gravity, p.noise_gravity)
-        critic[w, i] = lin[i]
-        critic[w, 3 + i] = ang[i]
-        critic[w, 6 + i] = g[i]
-    nj = r.joint_qpos.shape[0]
-    k = int(9)
-    for j in range(nj):
-        rel = d.qpos[w, r.joint_qpos[j]] - r.default_joint_pos[j]
-        # mjlab adds the bias to the position before taking the default away
-        biased = d.qpos[w, r.joint_qpos[j]] + st.encoder_bias[w, j] - r.default_joint_pos[j]
-        actor[w, k + j] = biased + wp.randf(rng, -p.noise_joint_pos, p.noise_joint_pos)
-        critic[w, k + j] = rel
-        vel = d.qvel[w, r.joint_dof[j]]
-        actor[w, k + nj + j] = vel + wp.randf(rng, -p.noise_joint_vel, p.noise_joint_vel)
-        critic[w, k + nj + j] = vel
-    k = k + 2 * nj
-    na = st.action.shape[1]
-    for a in range(na):
-        actor[w, k + a] = st.action[w, a]
-        critic[w, k + a] = st.action[w, a]
-    k = k + na
-    for i in range(3):
-        actor[w, k + i] = st.command[w, i]
-        critic[w, k + i] = st.command[w, i]
-    k = k + 3
-    for i in range(p.num_scan):
-        h = st.scan[w, i]
-        actor[w, k + i] = (h + wp.randf(rng, -p.noise_scan, p.noise_scan)) * p.scan_scale
-        critic[w, k + i] = h * p.scan_scale
-    k = k + p.num_scan
-    nf = r.foot_site.shape[0]
-    for f in range(nf):
-        critic[w, k + f] = foot_height_now(p, r, d, st, w, f)
-        critic[w, k + nf + f] = st.air_time[w, f]
-        contact = float(0.0)
-        if d.sensordata[w, r.foot_found[f]] > 0.0:
-            contact = 1.0
-        critic[w, k + 2 * nf + f] = contact
-        force = sensor3(d, w, r.foot_force[f])
-        for i in range(3):
-            critic[w, k + 3 * nf + 3 * f + i] = signed_log(force[i])
+def base_lin_vel(env: LeggedEnv, w: int, i: int) -> float:
+    """the base's linear velocity in its own frame, from its IMU [m/s]"""
+    return env.d.sensordata[w, env.r.imu_lin_vel + i]
+
+
+@wp.func
+def base_ang_vel(env: LeggedEnv, w: int, i: int) -> float:
+    """the base's angular velocity in its own frame, from its IMU [rad/s]"""
+    return env.d.sensordata[w, env.r.imu_ang_vel + i]
+
+
+@wp.func
+def gravity(env: LeggedEnv, w: int, i: int) -> float:
+    """the unit gravity vector in the base's frame"""
+    return projected_gravity(env.d.xquat[w, env.r.root_body])[i]
+
+
+@wp.func
+def joint_pos(env: LeggedEnv, w: int, i: int, p: Encoder) -> float:
+    """each joint's position minus its default [rad]"""
+    q = env.d.qpos[w, env.r.joint_qpos[i]]
+    if p.biased != 0:  # mjlab adds the bias to the position before taking the default away
+        q = q + env.st.encoder_bias[w, i]
+    return q - env.r.default_joint_pos[i]
+
+
+@wp.func
+def joint_vel(env: LeggedEnv, w: int, i: int) -> float:
+    """each joint's velocity [rad/s]"""
+    return env.d.qvel[w, env.r.joint_dof[i]]
+
+
+@wp.func
+def last_action(env: LeggedEnv, w: int, i: int) -> float:
+    """the previous action, as the policy gave it"""
+    return env.st.action[w, i]
+
+
+@wp.func
+def velocity_command(env: LeggedEnv, w: int, i: int) -> float:
+    """the velocity command: forward, sideways [m/s], yaw rate [rad/s], in the base's frame"""
+    return env.st.command[w, i]
+
+
+@wp.func
+def height_scan(env: LeggedEnv, w: int, i: int) -> float:
+    """the base's height above each ray's hit (a miss reads the reach), the rays under the base and turned with
+    its heading [m]"""
+    return env.st.scan[w, i]
+
+
+@wp.func
+def foot_height_now(env: LeggedEnv, w: int, f: int):
+    """A foot's height: scanned on rough ground (the scan this observation made), the site's on the flat floor."""
+    if env.p.foot_scan != 0:
+        return env.st.foot_clear[w, f]
+    return foot_height(env.d, w, env.r.foot_site[f])
+
+
+@wp.func
+def feet_height(env: LeggedEnv, w: int, i: int) -> float:
+    """each foot's height above the ground [m]"""
+    return foot_height_now(env, w, i)
+
+
+@wp.func
+def feet_air_time(env: LeggedEnv, w: int, i: int) -> float:
+    """how long each foot has been off the ground [s]"""
+    return env.st.air_time[w, i]
+
+
+@wp.func
+def feet_contact(env: LeggedEnv, w: int, i: int) -> float:
+    """1 where a foot touches the ground, else 0"""
+    if env.d.sensordata[w, env.r.foot_found[i]] > 0.0:
+        return 1.0
+    return 0.0
+
+
+@wp.func
+def feet_contact_forces(env: LeggedEnv, w: int, i: int) -> float:
+    """each foot's net contact force (world frame), sign x log(1 + |f|), three entries a foot"""
+    return signed_log(env.d.sensordata[w, env.r.foot_force[i / 3] + i % 3])
 
 
 @wp.kernel
-def observe(p: LeggedParams, r: LeggedRobot, rng_state: wp.array[wp.int32], d: MjLegged, st: LeggedState,
-            actor: wp.array2d[float], critic: wp.array2d[float]):
-    """mjlab's sense and observation pass after the step's forward pass (and, on rough ground, the scans): the
-    feet's heights, kept for the next step's rewards, and both observations."""
+def keep_foot_heights(env: LeggedEnv):
+    """The feet's heights at this observation, which the next step's rewards read (mjlab's sense pass)."""
     w = wp.tid()
-    for f in range(r.foot_site.shape[0]):
-        st.foot_height[w, f] = foot_height_now(p, r, d, st, w, f)
-    write_observation(p, r, d, st, w, stream(rng_state, w, OBSERVATION), actor, critic)
+    for f in range(env.r.foot_site.shape[0]):
+        env.st.foot_height[w, f] = foot_height_now(env, w, f)

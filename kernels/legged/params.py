@@ -1,40 +1,16 @@
 """What the legged velocity tasks' kernels read and write: the task's numbers (``LeggedParams``, filled by
 ``warpgym.tasks.legged``), the robot's indices in MuJoCo's model (``LeggedRobot``), MuJoCo Warp's arrays
 (``MjLegged``), the per-world task state (``LeggedState``: command, timers, contact times, action history,
-randomised encoder bias) and the episode bookkeeping (``LeggedEpisodes``), and the reward terms, named once
-(``Term``: each is written at its column of ``LeggedEpisodes.terms``, and ``info["reward_<name>"]`` reads it).
+randomised encoder bias), the terrain curriculum (``TerrainLevels``) and the episode bookkeeping
+(``LeggedEpisodes``). ``LeggedEnv`` holds all but the last: it is what every term function reads (the contract a
+user's own reward, observation or termination is written against, ``warpgym.tasks.terms``).
 
 Shapes: N worlds, J actuated joints (hinges, in the model's order, which is the action's), F feet,
 K reward terms, S command stages (or height scan rays), H contact group sensors, Q = nq, V = nv, B bodies, T sites, D sensor data entries.
 """
 
-import enum
-
 import warp as wp
 
-
-class Term(enum.IntEnum):
-    """mjlab's reward terms of the velocity tasks, in its config's order."""
-
-    track_linear_velocity = 0
-    track_angular_velocity = 1
-    upright = 2
-    pose = 3
-    body_ang_vel = 4
-    angular_momentum = 5
-    dof_pos_limits = 6
-    action_rate_l2 = 7
-    air_time = 8
-    foot_clearance = 9
-    foot_swing_height = 10
-    foot_slip = 11
-    soft_landing = 12
-    self_collisions = 13
-    shank_collision = 14  # the rough Go1's: its calves on the ground
-    trunk_head_collision = 15  # ... its trunk or head on the ground
-
-
-NUM_TERMS = len(Term)
 
 # Contact groups (LeggedRobot.hit_group): each counts the physics steps of a control step in which any of its
 # contact sensors felt more than ``LeggedParams.collision_force`` (mjlab's force history over the decimation)
@@ -68,38 +44,8 @@ class LeggedParams:
     heading_stiffness: float
     forward_min: float
     max_command_steps: float  # resample_hi / dt: the tracking errors' divisor
-    # rewards: weights (0 skips a term) and each term's parameters
-    weights: wp.array[float]  # (K,)
-    lin_var: float  # std^2 of the tracking and upright kernels
-    ang_var: float
-    upright_var: float
-    walking_threshold: float  # command speed from which the posture's walking / running stds hold
-    running_threshold: float
-    air_min: float
-    air_max: float
-    air_command: float
-    clearance_height: float
-    clearance_command: float
-    swing_height: float
-    swing_command: float
-    slip_command: float
-    landing_command: float
     collision_force: float  # contact force [N] above which a contact group's physics step counts
-    upright_terrain: int  # 1: the upright term's "up" is the ground's normal under the base (the rough Go1's)
-    # termination
-    fall_over: int  # 1: a base tilted beyond limit_angle ends the episode (0: the rough Go1's, which may tilt)
-    limit_angle: float  # tilt of the base from upright that ends an episode [rad]
-    # ground scans: the height scan's noise and scale in the observations; 1 where the feet's heights are scanned
-    num_scan: int  # rays of the height scan (0: none)
-    noise_scan: float
-    scan_scale: float
-    foot_scan: int
-    # observation noise: uniform in [-x, x] on the policy's terms (0 with noise off)
-    noise_lin_vel: float
-    noise_ang_vel: float
-    noise_gravity: float
-    noise_joint_pos: float
-    noise_joint_vel: float
+    foot_scan: int  # 1: the feet's heights are scanned (rough ground), else the sites' heights above z = 0
     # events
     push_interval_lo: float  # seconds between pushes, uniform in [lo, hi]
     push_interval_hi: float
@@ -126,9 +72,6 @@ class LeggedRobot:
     default_joint_pos: wp.array[float]  # (J,)
     soft_lo: wp.array[float]  # (J,) soft joint limits
     soft_hi: wp.array[float]
-    std_standing: wp.array[float]  # (J,) the posture reward's stds by regime
-    std_walking: wp.array[float]
-    std_running: wp.array[float]
     joint_actuator: wp.array[wp.int32]  # (J,) the actuator (control) of each joint
     action_scale: wp.array[float]  # (J,)
     foot_site: wp.array[wp.int32]  # (F,)
@@ -190,3 +133,30 @@ class LeggedEpisodes:
     ended_length: wp.array[wp.int32]  # (N,)
     ended_errors: wp.array2d[float]  # (N, 2)
     terms: wp.array2d[float]  # (N, K) this step's weighted reward terms (their sum is the reward)
+
+
+@wp.struct
+class TerrainLevels:
+    """mjlab's terrain curriculum on a grid whose rows are levels and whose columns are kinds of ground (L rows, C
+    columns); on the flat floor one start at the origin and no bound."""
+
+    origins: wp.array2d[wp.vec3]  # (L, C) each patch's start (world frame)
+    level: wp.array[wp.int32]  # (N,) each world's row
+    kind: wp.array[wp.int32]  # (N,) each world's column, fixed
+    origin: wp.array[wp.vec3]  # (N,) each world's start: origins[level, kind]
+    patch_length: float  # a patch's size along x [m]: half of it walked moves a world up
+    episode_s: float  # the episode's length [s]
+    half_x: float  # the ground's half extent, border included, less the bound's margin [m]
+    half_y: float
+
+
+@wp.struct
+class LeggedEnv:
+    """Everything a term function of a legged task reads: ``env.p`` the task's numbers, ``env.r`` the robot's
+    indices, ``env.d`` MuJoCo Warp's data, ``env.st`` the task's per-world state, ``env.t`` the terrain levels."""
+
+    p: LeggedParams
+    r: LeggedRobot
+    d: MjLegged
+    st: LeggedState
+    t: TerrainLevels

@@ -12,22 +12,10 @@ Shapes: N worlds, L levels (rows), C kinds (columns).
 import warp as wp
 
 from kernels.common import StepOutputs, resets_world, stream
-from kernels.legged.params import LeggedRobot, LeggedState, MjLegged
+from kernels.legged.params import LeggedRobot, LeggedState, MjLegged, TerrainLevels
 from kernels.legged.random import TERRAIN
 
 wp.set_module_options({"enable_backward": False})
-
-
-@wp.struct
-class TerrainLevels:
-    origins: wp.array2d[wp.vec3]  # (L, C) each patch's start (world frame)
-    level: wp.array[wp.int32]  # (N,) each world's row
-    kind: wp.array[wp.int32]  # (N,) each world's column, fixed
-    origin: wp.array[wp.vec3]  # (N,) each world's start: origins[level, kind]
-    patch_length: float  # a patch's size along x [m]: half of it walked moves a world up
-    episode_s: float  # the episode's length [s]
-    half_x: float  # the ground's half extent, border included, less the bound's margin [m]
-    half_y: float
 
 
 @wp.kernel
@@ -57,10 +45,3 @@ def move_levels(t: TerrainLevels, r: LeggedRobot, d: MjLegged, st: LeggedState, 
             level = wp.randi(rng, 0, rows)
         t.level[w] = wp.max(level, 0)
     t.origin[w] = t.origins[t.level[w], t.kind[w]]
-
-
-@wp.func
-def out_of_bounds(t: TerrainLevels, r: LeggedRobot, d: MjLegged, w: int):
-    """The base beyond the ground's edge, less the margin (mjlab ends such an episode as a time-out)."""
-    pos = d.xpos[w, r.root_body]
-    return wp.abs(pos[0]) > t.half_x or wp.abs(pos[1]) > t.half_y

@@ -32,6 +32,17 @@ def write_json(path: str, obj) -> None:
     os.replace(path + ".tmp", path)
 
 
+def run_task(name: str, imports: list[str]):
+    """The registry entry of the task a run's files name, the modules of ``--import`` imported first (a user's
+    task of ``--task MODULE:NAME`` is registered by its module, which a run's files never import themselves); a
+    ValueError says what is missing."""
+    from warpgym.tasks.names import import_modules, recorded  # noqa: PLC0415
+    from warpgym.tasks.registry import task_entry  # noqa: PLC0415
+
+    import_modules(imports)
+    return task_entry(recorded(name))
+
+
 def process_start_time() -> float:
     """The wall-clock time (time.time()) at which this process started, from the kernel's record, so a
     run's clock counts the interpreter's start and every import, whichever entry point started it.

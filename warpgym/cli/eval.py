@@ -50,6 +50,9 @@ def holds(gymnasium_return: float, warpgym_return: float) -> float:
 def parser() -> CommandParser:
     ap = CommandParser(prog="warpgym eval", description=__doc__)
     ap.add_argument("checkpoint", help="a run directory (its checkpoint.pt) or a checkpoint file")
+    ap.add_argument("--import", dest="imports", action="append", default=[], metavar="MODULE",
+                    help="a module of your own that registers the run's task (a run of --task MODULE:NAME); a run's "
+                         "files never import code themselves")
     ap.add_argument("--episodes", type=positive_int(10), default=10, help="episodes per seed (default 10)")
     ap.add_argument("--seeds", type=non_negative_int(0), nargs="+", default=[0, 1, 2],
                     help="reset seeds (default 0 1 2)")
@@ -121,11 +124,13 @@ def gymnasium_side(task, act, episodes: int, seeds: list[int], unit: bool, versi
             "per_seed": per_seed, "terms": mean_terms(terms), "returns": returns, "lengths": lengths}
 
 
-def in_native_mujoco(args, episode_length: int) -> int:
+def in_native_mujoco(args, ckpt: dict, name: str, device: str, env_args: dict, entry) -> int:
     """A robot's policy, scored as ``warpgym sim2sim`` does: one episode of the trained length in native MuJoCo
     beside warpgym, at the training step and 4x finer; ``--episodes`` x the seeds' count robots, from the first
     seed. The flags that only Gymnasium's env has are refused by name."""
     from warpgym.cli import sim2sim  # noqa: PLC0415
+
+    episode_length = int(env_args.get("max_episode_steps") or entry.episode_length)
 
     gym_only = [flag for flag, given in (("--nudge", args.nudge), ("--normalizer-from", args.normalizer_from),
                                          ("--env-version 4", args.env_version == 4)) if given]
@@ -137,7 +142,7 @@ def in_native_mujoco(args, episode_length: int) -> int:
                          *(["--out", args.json] if args.json else [])])
 
 
-def legged_in_native_mujoco(args, ckpt: dict, name: str, device: str) -> int:
+def legged_in_native_mujoco(args, ckpt: dict, name: str, device: str, env_args: dict, entry) -> int:
     """A legged policy over warpgym.native_legged's schedule of commands, ``--episodes`` x the seeds' count
     episodes in native MuJoCo and in warpgym's env: their tracking errors side by side, and the falls."""
     import torch  # noqa: PLC0415
@@ -194,16 +199,11 @@ def legged_in_native_mujoco(args, ckpt: dict, name: str, device: str) -> int:
 
 def main(argv=None) -> int:
     args = parse_args(argv)
-    import numpy as np  # noqa: PLC0415
     import torch  # noqa: PLC0415
 
-    from agents.checkpoint import load_for_command, policy_from_checkpoint, with_normalizer  # noqa: PLC0415
-    from warpgym.cli import write_json  # noqa: PLC0415
-    from warpgym.envs import make_vec_env  # noqa: PLC0415
-    from warpgym.envs.conformance import v4_tasks, warpgym_policy_episodes  # noqa: PLC0415
+    from agents.checkpoint import load_for_command, with_normalizer  # noqa: PLC0415
+    from warpgym.cli import run_task  # noqa: PLC0415
     from warpgym.sim.device import resolve_device  # noqa: PLC0415
-    from warpgym.tasks.registry import task_entry  # noqa: PLC0415
-    from warpgym.tasks.suite import SUITE  # noqa: PLC0415
 
     device = resolve_device(args.device)
     path, ckpt = load_for_command(args.checkpoint, torch.device(device))
@@ -218,13 +218,27 @@ def main(argv=None) -> int:
     env_args = dict(ckpt["config"]["env_args"])
     name = env_args.get("task")
     try:
-        entry = task_entry(name)
+        entry = run_task(name, args.imports)
     except ValueError as e:
         parser().error(f"{path}: {e}")
-    if entry.family == "legged":
-        return legged_in_native_mujoco(args, ckpt, name, device)
-    if entry.scored_in == "native MuJoCo":
-        return in_native_mujoco(args, int(env_args.get("max_episode_steps") or entry.episode_length))
+    args.checkpoint_path = path
+    if args.normalizer_from:
+        args.normalizer_path, args.normalizer_iteration = other_path, other["iteration"]
+    return entry.evaluate(args, ckpt, name, device, env_args, entry)
+
+
+def in_gymnasium(args, ckpt: dict, name: str, device: str, env_args: dict, entry) -> int:
+    """A policy of Gymnasium's suite in ``gymnasium.make``'s env (and, from the same starts, in warpgym's)."""
+    import numpy as np  # noqa: PLC0415
+    import torch  # noqa: PLC0415
+
+    from agents.checkpoint import policy_from_checkpoint  # noqa: PLC0415
+    from warpgym.cli import write_json  # noqa: PLC0415
+    from warpgym.envs import make_vec_env  # noqa: PLC0415
+    from warpgym.envs.conformance import v4_tasks, warpgym_policy_episodes  # noqa: PLC0415
+    from warpgym.tasks.suite import SUITE  # noqa: PLC0415
+
+    path = args.checkpoint_path
     if args.env_version == 4 and SUITE[name].v4_observation is None:
         parser().error(f"--env-version 4: {name}'s v4 observation is not v5's plus entries after it (or v4 needs "
                        f"MuJoCo < 3), so a v5 policy cannot play it; v4 is scored for {v4_tasks()}")
@@ -271,7 +285,7 @@ def main(argv=None) -> int:
               "gymnasium_returns": gym["returns"], "gymnasium_lengths": gym["lengths"],
               "warpgym_returns": ours_r.tolist(), "warpgym_lengths": ours_n.tolist(), **extra}
     if args.normalizer_from:
-        result.update(normalizer_from=other_path, normalizer_iteration=other["iteration"])
+        result.update(normalizer_from=args.normalizer_path, normalizer_iteration=args.normalizer_iteration)
     if ckpt["config"].get("normalize_obs"):  # the statistics the policy was played with: where do they drift?
         stats = ckpt["normalizer"]
         result.update(normalizer_mean=stats["mean"].tolist(), normalizer_std=stats["var"].sqrt().tolist())

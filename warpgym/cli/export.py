@@ -25,38 +25,12 @@ from warpgym.cli.flags import CommandParser
 def parser() -> CommandParser:
     ap = CommandParser(prog="warpgym export", description=__doc__)
     ap.add_argument("checkpoint", help="a run directory (its checkpoint.pt) or a checkpoint file")
+    ap.add_argument("--import", dest="imports", action="append", default=[], metavar="MODULE",
+                    help="a module of your own that registers the run's task (a run of --task MODULE:NAME); a run's "
+                         "files never import code themselves")
     ap.add_argument("--out", default=None, help="folder for the files (default: export/ in the run directory)")
     ap.add_argument("--no-onnx", action="store_true", help="write policy.pt2 and policy.json only")
     return ap
-
-
-def legged_contract(name: str) -> dict:
-    """What a controller needs around a legged policy, from MuJoCo's compile of the task's scene."""
-    from warpgym.tasks.legged import get_legged_task  # noqa: PLC0415
-    from warpgym.tasks.legged.model import compile_task_scene, policy_terms, resolve  # noqa: PLC0415
-
-    task = get_legged_task(name)
-    compiled, _ = compile_task_scene(task)
-    m = compiled.mjm
-    idx = resolve(task, m)
-    act = idx.joint_actuator
-    rounded = lambda values: [round(float(v), 6) for v in values]  # noqa: E731
-    return {
-        "mirrors": task.mirrors,
-        "control_dt": task.decimation * task.timestep, "physics_dt": task.timestep,
-        "observation": [{"name": n, "size": size, "what": what} for n, size, what in policy_terms(task, idx, len(act))],
-        "action": {"joints": list(idx.joint_names), "default_joint_pos": rounded(idx.default_joint_pos),
-                   "scale": rounded(idx.action_scale), "target": "default_joint_pos + scale * action [rad]",
-                   # the scene's position actuators: force = stiffness * (target - q) - damping * qdot, clamped
-                   "stiffness": rounded(m.actuator_gainprm[act, 0]), "damping": rounded(-m.actuator_biasprm[act, 2]),
-                   "effort_limit": rounded(m.actuator_forcerange[act, 1])},
-        # the ranges training drew commands from: at first, then from each stage of the command curriculum on
-        "command": {"lin_vel_x": list(task.lin_vel_x), "lin_vel_y": list(task.lin_vel_y),
-                    "ang_vel_z": list(task.ang_vel_z),
-                    "stages": [{"from_env_step": step, **{k: list(r) for k, r in
-                                                          zip(("lin_vel_x", "lin_vel_y", "ang_vel_z"), ranges) if r}}
-                               for step, *ranges in task.command_stages]},
-    }
 
 
 def main(argv=None) -> int:
@@ -67,13 +41,12 @@ def main(argv=None) -> int:
     import warpgym  # noqa: PLC0415
     from agents.checkpoint import load_for_command  # noqa: PLC0415
     from agents.export import deployable, write_exported_program, write_onnx  # noqa: PLC0415
-    from warpgym.cli import write_json  # noqa: PLC0415
-    from warpgym.tasks.registry import task_entry  # noqa: PLC0415
+    from warpgym.cli import run_task, write_json  # noqa: PLC0415
 
     path, ckpt = load_for_command(args.checkpoint, torch.device("cpu"))
     name = ckpt["config"]["env_args"]["task"]
     try:
-        entry = task_entry(name)
+        entry = run_task(name, args.imports)
     except ValueError as e:
         ap.error(f"{path}: {e}")
     if not args.no_onnx:
@@ -100,7 +73,7 @@ def main(argv=None) -> int:
         "trained": {"checkpoint": os.path.abspath(path), "iteration": ckpt.get("iteration"),
                     "samples": ckpt.get("samples")},
         "warpgym": warpgym.__version__,
-        **(legged_contract(name) if entry.family == "legged" else
+        **(entry.export_contract(name) if entry.export_contract is not None else
            {"observation": f"the observation of warpgym/{name}'s env (docs/tasks.md)",
             "action": f"the action warpgym/{name}'s env takes (docs/tasks.md)"}),
     }

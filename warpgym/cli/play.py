@@ -26,6 +26,9 @@ from warpgym.cli.flags import CommandParser, check_checkpoint, check_device, non
 def parser() -> CommandParser:
     ap = CommandParser(prog="warpgym play", description=__doc__)
     ap.add_argument("checkpoint", help="a checkpoint file, or a run directory holding checkpoint.pt")
+    ap.add_argument("--import", dest="imports", action="append", default=[], metavar="MODULE",
+                    help="a module of your own that registers the run's task (a run of --task MODULE:NAME); a run's "
+                         "files never import code themselves")
     ap.add_argument("--num-envs", type=positive_int(64), default=None,
                     help="episodes at once (default 64 on a GPU, 4 on the CPU; 1 with --video/--gif, "
                          "more draws a grid of robots)")
@@ -88,14 +91,17 @@ def main(argv=None) -> int:
     from agents.evaluate import evaluate  # noqa: PLC0415
     from warpgym.sim.device import resolve_device  # noqa: PLC0415
     from warpgym.envs import entry_point  # noqa: PLC0415
-    from warpgym.tasks.registry import task_entry  # noqa: PLC0415
+    from warpgym.cli import run_task  # noqa: PLC0415
 
     device = resolve_device(args.device)
     path, ckpt = load_for_command(args.checkpoint, torch.device(device))
     cfg = ckpt["config"]
     env_args = cfg["env_args"]
     task = env_args["task"]
-    entry = task_entry(task)
+    try:
+        entry = run_task(task, args.imports)
+    except ValueError as e:
+        parser().error(f"{path}: {e}")
     filming = bool(args.video or args.gif)
     n = args.num_envs or (1 if filming else 64 if device.startswith("cuda") else 4)
     if args.world and entry.clip_all_worlds:
@@ -117,8 +123,8 @@ def main(argv=None) -> int:
     result = evaluate(env, policy, normalize, steps, recorder)
     result = {"task": task, "checkpoint": path, "iteration": ckpt["iteration"], "samples": ckpt["samples"],
               "episodes": n, **result}
-    # a legged task's robots follow a command in any direction: no forward speed to report
-    speed = "" if entry.family == "legged" else f", forward speed {result['eval/speed']:.2f} m/s"
+    # the tasks whose measure is a forward speed report it (a legged robot follows a command in any direction)
+    speed = f", forward speed {result['eval/speed']:.2f} m/s" if entry.reports_speed else ""
     print(f"{task}, policy of iteration {ckpt['iteration']}, {n} episodes of the deterministic policy: "
           f"return {result['eval/return']:.1f}{speed}, length {result['eval/length']:.0f} steps (means)")
     if filming:

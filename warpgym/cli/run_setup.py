@@ -12,7 +12,7 @@ from dataclasses import dataclass, fields
 from agents import Config
 from agents.data_parallel import envs_per_process
 from warpgym.cli import train_args
-from warpgym.cli.train_args import TASK_NAMES, with_flag_names
+from warpgym.cli.train_args import with_flag_names
 
 
 def default_envs_and_iterations(kind: str, task: str) -> tuple[int, int]:
@@ -20,6 +20,13 @@ def default_envs_and_iterations(kind: str, task: str) -> tuple[int, int]:
     from warpgym.tasks.registry import task_entry  # noqa: PLC0415
 
     return task_entry(task).defaults(kind)
+
+
+def known_task(name) -> bool:
+    """A task name the registry has, or a user's (``module:Name``), whose module the resume imports if asked."""
+    from warpgym.tasks.registry import REGISTRY  # noqa: PLC0415
+
+    return isinstance(name, str) and (name in REGISTRY or ":" in name)
 
 
 def check_resume(run_dir: str, saved: dict, task_flag: str | None) -> bool:
@@ -31,9 +38,9 @@ def check_resume(run_dir: str, saved: dict, task_flag: str | None) -> bool:
     import torch  # noqa: PLC0415
 
     task = saved.get("task")
-    if task_flag is not None and TASK_NAMES.get(task_flag.lower()) != task:
+    if task_flag is not None and task_flag != task:  # the flag is canonical already (train_args.check_values)
         raise SystemExit(f"--task {task_flag} --resume {run_dir}: that run trains {task}; drop --task, or start "
-                         f"a new {TASK_NAMES.get(task_flag.lower(), task_flag)} run with --run-dir")
+                         f"a new {task_flag} run with --run-dir")
     path = os.path.join(run_dir, "checkpoint.pt")
     if not os.path.exists(path):
         return False  # stopped before its first save: the run starts again from iteration 0
@@ -58,7 +65,9 @@ def build_config(args, task: str, num_envs: int, device: str, saved: dict | None
         saved = {"multi_gpu": "grow-batch", **Config.renamed(saved)}
         cfg = Config(**{k: (tuple(v) if k == "net_dims" else v) for k, v in saved.items() if k in known})
     else:
-        cfg = Config.for_task(task, seed=args.seed)
+        from warpgym.tasks.registry import task_entry  # noqa: PLC0415
+
+        cfg = Config.from_preset(task_entry(task).preset, seed=args.seed)
     changes = {k: v for k, v in {
         "horizon_len": args.horizon_len, "repeat_times": args.repeat_times, "learning_rate": args.learning_rate,
         "save_gap": args.save_gap, "eval_gap": args.eval_gap, "eval_envs": args.eval_envs,
@@ -145,9 +154,15 @@ def check_run_config(path: str, data: bytes) -> None:
         what = "empty" if not data.strip() else f"not valid JSON ({e})"
         raise SystemExit(f"--resume: {path} is damaged: {what}; {fix}") from None
     missing = [k for k in RUN_KEYS if not isinstance(saved, dict) or k not in saved]
-    if missing or not isinstance(saved.get("env_args"), dict) or saved["task"] not in TASK_NAMES.values():
+    if missing or not isinstance(saved.get("env_args"), dict) or not known_task(saved["task"]):
         raise SystemExit(f"--resume: {path} is not a warpgym run's config (missing or wrong: "
                          f"{missing or ['env_args' if not isinstance(saved.get('env_args'), dict) else 'task']}); {fix}")
+    from warpgym.tasks.names import recorded  # noqa: PLC0415
+
+    try:
+        recorded(saved["task"], flag=f"--task {saved['task']}")
+    except ValueError as e:
+        raise SystemExit(f"--resume: {e}") from None
 
 
 @dataclass
@@ -178,7 +193,7 @@ def plan_run(args, rank: int) -> RunPlan:
         args.physics = recorded(saved["env_args"].get("physics"))
         return RunPlan(saved["task"], args.resume, device, saved["num_envs"], saved,
                        same_on_every_worker(found, device) == "1")
-    task = TASK_NAMES[(args.task or "Ant").lower()]
+    task = args.task or "Ant"  # canonical (train_args.check_values)
     device = resolve_device(args.device)
     num_envs = args.num_envs or default_envs_and_iterations(device_kind(device), task)[0]
     run_dir = args.run_dir or os.path.join("runs", f"{task}-{time.strftime('%Y%m%d-%H%M%S')}")

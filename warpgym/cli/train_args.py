@@ -7,7 +7,7 @@ import os
 from agents.data_parallel import MODES as MULTI_GPU_MODES
 from warpgym.cli.flags import CommandParser, check_device, non_negative_float, non_negative_int, positive_float, \
     positive_int
-from warpgym.tasks.registry import task_entry, task_names
+from warpgym.tasks.registry import canonical, task_entry, task_names
 
 TASK_NAMES = {t.lower(): t for t in task_names()}
 
@@ -154,16 +154,16 @@ def task_config(task: str, texts: list[str]) -> dict:
     from agents.config import Config  # noqa: PLC0415
 
     config = parse_config(texts)
-    Config.for_task(TASK_NAMES[task.lower()]).replace(**config)
+    Config.from_preset(task_entry(task).preset).replace(**config)
     return config
 
 
 def is_preset(task: str, texts: list[str]) -> bool:
-    """Whether the settings ``texts`` leave ``task``'s preset as agents/config.py holds it now (a candidate's
+    """Whether the settings ``texts`` leave ``task``'s preset as warpgym/tasks/presets.py holds it now (a candidate's
     settings once the preset took them)."""
     from agents.config import Config  # noqa: PLC0415
 
-    preset = Config.for_task(TASK_NAMES[task.lower()])
+    preset = Config.from_preset(task_entry(task).preset)
     return preset.replace(**task_config(task, texts)) == preset
 
 
@@ -179,8 +179,11 @@ def flag(name: str) -> str:
 def check_values(ap, args) -> None:
     """What the flags' types cannot check alone fails here, before anything is built, naming the flag and a
     value that works: the task, the device, the target, --config against the task's preset, a resume's flags."""
-    if args.task is not None and args.task.lower() not in TASK_NAMES:
-        ap.error(f"--task {args.task!r}: choose one of {list(TASK_NAMES.values())}")
+    if args.task is not None:
+        try:
+            args.task = canonical(args.task)
+        except ValueError as e:  # an unknown name, or a user's module that does not import
+            ap.error(f"--task {args.task!r}: {e}; or a task of your own module, --task my_module:MyTask-v0")
     if args.target is not None:
         from agents.config import Config  # noqa: PLC0415
 

@@ -38,18 +38,18 @@ HORIZON = {"rsl_rl": {"Ant": 32, "Humanoid": 32}, "skrl": {"Ant": 16, "Humanoid"
 WIDE = {"Humanoid", "Humanoid-v5", "HumanoidStandup-v5"}
 
 
-LEGGED_HORIZON = 24  # mjlab's num_steps_per_env for its velocity tasks (rsl_rl)
-
-
-def is_legged(task: str) -> bool:
+def asymmetric(task: str) -> bool:
+    """The task's critic has an observation group of its own (the legged tasks'): mjlab's rl_cfg trains them."""
     from warpgym.tasks.registry import task_entry  # noqa: PLC0415
 
-    return task_entry(task).family == "legged"
+    return task_entry(task).asymmetric
 
 
 def horizon_of(learner: str, task: str) -> int:
-    if is_legged(task):
-        return LEGGED_HORIZON
+    from warpgym.tasks.registry import task_entry  # noqa: PLC0415
+
+    if asymmetric(task):  # mjlab's num_steps_per_env, its preset's
+        return task_entry(task).preset["horizon_len"]
     return HORIZON[learner].get(task, HORIZON[learner]["Humanoid"])
 
 
@@ -95,7 +95,7 @@ def parse_args(argv=None):
     if args.task.lower() not in names:
         ap.error(f"--task {args.task!r}: choose one of {list(names.values())}")
     args.task = names[args.task.lower()]
-    if is_legged(args.task) and args.learner != "rsl_rl":
+    if asymmetric(args.task) and args.learner != "rsl_rl":
         ap.error(f"--task {args.task}: of the adapters' learners only rsl_rl trains the legged tasks (its observation "
                  f"groups give the critic its own observation): `warpgym train-with rsl_rl --task {args.task}`, or "
                  f"`warpgym train --task {args.task}`")
@@ -121,7 +121,7 @@ def rsl_rl_cfg(task: str, horizon: int) -> dict:
     """Isaac Lab's rsl_rl settings for the Ant and the Humanoid (a smaller step for the humanoids), or, for a legged
     task, mjlab 1.6's rl_cfg of its velocity tasks (the Go1's and the G1's are the same: a larger network, an entropy
     bonus, the critic on the task's own critic observation group)."""
-    legged = is_legged(task)
+    legged = asymmetric(task)
     net = {"class_name": "MLPModel", "hidden_dims": [512, 256, 128] if legged else [400, 200, 100],
            "activation": "elu", "obs_normalization": True}
     distribution = {"class_name": "GaussianDistribution", "init_std": 1.0, **({"std_type": "scalar"} if legged else {})}

@@ -69,7 +69,7 @@ class GraphVecEnv(VectorEnv):
         """Make the torch views every step hands out (the task's ``info`` entries, then the final
         observations and the fault entries every env reports), compile every kernel a step launches side
         by side rather than one by one inside the first step (warpgym.compile.preload; a warm cache
-        makes this a quick check), and reset every world."""
+        makes this a quick check), capture the step and reset every world."""
         t, out = self.sim.to_torch, self._out
         self._actions_in_t = t(self._actions_in)
         self.obs, self.reward = t(out.obs), t(out.reward)
@@ -80,8 +80,10 @@ class GraphVecEnv(VectorEnv):
                      "solver_overflows": t(self.sim.solver_overflows)}
         totals = t(self._fault_totals)
         self._fault_views = {name: totals[i] for i, name in enumerate(self.FAULTS)}
-        self._graph = None
-        self.sim.compile_ahead(self._launch_step)
+        # captured before the first reset: a capture's host-side effects (the memsets and copies inside MuJoCo
+        # Warp's step, which run while its launches are only recorded) then fall on worlds the reset writes whole,
+        # never on a state that a step, write_state or a forward pass left for the next step to start from
+        self._graph = self.sim.capture(self._launch_step)
         self._reset_all()
 
     def _launch_step(self) -> None:

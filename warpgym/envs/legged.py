@@ -20,20 +20,19 @@ from gymnasium.vector.utils import batch_space
 
 from kernels.legged.commands import update_commands
 from kernels.legged.control import apply_legged_actions, track_feet
-from kernels.legged.observations import observe
-from kernels.legged.params import NUM_GROUPS, NUM_TERMS, LeggedEpisodes, LeggedState, MjLegged
+from kernels.legged.params import NUM_GROUPS, LeggedEnv, LeggedEpisodes, LeggedState, MjLegged, TerrainLevels
 from kernels.legged.resets import randomize_worlds, reset_legged_worlds
 from kernels.legged.scan import fit_ground_normal
-from kernels.legged.step import count_step, legged_step
-from kernels.legged.terrain_levels import TerrainLevels, move_levels
+from kernels.legged.step import count_step, step_kernels
+from kernels.legged.terrain_levels import move_levels
 from warpgym.envs.graph_env import GraphVecEnv
 from warpgym.sim.mjw_sim import MjwSim
 from warpgym.sim.rays import RayCaster, Scan, ScanFrames
 from warpgym.tasks.legged import LeggedTask, get_legged_task
-from warpgym.tasks.legged.base import TERM_NAMES
 from warpgym.tasks.legged.levels import bounds, start_levels
-from warpgym.tasks.legged.model import compile_task_scene, kernel_structs, policy_terms, resolve
+from warpgym.tasks.legged.model import compile_task_scene, dims, kernel_structs, resolve
 from warpgym.tasks.legged.scan import normal_picks
+from warpgym.tasks.terms import compile_observations, compile_rewards, compile_terminations, layout
 
 # the model fields randomised per world, and those MuJoCo Warp's set_const derives from them (mjlab's list)
 RANDOMISED_FIELDS = ("geom_friction", "body_ipos")
@@ -83,8 +82,12 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
         self.num_actions = a = sim.nu
         joints, feet = len(idx.joint_names), len(idx.foot_site)
         scan = 0 if task.height_scan is None else len(task.height_scan.offsets)
-        self.num_obs = o = sum(size for _, size, _ in policy_terms(task, idx, a))
-        self.num_critic_obs = c = o + 6 * feet
+        self.dims = size = dims(task, idx, a)
+        # each group's entries, term by term: (name, offset, size, what)
+        self.layouts = {"policy": layout(task.policy_obs, size, f"{task.name}: policy_obs"),
+                        "critic": layout(task.critic_obs, size, f"{task.name}: critic_obs")}
+        self.num_obs = o = sum(n for *_, n, _ in self.layouts["policy"])
+        self.num_critic_obs = c = sum(n for *_, n, _ in self.layouts["critic"])
         self.max_episode_steps = task.episode_length
         self.metadata = {**self.metadata, "render_fps": int(round(1.0 / (task.decimation * task.timestep)))}
         self.single_observation_space = spaces.Box(-np.inf, np.inf, (o,), np.float32)
@@ -115,11 +118,12 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
         self._episodes = ep = LeggedEpisodes()
         ep.length, ep.total_return, ep.errors = buf(n, wp.int32), buf(n), buf((n, 2))
         ep.ended_return, ep.ended_length, ep.ended_errors = buf(n), buf(n, wp.int32), buf((n, 2))
-        ep.terms = buf((n, NUM_TERMS))
+        ep.terms = buf((n, len(task.rewards)))
         self._critic, self._final_critic = buf((n, c)), buf((n, c))
         self._stagger = 0
 
         out = self._alloc_common(n, o, a, seed)
+        self._tables(dev)
         self._randomize(randomization)
         sim.after_substep = lambda: wp.launch(track_feet, dim=n, inputs=[self.params, self.robot, self._mj,
                                                                           self._state], device=dev)
@@ -134,11 +138,36 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
         if self.terrain is not None:  # the level each ended episode's world moved to: training logs its mean
             episode["terrain_level"] = t(self._levels.level)
         so_far = {"r": t(ep.total_return), "l": t(ep.length)}
-        self._expose({**{f"reward_{name}": terms[:, k] for k, name in enumerate(TERM_NAMES)},
+        self._expose({**{f"reward_{name}": terms[:, k] for k, name in enumerate(task.rewards)},
                       "episode": episode, "_episode": done, "episode_so_far": so_far,
                       "critic_obs": t(self._critic), "final_critic_obs": t(self._final_critic),
                       "command": t(st.command),
                       **({"terrain_level": t(self._levels.level)} if self.terrain is not None else {})})
+
+    # ------------------------------------------------------------------ the task's tables of terms
+    def _tables(self, dev: str) -> None:
+        """The task's tables as its kernels take them (``warpgym.tasks.terms``), the state every term reads
+        (``LeggedEnv``), and the step's and observation's kernels made from the tables."""
+        task, joints = self.task, self.index.joint_names
+        self._env = env = LeggedEnv()
+        env.p, env.r, env.d, env.st, env.t = self.params, self.robot, self._mj, self._state, self._levels
+        self._rewards = compile_rewards(task.rewards, LeggedEnv, joints, dev, f"{task.name}: rewards")
+        self._terminations = compile_terminations(task.terminations, LeggedEnv, joints, dev,
+                                                  f"{task.name}: terminations")
+        self._policy = compile_observations(task.policy_obs, "policy", LeggedEnv, self.dims, joints, dev,
+                                            task.observation_noise, f"{task.name}: policy_obs")
+        self._critic_obs = compile_observations(task.critic_obs, "critic", LeggedEnv, self.dims, joints, dev,
+                                                task.observation_noise, f"{task.name}: critic_obs")
+        tables = self._rewards, self._terminations, self._policy, self._critic_obs
+        self._step_kernel, self._observe_kernel = step_kernels(*[x for t in tables for x in (t.func, t.params_type)])
+
+    def _observe_inputs(self) -> list:
+        return [self._policy.params, self._policy.arrays, self._critic_obs.params, self._critic_obs.arrays]
+
+    def _launch_observe(self) -> None:
+        wp.launch(self._observe_kernel, dim=self.num_envs,
+                  inputs=[self._env, self._rng_state, *self._observe_inputs(), self._out.obs, self._critic],
+                  device=self.sim.device)
 
     # ------------------------------------------------------------------ rough ground
     def curriculum(self) -> dict[str, torch.Tensor]:
@@ -182,6 +211,7 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
             self._height_scan = Scan(ScanFrames("body", root, root), p.array(), p.direction, p.alignment,
                                      p.max_distance, num_envs=self.num_envs, device=sim.device)
             self._normal_picks = wp.array(normal_picks(self._height_scan.num_rays), dtype=wp.int32, device=sim.device)
+
         if task.foot_scan is not None:
             p = task.foot_scan
             self._foot_scan = Scan(ScanFrames("site", idx.foot_site, idx.foot_body), p.array(), p.direction,
@@ -196,8 +226,8 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
         self._caster.sense(*scans)
         if self._height_scan is not None:
             self._height_scan.heights(st.scan)
-            if self.task.upright_on_terrain:
-                wp.launch(fit_ground_normal, dim=n, inputs=[self._height_scan.s, self._normal_picks],
+            # the ground's normal under the base, for terms that measure tilt against it (the rough Go1's upright)
+            wp.launch(fit_ground_normal, dim=n, inputs=[self._height_scan.s, self._normal_picks],
                           outputs=[st.terrain_normal], device=dev)
         if self._foot_scan is not None:
             self._foot_scan.clearance(st.foot_clear)
@@ -221,10 +251,13 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
         wp.launch(count_step, dim=1, inputs=[self._state], device=dev)
         wp.launch(apply_legged_actions, dim=n, inputs=[self._actions_in, self.robot, self._state],
                   outputs=[sim.d.ctrl, self._nan_count], device=dev)
-        sim.simulate()
-        wp.launch(legged_step, dim=n, inputs=[self.params, self.robot, self._rng_state, self._mj, self._state,
-                                              self._episodes, self._levels, self._out, self._critic,
-                                              self._final_critic], device=dev)
+        # the step's last forward pass (after its resets, or write_state's) is the first physics step's positions
+        # and velocities: only the controls changed since
+        sim.simulate(after_forward=True)
+        wp.launch(self._step_kernel, dim=n,
+                  inputs=[self._env, self._rng_state, self._rewards.params, self._rewards.arrays,
+                          self._terminations.params, *self._observe_inputs(), self._episodes, self._out,
+                          self._final_critic], device=dev)
         self._finish_step()
 
     def _launch_reset(self, force_all: int) -> None:
@@ -239,8 +272,7 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
         self._sense()
         wp.launch(update_commands, dim=n, inputs=[self.params, self.robot, force_all, self._rng_state, self._out.done,
                                                   self._mj, self._state, self._episodes], device=dev)
-        wp.launch(observe, dim=n, inputs=[self.params, self.robot, self._rng_state, self._mj, self._state,
-                                          self._out.obs, self._critic], device=dev)
+        self._launch_observe()
 
     # ------------------------------------------------------------------ the task's state (Tensor API)
     STATE_KEYS = ("qpos", "qvel", "warm_start", "action", "prev_action", "command", "heading_target", "command_kind",
@@ -293,12 +325,13 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
                 raise ValueError(f"write_state: {key} has shape {tuple(value.shape)}, this env's is {tuple(view.shape)}")
             view.copy_(value.to(view.dtype))
         cuda = self.sim.device != "cpu"
-        if "body_ipos" in state:
-            if cuda:  # the writes above are torch's, on its stream; set_const runs on Warp's
-                torch.cuda.synchronize(self.device)
-            self.sim.set_const()
-        if cuda:  # not a hot path: the state is whole before anything reads it, on either stream
+        if cuda:  # the writes above are torch's, on its stream; set_const and forward run on Warp's
             torch.cuda.synchronize(self.device)
+        if "body_ipos" in state:
+            self.sim.set_const()
+        # the frames, contacts and sensors of the state written: the next step's first physics step starts from them
+        self.sim.forward()
+        if cuda:  # not a hot path: the state is whole before anything reads it, on either stream
             wp.synchronize_device(self.sim.device)
 
     def observe(self):
@@ -307,9 +340,7 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
         def run():
             self.sim.forward()
             self._sense()
-            wp.launch(observe, dim=self.num_envs, inputs=[self.params, self.robot, self._rng_state, self._mj,
-                                                          self._state, self._out.obs, self._critic],
-                      device=self.sim.device)
+            self._launch_observe()
 
         self.sim.launch(None, run)
         return self.obs, {"critic_obs": self.info["critic_obs"]}

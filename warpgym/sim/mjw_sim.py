@@ -90,12 +90,21 @@ class MjwSim(CapturedLaunches):
         self.compile_log = [("model", {"seconds": time.perf_counter() - start})]
 
     # ------------------------------------------------------------------ stepping
-    def simulate(self) -> None:
-        """One control step as plain launches: ``frame_skip`` physics steps (what the graph holds)."""
+    def simulate(self, after_forward: bool = False) -> None:
+        """One control step as plain launches: ``frame_skip`` physics steps (what the graph holds).
+
+        ``after_forward``: the data hold a forward pass of the very state the step starts from (``forward`` ran
+        since qpos and qvel last changed; only the controls are new), so the first physics step starts from its
+        actuation stage (MuJoCo Warp's ``step2``, MuJoCo's ``mj_step2``): the positions' and velocities' stages,
+        collisions and constraints included, are not computed twice. Nothing in them reads the controls, so the
+        step is the same."""
         mjw, m, d = self._mjw, self.m, self.d
         with wp.ScopedDevice(self.device), mujoco_contact_frames():
             for i in range(self.frame_skip):
-                mjw.step(m, d)
+                if i == 0 and after_forward:
+                    mjw.step2(m, d)
+                else:
+                    mjw.step(m, d)
                 wp.launch(track_solver_load, dim=self.num_envs,
                           inputs=[d.nefc, d.nacon, self._drop_bits, int(i == 0)],
                           outputs=[d.overflow, self._peak_nefc, self._peak_nacon, self._overflowed])
@@ -106,9 +115,12 @@ class MjwSim(CapturedLaunches):
 
     def forward(self) -> None:
         """MuJoCo's forward pass of every world's current state (``mj_forward``): body frames, velocities,
-        contacts, constraint forces and sensors."""
+        contacts, constraint forces and sensors; and the factor of the inertia matrix, which MuJoCo Warp's forward
+        pass solves with but does not keep (its fused factor-and-solve) and a step that starts from this pass
+        (``simulate(after_forward=True)``) solves with again."""
         with wp.ScopedDevice(self.device), mujoco_contact_frames():
             self._mjw.forward(self.m, self.d)
+            self._mjw.factor_m(self.m, self.d)
 
     def per_world(self, *fields: str) -> None:
         """Give each world its own copy of these model fields (MuJoCo Warp reads a model field's row
@@ -212,6 +224,9 @@ class MjwSim(CapturedLaunches):
             self.dof_pos.copy_(qpos), self.dof_vel.copy_(qvel), warm.zero_()
         else:
             self.dof_pos[ids], self.dof_vel[ids], warm[ids] = qpos, qvel, 0.0
+        if self.torch_device.type == "cuda":  # the writes are torch's; the forward pass runs on Warp's stream
+            torch.cuda.synchronize(self.torch_device)
+        self.forward()  # frames, contacts and sensors of the state written (a step may start from them)
 
     def __repr__(self) -> str:
         return (f"MjwSim({self.compiled.path.rsplit('/', 1)[-1]!r}, num_envs={self.num_envs}, device={self.device!r}, "

@@ -15,10 +15,16 @@ this layer imports nothing above it.
 
 from __future__ import annotations
 
+import importlib
 from dataclasses import dataclass
+from typing import Callable
 
 from warpgym.tasks import TASKS as ROBOTS
-from warpgym.tasks.legged import LEGGED
+from warpgym.tasks.legged import LEGGED, LeggedTask
+from warpgym.tasks.legged.contract import deployment_contract
+from warpgym.tasks.names import imported
+from warpgym.tasks.presets import LEGGED as LEGGED_PRESET
+from warpgym.tasks.presets import PRESETS
 from warpgym.tasks.suite import SUITE
 
 
@@ -45,11 +51,28 @@ class TaskEntry:
     # `warpgym train`'s default envs and iterations on a GPU and on the CPU (docs/benchmarks.md, "Envs per GPU")
     default_envs: tuple[int, int]
     default_iterations: tuple[int, int]
+    preset: dict = None  # PPO's starting point (agents.Config fields, warpgym.tasks.presets)
+    # the commands' parts that differ by family, as callables (each imports its module when called:
+    # ``_command``): how `warpgym eval` scores a policy, and what `warpgym export` writes about the task (None: the
+    # env's own observation and action, docs/tasks.md)
+    evaluate: Callable = None
+    export_contract: Callable | None = None
+    asymmetric: bool = False  # the critic has an observation group of its own (info["critic_obs"])
 
     def defaults(self, device_kind: str) -> tuple[int, int]:
         """(envs, iterations) for a device kind, "cuda" or "cpu"."""
         k = 0 if device_kind == "cuda" else 1
         return self.default_envs[k], self.default_iterations[k]
+
+
+def _command(module: str, name: str) -> Callable:
+    """A command's function, imported when it is called: the contract holds callables, and this layer loads
+    nothing above it until a command calls one."""
+    def call(*args, **kwargs):
+        return getattr(importlib.import_module(module), name)(*args, **kwargs)
+
+    call.__qualname__ = call.__name__ = f"{module}.{name}"
+    return call
 
 
 def _robot(name: str, episode_length: int, envs: tuple[int, int], iterations: tuple[int, int]) -> TaskEntry:
@@ -58,7 +81,8 @@ def _robot(name: str, episode_length: int, envs: tuple[int, int], iterations: tu
                      physics_flags=True, clip_keys=(), clip_all_worlds=True,
                      clip_drawer="warpgym.media.video:draw_robot_clip", training_clips=True,
                      scored_in="native MuJoCo",
-                     reports_speed=True, default_envs=envs, default_iterations=iterations)
+                     reports_speed=True, default_envs=envs, default_iterations=iterations, preset=PRESETS[name],
+                     evaluate=_command("warpgym.cli.eval", "in_native_mujoco"))
 
 
 def _suite(name: str, episode_length: int) -> TaskEntry:
@@ -67,17 +91,20 @@ def _suite(name: str, episode_length: int) -> TaskEntry:
                      physics_flags=False, clip_keys=("dof_pos", "dof_vel"), clip_all_worlds=False,
                      clip_drawer="warpgym.media.video:draw_suite_clip", training_clips=False,
                      scored_in="Gymnasium's env", reports_speed=False, default_envs=(4096, 64),
-                     default_iterations=(500, 100))
+                     default_iterations=(500, 100), preset=PRESETS[name],
+                     evaluate=_command("warpgym.cli.eval", "in_gymnasium"))
 
 
 def _legged(name: str, episode_length: int) -> TaskEntry:
-    # mjlab trains its velocity tasks with 4096 envs
+    # mjlab trains its velocity tasks with 4096 envs; a legged task a user registers trains with mjlab's settings
     return TaskEntry(name, "legged", f"warpgym/{name}", episode_length,
                      "warpgym.envs.legged:LeggedVecEnv", "warpgym.envs.single:LeggedEnv", (),
                      physics_flags=False, clip_keys=("dof_pos", "dof_vel"), clip_all_worlds=False,
                      clip_drawer="warpgym.media.video:draw_legged_clip", training_clips=False,
                      scored_in="native MuJoCo", reports_speed=False, default_envs=(4096, 32),
-                     default_iterations=(1000, 30))
+                     default_iterations=(1000, 30), preset=PRESETS.get(name, LEGGED_PRESET),
+                     evaluate=_command("warpgym.cli.eval", "legged_in_native_mujoco"),
+                     export_contract=deployment_contract, asymmetric=True)
 
 
 # 8192 Ants and 4096 Humanoids reach their targets soonest on one H100 (docs/benchmarks.md, "Envs per GPU");
@@ -90,14 +117,27 @@ REGISTRY: dict[str, TaskEntry] = {
 }
 
 
+BUILT_IN = frozenset(REGISTRY)
+
+
 def task_entry(name: str) -> TaskEntry:
-    """The entry of a task name, as written or in any letter case ("hopper-v5")."""
+    """The entry of a task name, as written or in any letter case ("hopper-v5"), or ``"module:Name"`` (the module
+    imported first, as Gymnasium's ``make`` imports it)."""
+    name = imported(name)
     if name in REGISTRY:
         return REGISTRY[name]
     by_lower = {n.lower(): e for n, e in REGISTRY.items()}
     if str(name).lower() in by_lower:
         return by_lower[str(name).lower()]
     raise ValueError(f"unknown task {name!r}: choose one of {', '.join(REGISTRY)}")
+
+
+def canonical(name: str) -> str:
+    """A task name as a run records it: the registry's spelling, ``module:Name`` kept for a user's task (a replay
+    imports the module again)."""
+    entry = task_entry(name)
+    module = name.partition(":")[0] if isinstance(name, str) and ":" in name else ""
+    return f"{module}:{entry.name}" if module else entry.name
 
 
 def task_names(family: str | None = None) -> list[str]:
@@ -107,4 +147,27 @@ def task_names(family: str | None = None) -> list[str]:
     return [n for n, e in REGISTRY.items() if family in (None, e.family)]
 
 
-__all__ = ["REGISTRY", "TaskEntry", "task_entry", "task_names"]
+def register(task) -> object:
+    """A task of the user's own (a legged task's ``replace`` with a new ``name``, say, its own terms in its tables)
+    entered as warpgym's own: in the registry under its family's contract, as the Gymnasium id ``warpgym/<name>``,
+    and by name for ``warpgym train --task module:<name>``, play, eval and export. Returns the task. Call it from
+    the module that defines the task; naming a task warpgym has is refused."""
+    import gymnasium as gym  # noqa: PLC0415
+
+    if not isinstance(task, LeggedTask):
+        raise TypeError(f"register({task!r}): a legged velocity task (a LeggedTask) registers so far; the suite's "
+                        "and the robots' tasks take their changes as keywords of gym.make_vec")
+    name = task.name
+    if name in BUILT_IN:
+        raise ValueError(f"register: {name!r} is warpgym's own task: give yours a name of its own "
+                         "(task.replace(name='MyGo1-v0', ...))")
+    task.validate()
+    LEGGED[name] = task
+    entry = REGISTRY[name] = _legged(name, task.episode_length)
+    gym.registry.pop(entry.gym_id, None)
+    gym.register(id=entry.gym_id, entry_point=entry.single_entry_point, vector_entry_point=entry.vector_entry_point,
+                 max_episode_steps=entry.episode_length, kwargs={"task": name})
+    return task
+
+
+__all__ = ["REGISTRY", "TaskEntry", "canonical", "register", "task_entry", "task_names"]

@@ -1,35 +1,111 @@
 """What the legged robots' velocity tasks share (mjlab's ``make_velocity_env_cfg`` and its flat-ground edits): the
-command, the reward terms' weights and parameters, observation noise, the fall, pushes, resets and the
-randomisation drawn when an env is built. Each robot's file beside this one names its parts in its scene and
-sets what its mjlab config sets for it; the kernels (``kernels/legged``) hold the step.
+command, the tables of terms (rewards, the policy's and the critic's observations, terminations; each term a Warp
+function of ``kernels/legged`` with its weight or noise and its parameters, ``warpgym.tasks.terms``), pushes,
+resets and the randomisation drawn when an env is built. Each robot's file beside this one names its parts in its
+scene and sets what its mjlab config sets for it.
 
 Every field is a constructor keyword of the env (``gym.make_vec("warpgym/Go1VelocityFlat-v0", num_envs=4096,
-lin_vel_x=(-2.0, 2.0))``); ``replace`` checks a change and ``validate`` the whole.
+lin_vel_x=(-2.0, 2.0), rewards={"foot_slip": -0.2})``); ``replace`` checks a change and ``validate`` the whole.
 """
 
 from __future__ import annotations
 
 import math
 import os
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import dataclass, fields, replace
 from typing import ClassVar
 
-from kernels.legged.params import Term
+from kernels.legged import observations as obs
+from kernels.legged import rewards as rew
+from kernels.legged import terminations as ends
+from kernels.legged.params import SELF_COLLISION, SHANK_GROUND, TRUNK_GROUND
+from warpgym.tasks.terms import Dims, Observation, PerJoint, Reward, Termination, Terms, validate as validate_terms
 
 ASSETS = os.path.join(os.path.dirname(os.path.abspath(__file__)), "assets")
-TERM_NAMES = tuple(t.name for t in Term)
+TABLES = ("rewards", "policy_obs", "critic_obs", "terminations")  # a task's tables of terms
 
-# mjlab's reward weights of the velocity tasks before a robot's config changes them (0: the term is off)
-BASE_WEIGHTS = {
-    "track_linear_velocity": 2.0, "track_angular_velocity": 2.0, "upright": 1.0, "pose": 1.0, "body_ang_vel": 0.0,
-    "angular_momentum": 0.0, "dof_pos_limits": -1.0, "action_rate_l2": -0.1, "air_time": 0.0, "foot_clearance": -2.0,
-    "foot_swing_height": -0.25, "foot_slip": -0.1, "soft_landing": -1e-5, "self_collisions": 0.0,
-    "shank_collision": 0.0, "trunk_head_collision": 0.0,
-}
+# mjlab's reward terms of the velocity tasks (make_velocity_env_cfg), in its config's order, before a robot's config
+# changes them (0: the term is off); the posture's stds per joint are the robot's
+REWARDS = Terms("reward", {
+    "track_linear_velocity": Reward(rew.track_linear_velocity, 2.0, {"std": math.sqrt(0.25)}),
+    "track_angular_velocity": Reward(rew.track_angular_velocity, 2.0, {"std": math.sqrt(0.5)}),
+    "upright": Reward(rew.upright, 1.0, {"std": math.sqrt(0.2), "on_terrain": 0}),
+    "pose": Reward(rew.pose, 1.0, {"std_standing": PerJoint(()), "std_walking": PerJoint(()),
+                                   "std_running": PerJoint(()), "walking_threshold": 0.05, "running_threshold": 1.5}),
+    "body_ang_vel": Reward(rew.body_ang_vel, 0.0),
+    "angular_momentum": Reward(rew.angular_momentum, 0.0),
+    "dof_pos_limits": Reward(rew.dof_pos_limits, -1.0),
+    "action_rate_l2": Reward(rew.action_rate_l2, -0.1),
+    "air_time": Reward(rew.air_time, 0.0, {"threshold_min": 0.05, "threshold_max": 0.5, "command_threshold": 0.5}),
+    "foot_clearance": Reward(rew.foot_clearance, -2.0, {"target_height": 0.1, "command_threshold": 0.05}),
+    "foot_swing_height": Reward(rew.foot_swing_height, -0.25, {"target_height": 0.1, "command_threshold": 0.05}),
+    "foot_slip": Reward(rew.foot_slip, -0.1, {"command_threshold": 0.05}),
+    "soft_landing": Reward(rew.soft_landing, -1e-5, {"command_threshold": 0.05}),
+    "self_collisions": Reward(rew.contact_steps, 0.0, {"group": SELF_COLLISION}),
+    "shank_collision": Reward(rew.contact_steps, 0.0, {"group": SHANK_GROUND}),  # the rough Go1's calves on the ground
+    "trunk_head_collision": Reward(rew.contact_steps, 0.0, {"group": TRUNK_GROUND}),  # ... its trunk or head
+})
 
 
-def _weights(**changes) -> tuple[tuple[str, float], ...]:
-    return tuple({**BASE_WEIGHTS, **changes}.items())
+def _joints(d: Dims) -> int:
+    return d.joints
+
+
+def _actions(d: Dims) -> int:
+    return d.actions
+
+
+def _feet(d: Dims) -> int:
+    return d.feet
+
+
+def _forces(d: Dims) -> int:
+    return 3 * d.feet
+
+
+def _scan(d: Dims) -> int:
+    if not d.scan:
+        raise ValueError("the height_scan observation needs the task's height_scan pattern: pass height_scan=")
+    return d.scan
+
+
+# mjlab's "actor" group: the policy's observation, with uniform noise on its first five terms
+POLICY_OBS = Terms("observation", {
+    "base_lin_vel": Observation(obs.base_lin_vel, 3, noise=0.5),
+    "base_ang_vel": Observation(obs.base_ang_vel, 3, noise=0.2),
+    "projected_gravity": Observation(obs.gravity, 3, noise=0.05),
+    "joint_pos": Observation(obs.joint_pos, _joints, noise=0.01, params={"biased": 1}),
+    "joint_vel": Observation(obs.joint_vel, _joints, noise=1.5),
+    "actions": Observation(obs.last_action, _actions),
+    "command": Observation(obs.velocity_command, 3),
+})
+# mjlab's "critic" group: the actor's terms without noise or encoder bias, and the feet's state
+CRITIC_OBS = Terms("observation", {
+    **{name: replace(term, noise=0.0) for name, term in POLICY_OBS.items()},
+    "joint_pos": Observation(obs.joint_pos, _joints, params={"biased": 0}),
+    "foot_height": Observation(obs.feet_height, _feet),
+    "foot_air_time": Observation(obs.feet_air_time, _feet),
+    "foot_contact": Observation(obs.feet_contact, _feet),
+    "foot_contact_forces": Observation(obs.feet_contact_forces, _forces),
+})
+# the rough tasks' height scan, both groups (the policy's with noise), after the command; mjlab scales it by
+# 1 / the scan's reach
+HEIGHT_SCAN = Observation(obs.height_scan, _scan)
+
+TERMINATIONS = Terms("termination", {
+    "fell_over": Termination(ends.bad_orientation, params={"limit_angle": math.radians(70.0)}),
+})
+
+
+def with_height_scan(table: Terms, max_distance: float, noise: float) -> Terms:
+    """``table`` with the height scan after the command (mjlab's place for it), scaled by 1 / its reach."""
+    scan = replace(HEIGHT_SCAN, scale=1.0 / max_distance, noise=noise)
+    items = []
+    for name, term in table.items():
+        items.append((name, term))
+        if name == "command":
+            items.append(("height_scan", scan))
+    return Terms("observation", items)
 
 
 @dataclass(frozen=True)
@@ -58,10 +134,6 @@ class LeggedTask:
     # limit / stiffness of the joint's actuator (mjlab's GO1_ACTION_SCALE, G1_ACTION_SCALE)
     action_scale: float = 0.25
     soft_joint_limit_factor: float = 0.9
-    # the posture reward's std of each joint (regular expressions over joint names, as mjlab's config writes them)
-    posture_std_standing: tuple[tuple[str, float], ...] = ()
-    posture_std_walking: tuple[tuple[str, float], ...] = ()
-    posture_std_running: tuple[tuple[str, float], ...] = ()
     decimation: int = 4
     episode_length_s: float = 20.0
     # MuJoCo Warp's contact and constraint room per world
@@ -80,25 +152,14 @@ class LeggedTask:
     heading_control_stiffness: float = 0.5
     # mjlab's command curriculum: from env step `step` on, the ranges given (None: unchanged) replace the earlier
     command_stages: tuple = ((5000 * 24, (-1.5, 2.0), None, (-0.7, 0.7)), (10000 * 24, (-2.0, 3.0), None, None))
-    # rewards
-    reward_weights: tuple[tuple[str, float], ...] = field(default_factory=_weights)
-    tracking_std_linear: float = math.sqrt(0.25)
-    tracking_std_angular: float = math.sqrt(0.5)
-    upright_std: float = math.sqrt(0.2)
-    walking_threshold: float = 0.05
-    running_threshold: float = 1.5
-    air_time_range: tuple[float, float] = (0.05, 0.5)
-    air_time_command: float = 0.5
-    clearance_height: float = 0.1
-    clearance_command: float = 0.05
-    swing_height: float = 0.1
-    swing_command: float = 0.05
-    slip_command: float = 0.05
-    landing_command: float = 0.05
+    # the tables of terms (warpgym.tasks.terms): rewards, the policy's and the critic's observations (on rough ground
+    # with the height scan), the terminations beside the time limit; ``replace`` takes their changes
+    rewards: Terms = REWARDS
+    policy_obs: Terms = POLICY_OBS
+    critic_obs: Terms = CRITIC_OBS
+    terminations: Terms = TERMINATIONS
+    # the force [N] above which a contact group's sensor counts a touch (mjlab's contact sensors' threshold)
     self_collision_force: float = 10.0
-    # termination: the base tilted further than this from upright (fall_over=False: tilt ends nothing)
-    fall_over: bool = True
-    fall_angle: float = math.radians(70.0)
     # rough ground (terrain=None: the scene's floor): a TerrainGrid (warpgym.tasks.legged.terrain, curriculum=True)
     # generated from terrain_seed into the scene's "terrain" body; each world's first level drawn up to
     # max_init_terrain_level; an episode whose base leaves the ground (less terrain_margin) ends as a time-out
@@ -110,15 +171,8 @@ class LeggedTask:
     # observations see (the policy's with noise_height_scan), the ring under each foot site for the feet's heights
     height_scan: object = None
     foot_scan: object = None
-    noise_height_scan: float = 0.1
-    upright_on_terrain: bool = False  # the upright term's "up" is the ground's normal under the height scan
-    # observation noise on the policy's terms, uniform in [-x, x] (mjlab's play mode turns it off)
+    # the observation terms' noise (mjlab's play mode turns it off)
     observation_noise: bool = True
-    noise_lin_vel: float = 0.5
-    noise_ang_vel: float = 0.2
-    noise_gravity: float = 0.05
-    noise_joint_pos: float = 0.01
-    noise_joint_vel: float = 1.5
     # events: the reset pose's offset, pushes, the randomisation drawn when the env is built
     reset_x: tuple[float, float] = (-0.5, 0.5)
     reset_y: tuple[float, float] = (-0.5, 0.5)
@@ -153,7 +207,7 @@ class LeggedTask:
         return self.scene_file if os.sep in self.scene_file else os.path.join(ASSETS, self.scene_file)
 
     def weights(self) -> dict[str, float]:
-        return dict(self.reward_weights)
+        return {name: term.weight for name, term in self.rewards.items()}
 
     # ------------------------------------------------------------------ keyword arguments
     @classmethod
@@ -161,16 +215,14 @@ class LeggedTask:
         return [f.name for f in fields(cls) if f.name not in cls.OWN]
 
     def replace(self, **changes) -> LeggedTask:
-        """A copy with constructor keywords changed; ``reward_weights`` may name only the terms it changes."""
+        """A copy with constructor keywords changed; a table of terms (``rewards``, ``policy_obs``, ``critic_obs``,
+        ``terminations``) takes the changes of the terms it names (``warpgym.tasks.terms.Terms.changed``)."""
         unknown = sorted(set(changes) - {f.name for f in fields(self)})
         if unknown:
             raise ValueError(f"{self.name} has no argument(s) {unknown}: it takes {self.argument_names()}")
-        if "reward_weights" in changes:
-            given = dict(changes["reward_weights"])
-            wrong = sorted(set(given) - set(TERM_NAMES))
-            if wrong:
-                raise ValueError(f"{self.name}: reward_weights names no term {wrong}: its terms are {list(TERM_NAMES)}")
-            changes["reward_weights"] = tuple({**self.weights(), **given}.items())
+        for name in TABLES:
+            if name in changes:
+                changes[name] = getattr(self, name).changed(changes[name], f"{self.name}: {name}")
         for name, value in changes.items():
             if isinstance(getattr(self, name), tuple) and isinstance(value, list):
                 changes[name] = tuple(tuple(v) if isinstance(v, list) else v for v in value)
@@ -182,7 +234,7 @@ class LeggedTask:
         def fail(name, why):
             raise ValueError(f"{self.name}: {name}={getattr(self, name)!r} {why}")
 
-        ranges = ("lin_vel_x", "lin_vel_y", "ang_vel_z", "heading", "resampling_time", "air_time_range", "reset_x",
+        ranges = ("lin_vel_x", "lin_vel_y", "ang_vel_z", "heading", "resampling_time", "reset_x",
                   "reset_y", "reset_z", "reset_yaw", "joint_position_offset", "joint_velocity", "push_interval",
                   "encoder_bias")
         for name in ranges:
@@ -200,13 +252,9 @@ class LeggedTask:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < 1:
                 fail(name, "must be a positive integer")
-        positive = ("episode_length_s", "tracking_std_linear", "tracking_std_angular", "upright_std", "clearance_height",
-                    "swing_height", "action_scale", "soft_joint_limit_factor", "fall_angle")
+        positive = ("episode_length_s", "action_scale", "soft_joint_limit_factor")
         non_negative = ("rel_standing_envs", "rel_heading_envs", "rel_forward_envs", "heading_control_stiffness",
-                        "walking_threshold", "running_threshold", "air_time_command", "clearance_command",
-                        "swing_command", "slip_command", "landing_command", "self_collision_force", "noise_lin_vel",
-                        "noise_ang_vel", "noise_gravity", "noise_joint_pos", "noise_joint_vel", "terrain_margin",
-                        "noise_height_scan")
+                        "self_collision_force", "terrain_margin")
         for name in positive + non_negative:
             v = getattr(self, name)
             ok = _is_number(v) and (v > 0 if name in positive else v >= 0)
@@ -215,9 +263,11 @@ class LeggedTask:
         for name in ("rel_standing_envs", "rel_heading_envs", "rel_forward_envs"):
             if getattr(self, name) > 1:
                 fail(name, "is a share of the worlds, in [0, 1]")
-        weights = self.weights()
-        if sorted(weights) != sorted(TERM_NAMES) or not all(_is_number(w) for w in weights.values()):
-            fail("reward_weights", f"must give a finite weight to each of {list(TERM_NAMES)}")
+        for name in TABLES:
+            table = getattr(self, name)
+            if not isinstance(table, Terms):
+                fail(name, "must be a table of terms (warpgym.tasks.terms.Terms)")
+            validate_terms(table, f"{self.name}: {name}")
         for stage in self.command_stages:
             if not (isinstance(stage, tuple) and len(stage) == 4 and isinstance(stage[0], int) and stage[0] >= 0
                     and all(r is None or _is_range(r) for r in stage[1:])):
@@ -232,11 +282,13 @@ class LeggedTask:
         if isinstance(self.max_init_terrain_level, bool) or not isinstance(self.max_init_terrain_level, int) \
                 or self.max_init_terrain_level < 0:
             fail("max_init_terrain_level", "must be a level >= 0 (mjlab's rough tasks: 5)")
-        if self.upright_on_terrain and self.height_scan is None:
-            fail("upright_on_terrain", "needs a height_scan to fit the ground's normal to")
-        for name in ("posture_std_standing", "posture_std_walking", "posture_std_running"):
-            if not all(isinstance(k, str) and _is_number(v) and v > 0 for k, v in getattr(self, name)):
-                fail(name, "must map joint-name patterns to positive stds")
+        upright = self.rewards.get("upright")
+        if upright is not None and dict(upright.params).get("on_terrain") and self.height_scan is None:
+            raise ValueError(f"{self.name}: rewards['upright'] measures tilt against the ground (on_terrain=1), which "
+                             "needs a height_scan to fit the ground's normal to")
+        if "illegal_contact" in self.terminations and not self.illegal_contact_sensors:
+            raise ValueError(f"{self.name}: terminations['illegal_contact'] has no sensors to feel it: name them in "
+                             "illegal_contact_sensors")
 
     def to_dict(self) -> dict:
         return {f.name: getattr(self, f.name) for f in fields(self)}

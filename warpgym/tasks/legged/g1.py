@@ -8,11 +8,25 @@ penalty on the torso's roll and pitch rates, on the whole body's angular momentu
 
 from dataclasses import dataclass
 
-from warpgym.tasks.legged.base import LeggedTask, _weights
+from kernels.legged import terminations as ends
+from warpgym.tasks.legged.base import CRITIC_OBS, POLICY_OBS, REWARDS, TERMINATIONS, LeggedTask, with_height_scan
 from warpgym.tasks.legged.go1 import ROUGH_CURRICULUM
 from warpgym.tasks.legged.scan import G1_FOOT_SCAN, TERRAIN_SCAN
+from warpgym.tasks.terms import PerJoint, Termination
 
 SIDES = ("left", "right")
+# the posture's stds by joint; mjlab's rationale: knees and hip pitch loosest for the stride, hip roll and yaw tighter
+# against sway, ankle roll tight for balance, the waist tight to keep the torso upright, the arms free to swing
+WALKING = (
+    (r".*hip_pitch.*", 0.3), (r".*hip_roll.*", 0.15), (r".*hip_yaw.*", 0.15), (r".*knee.*", 0.35),
+    (r".*ankle_pitch.*", 0.25), (r".*ankle_roll.*", 0.1), (r".*waist_yaw.*", 0.2), (r".*waist_roll.*", 0.08),
+    (r".*waist_pitch.*", 0.1), (r".*shoulder_pitch.*", 0.15), (r".*shoulder_roll.*", 0.15),
+    (r".*shoulder_yaw.*", 0.1), (r".*elbow.*", 0.15), (r".*wrist.*", 0.3))
+RUNNING = (
+    (r".*hip_pitch.*", 0.5), (r".*hip_roll.*", 0.2), (r".*hip_yaw.*", 0.2), (r".*knee.*", 0.6),
+    (r".*ankle_pitch.*", 0.35), (r".*ankle_roll.*", 0.15), (r".*waist_yaw.*", 0.3), (r".*waist_roll.*", 0.08),
+    (r".*waist_pitch.*", 0.2), (r".*shoulder_pitch.*", 0.5), (r".*shoulder_roll.*", 0.2),
+    (r".*shoulder_yaw.*", 0.15), (r".*elbow.*", 0.35), (r".*wrist.*", 0.3))
 
 
 @dataclass(frozen=True)
@@ -28,21 +42,11 @@ class G1VelocityFlat(LeggedTask):
     foot_sites: tuple = tuple(f"robot/{s}_foot" for s in SIDES)
     foot_sensors: tuple = tuple(f"feet_ground_contact_{s}_ankle_roll_link" for s in SIDES)
     self_collision_sensor: str = "self_collision_pelvis"
-    # mjlab's rationale: knees and hip pitch loosest for the stride, hip roll and yaw tighter against sway, ankle
-    # roll tight for balance, the waist tight to keep the torso upright, the arms free to swing
-    posture_std_standing: tuple = ((".*", 0.05),)
-    posture_std_walking: tuple = (
-        (r".*hip_pitch.*", 0.3), (r".*hip_roll.*", 0.15), (r".*hip_yaw.*", 0.15), (r".*knee.*", 0.35),
-        (r".*ankle_pitch.*", 0.25), (r".*ankle_roll.*", 0.1), (r".*waist_yaw.*", 0.2), (r".*waist_roll.*", 0.08),
-        (r".*waist_pitch.*", 0.1), (r".*shoulder_pitch.*", 0.15), (r".*shoulder_roll.*", 0.15),
-        (r".*shoulder_yaw.*", 0.1), (r".*elbow.*", 0.15), (r".*wrist.*", 0.3))
-    posture_std_running: tuple = (
-        (r".*hip_pitch.*", 0.5), (r".*hip_roll.*", 0.2), (r".*hip_yaw.*", 0.2), (r".*knee.*", 0.6),
-        (r".*ankle_pitch.*", 0.35), (r".*ankle_roll.*", 0.15), (r".*waist_yaw.*", 0.3), (r".*waist_roll.*", 0.08),
-        (r".*waist_pitch.*", 0.2), (r".*shoulder_pitch.*", 0.5), (r".*shoulder_roll.*", 0.2),
-        (r".*shoulder_yaw.*", 0.15), (r".*elbow.*", 0.35), (r".*wrist.*", 0.3))
     nconmax: int = 48
-    reward_weights: tuple = _weights(body_ang_vel=-0.05, angular_momentum=-0.02, self_collisions=-1.0)
+    rewards: object = REWARDS.changed({
+        "body_ang_vel": -0.05, "angular_momentum": -0.02, "self_collisions": -1.0,
+        "pose": {"params": {"std_standing": PerJoint(((".*", 0.05),)), "std_walking": PerJoint(WALKING),
+                            "std_running": PerJoint(RUNNING)}}}, "G1VelocityFlat-v0: rewards")
     foot_friction: tuple = ((0, 0.3, 1.2, "uniform"),)
 
 
@@ -61,3 +65,8 @@ class G1VelocityRough(G1VelocityFlat):
     terrain: object = ROUGH_CURRICULUM
     height_scan: object = TERRAIN_SCAN
     foot_scan: object = G1_FOOT_SCAN
+    policy_obs: object = with_height_scan(POLICY_OBS, TERRAIN_SCAN.max_distance, noise=0.1)
+    critic_obs: object = with_height_scan(CRITIC_OBS, TERRAIN_SCAN.max_distance, noise=0.0)
+    terminations: object = TERMINATIONS.changed({
+        "out_of_terrain_bounds": Termination(ends.out_of_terrain_bounds, time_out=True)},
+        "G1VelocityRough-v0: terminations")

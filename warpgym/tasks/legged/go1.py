@@ -8,9 +8,11 @@ friction randomised per axis, the trunk's centre of mass offset.
 
 from dataclasses import dataclass, replace
 
-from warpgym.tasks.legged.base import LeggedTask, _weights
+from kernels.legged import terminations as ends
+from warpgym.tasks.legged.base import CRITIC_OBS, POLICY_OBS, REWARDS, TERMINATIONS, LeggedTask, with_height_scan
 from warpgym.tasks.legged.scan import GO1_FOOT_SCAN, TERRAIN_SCAN
 from warpgym.tasks.legged.terrain import ROUGH
+from warpgym.tasks.terms import PerJoint, Termination
 
 # mjlab's rough tasks build its ROUGH_TERRAINS_CFG in curriculum mode: one kind a column, ten levels
 ROUGH_CURRICULUM = replace(ROUGH, curriculum=True)
@@ -32,11 +34,11 @@ class Go1VelocityFlat(LeggedTask):
     foot_geoms: tuple = tuple(f"robot/{f}_foot_collision" for f in FEET)
     foot_sites: tuple = tuple(f"robot/{f}" for f in FEET)
     foot_sensors: tuple = tuple(f"feet_ground_contact_{f}_foot_collision" for f in FEET)
-    posture_std_standing: tuple = ((HIP_THIGH, 0.05), (CALF, 0.1))
-    posture_std_walking: tuple = ((HIP_THIGH, 0.3), (CALF, 0.6))
-    posture_std_running: tuple = ((HIP_THIGH, 0.3), (CALF, 0.6))
     nconmax: int = 32
-    reward_weights: tuple = _weights()
+    rewards: object = REWARDS.changed({"pose": {"params": {
+        "std_standing": PerJoint(((HIP_THIGH, 0.05), (CALF, 0.1))),
+        "std_walking": PerJoint(((HIP_THIGH, 0.3), (CALF, 0.6))),
+        "std_running": PerJoint(((HIP_THIGH, 0.3), (CALF, 0.6)))}}}, "Go1VelocityFlat-v0: rewards")
     # condim-6 feet: sliding, torsional and rolling friction each drawn
     foot_friction: tuple = ((0, 0.3, 1.5, "uniform"), (1, 1e-4, 2e-2, "log_uniform"), (2, 1e-5, 5e-3, "log_uniform"))
 
@@ -58,12 +60,19 @@ class Go1VelocityRough(Go1VelocityFlat):
     shank_sensors: tuple = tuple(f"shank_ground_touch_{f}_calf_collision{i}" for f in FEET for i in (1, 2))
     trunk_sensors: tuple = ("trunk_ground_touch_trunk_collision", "trunk_ground_touch_head_collision")
     illegal_contact_sensors: tuple = tuple(f"thigh_ground_touch_{f}_thigh_collision{i}" for f in FEET for i in (1, 2, 3))
-    reward_weights: tuple = _weights(self_collisions=-0.1, shank_collision=-0.1, trunk_head_collision=-0.1)
-    fall_over: bool = False
+    rewards: object = Go1VelocityFlat.rewards.changed({
+        "self_collisions": -0.1, "shank_collision": -0.1, "trunk_head_collision": -0.1,
+        "upright": {"params": {"on_terrain": 1}}}, "Go1VelocityRough-v0: rewards")
+    policy_obs: object = with_height_scan(POLICY_OBS, TERRAIN_SCAN.max_distance, noise=0.1)
+    critic_obs: object = with_height_scan(CRITIC_OBS, TERRAIN_SCAN.max_distance, noise=0.0)
+    # a thigh's touch ends an episode where tilt no longer does
+    terminations: object = TERMINATIONS.changed({
+        "fell_over": None, "illegal_contact": Termination(ends.illegal_contact),
+        "out_of_terrain_bounds": Termination(ends.out_of_terrain_bounds, time_out=True)},
+        "Go1VelocityRough-v0: terminations")
     nconmax: int = 35
     njmax: int = 1500
     contact_sensor_maxmatch: int = 500
     terrain: object = ROUGH_CURRICULUM
     height_scan: object = TERRAIN_SCAN
     foot_scan: object = GO1_FOOT_SCAN
-    upright_on_terrain: bool = True

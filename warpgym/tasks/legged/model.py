@@ -4,7 +4,6 @@ there."""
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -27,9 +26,6 @@ class RobotIndex:
     default_joint_pos: np.ndarray
     soft_lo: np.ndarray
     soft_hi: np.ndarray
-    std_standing: np.ndarray
-    std_walking: np.ndarray
-    std_running: np.ndarray
     joint_actuator: np.ndarray  # (J,) the actuator of each joint
     action_scale: np.ndarray  # (J,)
     foot_geoms: np.ndarray
@@ -60,25 +56,6 @@ def _find(task: LeggedTask, mjm, kind: str, field: str, name: str) -> int:
         raise ValueError(f"{task.name}: {field}={getattr(task, field)!r}: the scene ({task.scene_file}) has no {kind} "
                          f"{name!r}; its {kind}s are {known}")
     return names.index(name)
-
-
-def _per_joint(task: LeggedTask, field: str, joints: list[str]) -> np.ndarray:
-    """A value per joint from (pattern, value) pairs, each pattern matched in full against the joint's name
-    without its entity prefix, once per joint (mjlab's resolve_matching_names_values)."""
-    out = np.full(len(joints), np.nan)
-    pairs = getattr(task, field)
-    for j, joint in enumerate(joints):
-        short = joint.rsplit("/", 1)[-1]
-        hits = [(p, v) for p, v in pairs if re.fullmatch(p, short)]
-        if len(hits) > 1:
-            raise ValueError(f"{task.name}: {field}: joint {short!r} matches more than one pattern "
-                             f"{[p for p, _ in hits]}; make the patterns exclusive")
-        if hits:
-            out[j] = hits[0][1]
-    missing = [joints[j].rsplit('/', 1)[-1] for j in np.flatnonzero(np.isnan(out))]
-    if missing:
-        raise ValueError(f"{task.name}: {field} gives no std for joint(s) {missing}: add a pattern that matches them")
-    return out.astype(np.float32)
 
 
 def resolve(task: LeggedTask, mjm) -> RobotIndex:
@@ -137,9 +114,6 @@ def resolve(task: LeggedTask, mjm) -> RobotIndex:
         joint_names=joint_names, joint_qpos=joint_qpos, joint_dof=joint_dof,
         default_root=key_qpos[root_qpos:root_qpos + 7].astype(np.float32), default_joint_pos=default_joint_pos,
         soft_lo=soft_lo, soft_hi=soft_hi,
-        std_standing=_per_joint(task, "posture_std_standing", joint_names),
-        std_walking=_per_joint(task, "posture_std_walking", joint_names),
-        std_running=_per_joint(task, "posture_std_running", joint_names),
         joint_actuator=joint_actuator, action_scale=action_scale,
         foot_geoms=np.array([_find(task, mjm, "geom", "foot_geoms", g) for g in task.foot_geoms], np.int32),
         foot_site=sites, foot_body=mjm.site_bodyid[sites].astype(np.int32),
@@ -153,25 +127,21 @@ def resolve(task: LeggedTask, mjm) -> RobotIndex:
     )
 
 
+def dims(task: LeggedTask, idx: RobotIndex, num_actions: int):
+    """What the observation terms' sizes read: joints, actions, feet, height scan rays."""
+    from warpgym.tasks.terms import Dims  # noqa: PLC0415
+
+    scan = 0 if task.height_scan is None else len(task.height_scan.offsets)
+    return Dims(joints=len(idx.joint_names), actions=num_actions, feet=len(idx.foot_site), scan=scan)
+
+
 def policy_terms(task: LeggedTask, idx: RobotIndex, num_actions: int) -> list[tuple[str, int, str]]:
-    """The policy's observation term by term, in order: (name, size, what it holds), as mjlab's velocity config
-    lists its policy group. The env sizes its observation by it, and tests/test_export.py checks the env's slices
-    against it; warpgym.native_legged builds the same order by hand (tests/test_native_legged.py plays one policy in
-    both and compares their tracking)."""
-    joints = len(idx.joint_names)
-    terms = [("base_lin_vel", 3, "the base's linear velocity in its own frame, from its IMU [m/s]"),
-             ("base_ang_vel", 3, "the base's angular velocity in its own frame, from its IMU [rad/s]"),
-             ("projected_gravity", 3, "the unit gravity vector in the base's frame"),
-             ("joint_pos", joints, "each joint's position minus its default [rad]"),
-             ("joint_vel", joints, "each joint's velocity [rad/s]"),
-             ("actions", num_actions, "the previous action, as the policy gave it"),
-             ("command", 3, "the velocity command: forward, sideways [m/s], yaw rate [rad/s], in the base's frame")]
-    if task.height_scan is not None:
-        scan = task.height_scan
-        terms.append(("height_scan", len(scan.offsets),
-                      f"the base's height above each ray's hit over the reach, {scan.max_distance:g} m (a miss reads "
-                      "1), the rays under the base and turned with its heading"))
-    return terms
+    """The policy's observation term by term, in order: (name, size, what it holds), from the task's table. The env
+    sizes its observation by it and ``warpgym export`` writes it into the deployment contract."""
+    from warpgym.tasks.terms import layout  # noqa: PLC0415
+
+    return [(name, size, what) for name, _, size, what in
+            layout(task.policy_obs, dims(task, idx, num_actions), f"{task.name}: policy_obs")]
 
 
 def compile_task_scene(task: LeggedTask):
@@ -192,7 +162,6 @@ def kernel_structs(task: LeggedTask, idx: RobotIndex, device: str):
 
     from kernels.legged.params import LeggedParams, LeggedRobot  # noqa: PLC0415
     from kernels.legged.resets import Randomization  # noqa: PLC0415
-    from warpgym.tasks.legged.base import TERM_NAMES  # noqa: PLC0415
 
     def arr(values, dtype=float):
         return wp.array(np.asarray(values, np.int32 if dtype == wp.int32 else np.float32), dtype=dtype, device=device)
@@ -213,29 +182,8 @@ def kernel_structs(task: LeggedTask, idx: RobotIndex, device: str):
     p.heading_stiffness = task.heading_control_stiffness
     p.forward_min = 0.3  # mjlab's forward-only worlds walk at least this fast [m/s]
     p.max_command_steps = task.resampling_time[1] / p.dt
-    weights = task.weights()
-    p.weights = arr([weights[n] for n in TERM_NAMES])
-    p.lin_var, p.ang_var = task.tracking_std_linear ** 2, task.tracking_std_angular ** 2
-    p.upright_var = task.upright_std ** 2
-    p.walking_threshold, p.running_threshold = task.walking_threshold, task.running_threshold
-    p.air_min, p.air_max = task.air_time_range
-    p.air_command = task.air_time_command
-    p.clearance_height, p.clearance_command = task.clearance_height, task.clearance_command
-    p.swing_height, p.swing_command = task.swing_height, task.swing_command
-    p.slip_command, p.landing_command = task.slip_command, task.landing_command
     p.collision_force = task.self_collision_force
-    p.upright_terrain = int(task.upright_on_terrain)
-    p.fall_over = int(task.fall_over)
-    p.limit_angle = task.fall_angle
-    p.num_scan = 0 if task.height_scan is None else len(task.height_scan.offsets)
-    p.noise_scan = (1.0 if task.observation_noise else 0.0) * task.noise_height_scan
-    # mjlab scales the scan by 1 / its reach
-    p.scan_scale = 1.0 if task.height_scan is None else 1.0 / task.height_scan.max_distance
     p.foot_scan = int(task.foot_scan is not None)
-    on = 1.0 if task.observation_noise else 0.0
-    p.noise_lin_vel, p.noise_ang_vel = on * task.noise_lin_vel, on * task.noise_ang_vel
-    p.noise_gravity, p.noise_joint_pos = on * task.noise_gravity, on * task.noise_joint_pos
-    p.noise_joint_vel = on * task.noise_joint_vel
     # no pushes: the timer starts beyond any episode
     p.push_interval_lo, p.push_interval_hi = task.push_interval if task.pushes else (1e30, 1e30)
     p.push_lo = arr([r[0] for r in task.push_velocity])
@@ -251,7 +199,6 @@ def kernel_structs(task: LeggedTask, idx: RobotIndex, device: str):
     r.joint_qpos, r.joint_dof = arr(idx.joint_qpos, wp.int32), arr(idx.joint_dof, wp.int32)
     r.default_root, r.default_joint_pos = arr(idx.default_root), arr(idx.default_joint_pos)
     r.soft_lo, r.soft_hi = arr(idx.soft_lo), arr(idx.soft_hi)
-    r.std_standing, r.std_walking, r.std_running = arr(idx.std_standing), arr(idx.std_walking), arr(idx.std_running)
     r.joint_actuator = arr(idx.joint_actuator, wp.int32)
     r.action_scale = arr(idx.action_scale)
     r.foot_site, r.foot_body = arr(idx.foot_site, wp.int32), arr(idx.foot_body, wp.int32)

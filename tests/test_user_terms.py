@@ -1,0 +1,92 @@
+"""A user's own reward and observation terms (tests/user_terms.py, a module outside warpgym): in the step's tables
+from Python and from `warpgym train`, computed inside the step as warpgym's own terms are, and a half-declared
+term refused in one line that names it."""
+
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+import torch
+
+pytestmark = pytest.mark.slow
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+
+
+def test_a_users_terms_join_the_tasks_tables_and_read_the_step_as_its_own_do():
+    import gymnasium as gym
+
+    import warpgym  # noqa: F401  (the ids)
+    from tests import user_terms
+
+    envs = gym.make_vec("warpgym/Go1VelocityFlat-v0", num_envs=3, device="cpu", pushes=False,
+                        rewards=user_terms.REWARDS, policy_obs=user_terms.OBSERVATIONS)
+    obs, info = envs.reset(seed=0)
+    assert obs.shape == (3, 48 + 1)  # the Go1's 48 entries, the user's one after them
+    torch.manual_seed(0)
+    for _ in range(3):
+        obs, reward, terminated, truncated, info = envs.step(torch.rand(3, 12) * 2 - 1)
+        # the same rate of change as warpgym's term, at 3x the weight's scale: the term read the step's actions,
+        # its parameter and its weight x dt
+        assert torch.allclose(info["reward_user_action_rate"], 3.0 * info["reward_action_rate_l2"], rtol=1e-5,
+                              atol=1e-9)
+        assert float(info["reward_action_rate_l2"].abs().min()) > 0
+        # the observation reads the state the step ended in, the base's own height
+        root = envs.index.root_body
+        heights = envs.sim.to_torch(envs.sim.d.xpos)[:, root, 2]
+        assert torch.allclose(obs[:, -1], heights, atol=1e-6)
+    total = sum(v for k, v in info.items() if k.startswith("reward_"))
+    assert torch.allclose(total, reward, atol=1e-6)
+    envs.close()
+
+
+def wrong(kind: str):
+    """A term declared half or wrong, as a user might."""
+    from tests import user_terms
+    from warpgym.tasks.terms import Observation, Reward
+
+    return {
+        "unknown": {"rewards": {"half": {"weight": 1.0}}},
+        "misspelt": {"rewards": {"user_action_rate": Reward(user_terms.scaled_action_rate, -0.1, {"scal": 3.0})}},
+        "missing": {"rewards": {"user_action_rate": Reward(user_terms.scaled_action_rate, -0.1)}},
+        "not a function": {"policy_obs": {"height": Observation(lambda env, w, i: 0.0, 1)}},
+        "drop": {"policy_obs": {"base height": None}},
+    }[kind]
+
+
+@pytest.mark.parametrize("kind, words", [
+    ("unknown", "rewards: no term 'half'"),
+    ("misspelt", "['user_action_rate']: scaled_action_rate's parameters are ['scale']; unknown ['scal']; missing ['scale']"),
+    ("missing", "['user_action_rate']: scaled_action_rate's parameters are ['scale']; missing ['scale']"),
+    ("not a function", "is not a @wp.func"),
+    ("drop", "no term 'base height' to drop"),
+])
+def test_a_half_declared_term_is_one_line_that_names_it(kind, words):
+    from warpgym.envs.legged import LeggedVecEnv
+
+    with pytest.raises((ValueError, TypeError)) as e:
+        LeggedVecEnv("Go1VelocityFlat-v0", num_envs=1, device="cpu", **wrong(kind))
+    assert words in str(e.value) and "\n" not in str(e.value)
+
+
+def test_warpgym_train_trains_a_users_task_from_its_module(tmp_path):
+    """`warpgym train --task user_task:UserGo1-v0` imports the user's module, trains two iterations on the CPU and
+    evaluates with the user's term in the log; a replay of the run asks for the module rather than import it."""
+    run = str(tmp_path / "user")
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([HERE, ROOT, os.environ.get("PYTHONPATH", "")])}
+    done = subprocess.run([sys.executable, "-m", "warpgym", "train", "--task", "user_task:UserGo1-v0", "--device",
+                           "cpu", "--num-envs", "4", "--max-iterations", "2", "--horizon-len", "8", "--eval-gap", "0",
+                           "--eval-envs", "2", "--episode-length", "20", "--no-plots", "--run-dir", run],
+                          capture_output=True, text=True, env=env, cwd=str(tmp_path), timeout=900)
+    assert done.returncode == 0, done.stderr[-3000:]
+    rows = [json.loads(line) for line in open(os.path.join(run, "metrics.jsonl"))]
+    assert [r["iteration"] for r in rows] == [1, 2]
+    assert rows[-1]["eval/reward_user_action_rate"] < 0  # the user's term scored the evaluation's episodes
+    saved = json.load(open(os.path.join(run, "config.json")))
+    assert saved["env_args"]["task"] == "user_task:UserGo1-v0"
+    replay = subprocess.run([sys.executable, "-m", "warpgym", "play", run, "--device", "cpu", "--steps", "2"],
+                            capture_output=True, text=True, env=env, cwd=str(tmp_path), timeout=600)
+    assert replay.returncode == 2 and "pass --import user_task" in replay.stderr, replay.stderr[-2000:]

@@ -1,0 +1,146 @@
+"""A task's tables of terms into Warp functions: one function per table that calls each term's function in the
+table's order (``warpgym.tasks.terms`` declares the tables and fills their parameters). The kernels of the step call these, so every term runs
+inside the step's one graph, and a user's term is compiled into it like warpgym's own.
+
+Each generated function's source is written out (``source_of``) and compiled under a name of its own, registered
+with ``linecache`` so that Warp reads it as it reads a file; the same table always gives the same source, so Warp's
+kernel cache serves it across processes. Parameters reach the terms through one struct per table, a field per term
+that has parameters, named after the term.
+
+Shapes: N worlds; K terms of a table.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import keyword
+import linecache
+
+import warp as wp
+
+from kernels.common import ObsLayout
+
+
+_MADE: dict[str, tuple] = {}
+
+
+def _params_struct(name: str, terms) -> type:
+    """The struct of a table's parameters: a field per term whose function takes a parameter struct."""
+    fields = {term: ptype for term, _, ptype in terms if ptype is not None}
+    if not fields:  # Warp has no empty struct
+        fields = {"unused": int}
+    cls = type(name, (), {"__annotations__": fields, "__module__": __name__, "__qualname__": name})
+    return wp.struct(cls)
+
+
+def _compile(tag: str, source: str, scope: dict):
+    """The function defined by ``source``, read by Warp as if from a file of its own."""
+    digest = hashlib.sha256(source.encode()).hexdigest()[:16]
+    filename = f"<warpgym-{tag}-{digest}>"
+    linecache.cache[filename] = (len(source), None, source.splitlines(True), filename)
+    exec(compile(source, filename, "exec"), scope)  # noqa: S102  (our own generated source, never a file's)
+    fn = scope[tag]
+    fn.__module__ = f"warpgym_terms_{digest}"
+    return wp.func(fn)
+
+
+def _check(terms) -> None:
+    for name, func, _ in terms:
+        if not name.isidentifier() or keyword.iskeyword(name):
+            raise ValueError(f"term name {name!r} is not a Python identifier: name terms like variables, e.g. "
+                             "'feet_air_time'")
+        if not isinstance(func, wp.Function):
+            raise TypeError(f"term {name!r}: its function {func!r} is not a @wp.func")
+
+
+def _call(k: int, name: str, ptype, *args: str) -> str:
+    return f"f{k}({', '.join(args)}{', tp.' + name if ptype is not None else ''})"
+
+
+def reward_sum(env_type, terms) -> tuple[type, object, str]:
+    """``(Params, func, source)``: ``func(env, w, tp: Params, weights, dt, values) -> float`` writes each term's
+    ``weight * dt * value`` into ``values[w, k]`` (0 where the weight is 0, which skips the term, or where the value
+    is not finite) and returns their sum. ``terms``: ``[(name, wp.func, params struct or None)]``."""
+    _check(terms)
+    key = "rewards", env_type, tuple((n, id(f), p) for n, f, p in terms)
+    if key in _MADE:
+        return _MADE[key]
+    lines = ["def rewards(env: Env, w: int, tp: Params, weights: wp.array[float], dt: float, "
+             "values: wp.array2d[float]) -> float:",
+             "    total = float(0.0)"]
+    for k, (name, _, ptype) in enumerate(terms):
+        lines += [f"    # {name}",
+                  f"    v{k} = float(0.0)",
+                  f"    if weights[{k}] != 0.0:",
+                  f"        v{k} = {_call(k, name, ptype, 'env', 'w')} * weights[{k}] * dt",
+                  f"        if not wp.isfinite(v{k}):",
+                  f"            v{k} = 0.0",
+                  f"    values[w, {k}] = v{k}",
+                  f"    total += v{k}"]
+    lines.append("    return total")
+    made = _finish("rewards", env_type, terms, lines)
+    _MADE[key] = made
+    return made
+
+
+def termination_flags(env_type, terms, time_outs: list[bool]) -> tuple[type, object, str]:
+    """``(Params, func, source)``: ``func(env, w, tp: Params) -> wp.vec2i``, (any failure, any time-out) of the
+    table's terminations; ``time_outs[k]``: term k ends an episode as a time-out."""
+    _check(terms)
+    key = "terminations", env_type, tuple((n, id(f), p) for n, f, p in terms), tuple(time_outs)
+    if key in _MADE:
+        return _MADE[key]
+    lines = ["def terminations(env: Env, w: int, tp: Params) -> wp.vec2i:",
+             "    failed = int(0)",
+             "    timed_out = int(0)"]
+    for k, ((name, _, ptype), time_out) in enumerate(zip(terms, time_outs)):
+        flag = "timed_out" if time_out else "failed"
+        lines += [f"    if {_call(k, name, ptype, 'env', 'w')}:  # {name}",
+                  f"        {flag} = 1"]
+    lines.append("    return wp.vec2i(failed, timed_out)")
+    made = _finish("terminations", env_type, terms, lines)
+    _MADE[key] = made
+    return made
+
+
+def observation_group(env_type, group: str, terms) -> tuple[type, object, str]:
+    """``(Params, func, source)``: ``func(env, w, rng, tp: Params, layout: ObsLayout, out) -> rng`` writes world
+    ``w``'s row of the group, each term's entries in turn, noise, clip and scale as ``layout`` gives them (Warp's
+    draws advance the state passed in: the function returns it, for the caller to go on drawing from)."""
+    _check(terms)
+    tag = f"observe_{group}"
+    key = tag, env_type, tuple((n, id(f), p) for n, f, p in terms)
+    if key in _MADE:
+        return _MADE[key]
+    lines = [f"def {tag}(env: Env, w: int, rng: wp.uint32, tp: Params, layout: ObsLayout, "
+             "out: wp.array2d[float]) -> wp.uint32:",
+             "    at = int(0)"]
+    for k, (name, _, ptype) in enumerate(terms):
+        lines += [f"    # {name}",
+                  f"    for i in range(layout.size[{k}]):",
+                  f"        x = {_call(k, name, ptype, 'env', 'w', 'i')}",
+                  f"        if layout.noise[{k}] != 0.0:",
+                  f"            x = x + wp.randf(rng, -layout.noise[{k}], layout.noise[{k}])",
+                  f"        if layout.clip[{k}] != 0:",
+                  f"            x = wp.clamp(x, layout.lo[{k}], layout.hi[{k}])",
+                  f"        out[w, at + i] = x * layout.scale[{k}]",
+                  f"    at = at + layout.size[{k}]"]
+    lines.append("    return rng")
+    made = _finish(tag, env_type, terms, lines)
+    _MADE[key] = made
+    return made
+
+
+def _finish(tag: str, env_type, terms, lines: list[str]) -> tuple[type, object, str]:
+    source = "\n".join(lines) + "\n"
+    # named by what it holds, so that two tables' structs never share a name and one table's always has the same
+    shape = source + "".join(f"{n}:{_struct_key(p)};" for n, _, p in terms if p is not None)
+    params = _params_struct(f"{tag}_{hashlib.sha256(shape.encode()).hexdigest()[:16]}", terms)
+    scope = {"wp": wp, "Env": env_type, "Params": params, "ObsLayout": ObsLayout,
+             **{f"f{k}": func for k, (_, func, _) in enumerate(terms)}}
+    return params, _compile(tag, source, scope), source
+
+
+def _struct_key(struct) -> str:
+    cls = getattr(struct, "cls", None)
+    return f"{cls.__module__}.{cls.__qualname__}" if cls is not None else str(getattr(struct, "key", struct))
