@@ -2,7 +2,8 @@
 the other checkout's packages first on the path, in turn in one script run, so that a change's speed is a ratio of
 medians taken on one machine minutes apart: the legged tasks by ``benchmarks.speed.step_share`` (the env's step and
 warpgym's own share of it against MuJoCo Warp's work on the same worlds), Gymnasium's tasks (``--suite``) by
-``warpgym bench --tasks``.
+``warpgym bench --tasks`` and warpgym's robots (``--robots``) by ``warpgym bench --robots`` (their "own share" is
+against MuJoCo Warp's loop of that command, on constant controls).
 
     git archive BASE warpgym kernels agents | tar -x -C /tmp/base
     python -m benchmarks.speed.before_after --before /tmp/base --legged Go1VelocityFlat-v0 G1VelocityFlat-v0 \\
@@ -41,7 +42,8 @@ def rows_of(result) -> dict:
     """{(task, envs): (env steps/s, MuJoCo Warp's steps/s)} of a step_share or a ``warpgym bench`` output."""
     out = {}
     for r in result["results"] if isinstance(result, dict) else result:
-        out[(r["task"], r["num_envs"])] = (median(r["env_steps_per_s"]), median(r["mjwarp_steps_per_s"]))
+        out[(r.get("task") or r["robot"], r["num_envs"])] = (median(r["env_steps_per_s"]),
+                                                             median(r["mjwarp_steps_per_s"]))
     return out
 
 
@@ -66,6 +68,8 @@ def main(argv=None) -> int:
     ap.add_argument("--suite", nargs="*", default=[], help="Gymnasium's tasks too (Hopper-v5 ...)")
     ap.add_argument("--num-envs", nargs="+", type=int, default=[4096, 8192])
     ap.add_argument("--suite-envs", type=int, default=32768)
+    ap.add_argument("--robots", nargs="*", default=[], help="warpgym's Ant and Humanoid too (ant, humanoid)")
+    ap.add_argument("--robot-envs", type=int, default=4096)
     ap.add_argument("--steps", type=int, default=200)
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--out", help="the summary JSON")
@@ -81,6 +85,8 @@ def main(argv=None) -> int:
     jobs = [["benchmarks.speed.step_share", "--tasks", *args.legged, "--num-envs", *map(str, args.num_envs), *common]]
     if args.suite:
         jobs.append(["warpgym", "bench", "--tasks", *args.suite, "--num-envs", str(args.suite_envs), *common])
+    if args.robots:
+        jobs.append(["warpgym", "bench", "--robots", *args.robots, "--num-envs", str(args.robot_envs), *common])
     results = {"before": {}, "after": {}}
     with tempfile.TemporaryDirectory() as tmp:
         for k, module in enumerate(jobs):
