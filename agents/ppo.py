@@ -34,6 +34,13 @@ ACTION_BOUND = 1.1  # the env clips to [-1, 1]; a mean far outside it only waste
 # almost all weights lie well below 2, so the bound trims only that rare tail's variance
 MAX_BEHAVIOUR_WEIGHT = 2.0
 
+# What an update reports of its mini-batch steps, by name: each step's loss terms, KL and learning rate averaged
+# (the log's key for each), and the largest KL and rate of any step: the rule moves the rate 1.5x a mini-batch, and
+# the rate after the last one alone (policy/lr) can read the floor after swinging to the ceiling
+SUMMED = {"surrogate": "loss/surrogate", "value": "loss/value", "entropy": "loss/entropy", "kl": "policy/kl",
+          "bounds": "loss/bounds", "lr": "policy/lr_mean"}
+PEAKED = {"kl": "policy/kl_max", "lr": "policy/lr_max"}
+
 
 def surrogate_loss(log_prob, old_log_prob, advantages, clip: float, behaviour_log_prob=None) -> torch.Tensor:
     """PPO's clipped surrogate of the ratio to ``old_log_prob``; with ``behaviour_log_prob`` (the policy
@@ -117,15 +124,13 @@ class PPO:
         self._idx = torch.zeros(size, dtype=torch.long, device=self.device)
         self._old_log_std = torch.zeros_like(self.policy.log_std)
         self._prox_log_std = torch.zeros_like(self.policy.log_std)
-        self._sums = torch.zeros(6, device=self.device)  # surrogate, value, entropy, kl, bounds, lr
-        # the largest KL and rate of the update's mini-batches: the rule moves the rate 1.5x a mini-batch, and
-        # the rate after the last one alone (policy/lr) can read the floor after swinging to the ceiling
-        self._peaks = torch.zeros(2, device=self.device)
+        self._sums = torch.zeros(len(SUMMED), device=self.device)  # in SUMMED's order
+        self._peaks = torch.zeros(len(PEAKED), device=self.device)  # in PEAKED's order
         self._storage_id = id(storage)
         self._graph = None
 
-    def _losses(self, idx: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
-        """The mini-batch ``idx``'s loss, and its terms: surrogate, value, entropy, KL, bounds (detached)."""
+    def _losses(self, idx: torch.Tensor) -> tuple[torch.Tensor, dict[str, torch.Tensor]]:
+        """The mini-batch ``idx``'s loss, and its terms by name (detached): surrogate, value, entropy, kl, bounds."""
         cfg, policy, b = self.cfg, self.policy, self._batch
         critic = b["critic_obs"][idx] if "critic_obs" in b else None
         log_prob, entropy, values, mean = policy.evaluate(b["obs"][idx], b["actions"][idx], critic)
@@ -136,7 +141,8 @@ class PPO:
         ent = entropy.mean()
         b_loss = bounds_loss(mean)
         loss = surr + cfg.value_coef * v_loss - cfg.entropy_coef * ent + cfg.bounds_coef * b_loss
-        return loss, torch.stack([surr, v_loss, ent, kl, b_loss]).detach()
+        terms = {"surrogate": surr, "value": v_loss, "entropy": ent, "kl": kl, "bounds": b_loss}
+        return loss, {name: value.detach() for name, value in terms.items()}
 
     def _step(self) -> None:
         cfg, policy = self.cfg, self.policy
@@ -144,7 +150,7 @@ class PPO:
         self.optimizer.zero_grad(set_to_none=False)
         loss.backward()
         # one collective per mini-batch: every process's gradients and KL, averaged
-        (kl,) = self.workers.mean_grads_(policy.parameters(), terms[3])
+        (kl,) = self.workers.mean_grads_(policy.parameters(), terms["kl"])
         if self.desired_kl > 0:
             self.lr_free.copy_(adapted_lr(self.lr_free, kl, self.desired_kl))
         self.lr.copy_(self.lr_free * self.lr_scale)
@@ -153,9 +159,9 @@ class PPO:
         if cfg.max_noise_std > 0:  # in place: the captured step holds the parameter's address
             with torch.no_grad():
                 policy.log_std.clamp_(max=math.log(cfg.max_noise_std))
-        step = torch.stack([terms[0], terms[1], terms[2], kl, terms[4], self.lr])
-        self._sums += step
-        torch.maximum(self._peaks, step[3::2], out=self._peaks)  # kl, lr
+        step = {**terms, "kl": kl, "lr": self.lr}
+        self._sums += torch.stack([step[name] for name in SUMMED])
+        torch.maximum(self._peaks, torch.stack([step[name] for name in PEAKED]), out=self._peaks)
 
     def release_graph(self) -> None:
         """Free the captured step. Under NCCL a communicator cannot be destroyed while a graph that
@@ -215,8 +221,6 @@ class PPO:
             else:
                 epoch()
         self._sums /= cfg.repeat_times * num_minibatches
-        s = self._sums
-        return {"loss/surrogate": s[0].clone(), "loss/value": s[1].clone(), "loss/entropy": s[2].clone(),
-                "policy/kl": s[3].clone(), "loss/bounds": s[4].clone(), "policy/lr": self.lr.clone(),
-                "policy/lr_mean": s[5].clone(), "policy/lr_max": self._peaks[1].clone(),
-                "policy/kl_max": self._peaks[0].clone(), "policy/noise_std": self.policy.log_std.detach().exp().mean()}
+        return {**{key: self._sums[i].clone() for i, key in enumerate(SUMMED.values())},
+                **{key: self._peaks[i].clone() for i, key in enumerate(PEAKED.values())},
+                "policy/lr": self.lr.clone(), "policy/noise_std": self.policy.log_std.detach().exp().mean()}

@@ -37,6 +37,8 @@ RLLIB = [f"docs/bench/rllib/h200_rllib_{r}.json" for r in (
 LEGGED = [f"docs/bench/legged/side_by_side_{r}.json" for r in (
     "go1_15min_2026-11-28", "g1_15min_2026-11-29", "go1_rough_9min_2026-11-29", "g1_rough_15min_2026-11-29",
     "g1_rough_15min_seed1_2026-11-29")]
+BEFORE_AFTER = [f"docs/bench/speed/before_after_{r}_2026-12-02.json" for r in ("legged_flat", "legged_rough",
+                                                                                "suite_robots")]
 ENVS_ANT = ["--report", "docs/bench/envs_per_gpu/h100_envs_per_gpu_ant.json", "--figure", "-"]
 ENVS_HUMANOID = ["--report", "docs/bench/envs_per_gpu/h100_envs_per_gpu_humanoid_seed0.json",
                  "docs/bench/envs_per_gpu/h100_envs_per_gpu_humanoid_seed1.json", "--figure", "-"]
@@ -81,6 +83,8 @@ BLOCKS = {
                     ["--report", "docs/bench/suite_speed_h100_same_states.json", "docs/bench/suite_speed_h100_cpu.json"],
                     first(1)),
     "legged": ("docs/benchmarks.md", "benchmarks.learning.mjlab_side_by_side", ["--report", *LEGGED], first(3)),
+    "before-after": ("docs/benchmarks.md", "benchmarks.speed.before_after", ["--report", *BEFORE_AFTER], first(1)),
+    "legged-terms": ("docs/tasks.md", "warpgym.tasks.term_tables", [], first(3)),
     "legged-7min": ("docs/history.md", "benchmarks.learning.mjlab_side_by_side",
                     ["--report", "docs/bench/legged/side_by_side_2026-11-28.json"], first(3)),
     # the page: each policy's speeds in both simulators; the log: its training run

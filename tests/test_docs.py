@@ -118,6 +118,15 @@ def test_the_readmes_python_example_runs(tmp_path):
     run_on_the_cpu(blocks[0], tmp_path)
 
 
+def test_the_guides_own_terms_example_runs_and_reads_the_robots_feet(tmp_path):
+    """docs/guide.md's term of one's own: the Go1 at its keyframe stands with its front feet 0.2 m apart, so a
+    minimum of 0.15 m costs nothing; the observation grows by the one entry."""
+    block = next(b for b in python_blocks("docs/guide.md") if "feet_apart" in b)
+    run_on_the_cpu(block + "\nassert obs.shape == (4, 49) and float(info['reward_feet_apart'].abs().max()) == 0.0\n"
+                   "assert torch.allclose(obs[:, -1], envs.sim.to_torch(envs.sim.d.xpos)[:, envs.index.root_body, 2],"
+                   " atol=0.05)\n", tmp_path)
+
+
 def test_the_tensor_api_pages_first_example_runs_with_the_tasks_physics(tmp_path):
     block = python_blocks("docs/tensor_api.md")[0]
     assert "substeps=ANT.substeps" in block

@@ -222,8 +222,9 @@ def test_replayed_cpu_graph_steps_exactly_like_launches_from_python():
     runs = []
     for replay in (True, False):
         env = LocomotionVecEnv("Ant", num_envs=4, device="cpu", seed=2, max_episode_steps=25)
-        if not replay:
-            env.sim.capture = lambda fn: None  # every step launched from Python
+        if not replay:  # every step launched from Python (the env captured its step when it was built)
+            env.sim.capture = lambda fn: None
+            env._graph = None
         gen = torch.Generator().manual_seed(0)
         out = []
         for _ in range(40):  # falls, contacts and a truncation reset at step 25

@@ -75,6 +75,40 @@ def test_only_the_registry_asks_which_family_a_task_belongs_to():
     assert not found, found
 
 
+def test_warpgym_imports_run_one_way_down_its_layers():
+    """CONTRIBUTING.md's order, at module level: cli -> envs -> media -> native -> tasks -> sim; a module imports
+    nothing of a layer above its own when it is imported (a function that builds something of a layer above, as the
+    registry's contract does, imports it when it is called)."""
+    order = ["cli", "envs", "media", "native", "tasks", "sim"]
+
+    def layer(module: str):
+        parts = module.split(".")
+        if parts[0] != "warpgym" or len(parts) == 1:
+            return None
+        return "native" if parts[1] in ("native", "native_legged") else parts[1]
+
+    upward = []
+    for folder, _, files in os.walk(os.path.join(ROOT, "warpgym")):
+        for name in files:
+            if not name.endswith(".py"):
+                continue
+            path = os.path.join(folder, name)
+            rel = os.path.relpath(path, ROOT)
+            mine = layer(rel[:-3].replace(os.sep, "."))
+            for node in ast.parse(open(path).read()).body:
+                if isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+                    mods = [node.module]
+                elif isinstance(node, ast.Import):
+                    mods = [a.name for a in node.names]
+                else:
+                    continue
+                for m in mods:
+                    theirs = layer(m)
+                    if mine in order and theirs in order and order.index(theirs) < order.index(mine):
+                        upward.append(f"{rel} imports {m}")
+    assert not upward, upward
+
+
 def test_no_module_asks_which_family_a_task_is_by_name():
     """A command reaches what differs by family through the task's registry entry (its callables and flags), never
     by comparing the family's or the judge's name (``entry.family == "legged"``)."""

@@ -1,4 +1,6 @@
-"""warpgym: thousands of Ant and Humanoid robots simulated at once with Newton and NVIDIA Warp."""
+"""warpgym: thousands of robots simulated at once on one GPU by NVIDIA Warp kernels and MuJoCo Warp (through Newton
+for its own Ant and Humanoid), as Gymnasium vector envs whose step is one CUDA graph: Gymnasium's MuJoCo suite,
+Isaac Gym's Ant and Humanoid, mjlab's legged velocity tasks (``warpgym.tasks.registry``)."""
 
 import os as _os
 

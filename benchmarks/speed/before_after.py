@@ -8,7 +8,7 @@ against MuJoCo Warp's loop of that command, on constant controls).
     git archive BASE warpgym kernels agents | tar -x -C /tmp/base
     python -m benchmarks.speed.before_after --before /tmp/base --legged Go1VelocityFlat-v0 G1VelocityFlat-v0 \\
         --num-envs 4096 8192 --out OUT/before_after.json
-    python -m benchmarks.speed.before_after --report OUT/before_after.json
+    python -m benchmarks.speed.before_after --report OUT/before_after.json [MORE.json ...]
 """
 
 from __future__ import annotations
@@ -64,7 +64,7 @@ def main(argv=None) -> int:
     ap.add_argument("--before", help="a checkout (or `git archive`) of the commit to compare against")
     ap.add_argument("--before-name", default="the base commit", help="how the table names it")
     ap.add_argument("--after-name", default="this checkout")
-    ap.add_argument("--legged", nargs="+", default=["Go1VelocityFlat-v0", "G1VelocityFlat-v0"])
+    ap.add_argument("--legged", nargs="*", default=["Go1VelocityFlat-v0", "G1VelocityFlat-v0"])
     ap.add_argument("--suite", nargs="*", default=[], help="Gymnasium's tasks too (Hopper-v5 ...)")
     ap.add_argument("--num-envs", nargs="+", type=int, default=[4096, 8192])
     ap.add_argument("--suite-envs", type=int, default=32768)
@@ -73,16 +73,20 @@ def main(argv=None) -> int:
     ap.add_argument("--steps", type=int, default=200)
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--out", help="the summary JSON")
-    ap.add_argument("--report", help="print the table of a summary JSON and stop")
+    ap.add_argument("--report", nargs="+", help="print one table of summary JSONs (one GPU, one pair of checkouts) and "
+                                               "stop")
     args = ap.parse_args(argv)
     if args.report:
-        with open(args.report) as f:
-            print(table(json.load(f)))
+        summaries = []
+        for path in args.report:
+            with open(path) as f:
+                summaries.append(json.load(f))
+        print(table({**summaries[0], "rows": [row for s in summaries for row in s["rows"]]}))
         return 0
     if not args.before or not os.path.isdir(os.path.join(args.before, "warpgym")):
         ap.error(f"--before {args.before!r}: give a folder holding the base commit's warpgym/, kernels/ and agents/")
     common = ["--steps", str(args.steps), "--repeats", str(args.repeats)]
-    jobs = [["benchmarks.speed.step_share", "--tasks", *args.legged, "--num-envs", *map(str, args.num_envs), *common]]
+    jobs = [["benchmarks.speed.step_share", "--tasks", *args.legged, "--num-envs", *map(str, args.num_envs), *common]] if args.legged else []
     if args.suite:
         jobs.append(["warpgym", "bench", "--tasks", *args.suite, "--num-envs", str(args.suite_envs), *common])
     if args.robots:

@@ -183,7 +183,10 @@ def check_values(ap, args) -> None:
         try:
             args.task = canonical(args.task)
         except ValueError as e:  # an unknown name, or a user's module that does not import
-            ap.error(f"--task {args.task!r}: {e}; or a task of your own module, --task my_module:MyTask-v0")
+            if ":" in args.task:
+                ap.error(f"--task {args.task!r}: {e}")
+            ap.error(f"--task {args.task!r}: choose one of {list(TASK_NAMES.values())}, or a task of your own "
+                     "module: --task my_module:MyTask-v0")
     if args.target is not None:
         from agents.config import Config  # noqa: PLC0415
 

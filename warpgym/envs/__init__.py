@@ -1,5 +1,6 @@
 """Environments built on warpgym's simulators: ``LocomotionVecEnv`` (warpgym's Ant and Humanoid, on
-Newton) and ``SuiteVecEnv`` (Gymnasium's MuJoCo suite, on MuJoCo Warp)."""
+Newton), ``SuiteVecEnv`` (Gymnasium's MuJoCo suite) and ``LeggedVecEnv`` (mjlab's legged velocity tasks), both on
+MuJoCo Warp; ``make_vec_env`` builds any task's from its registry entry."""
 
 from importlib import import_module
 

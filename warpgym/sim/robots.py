@@ -1,4 +1,5 @@
-"""The robots warpgym simulates: which MJCF file, where they start, which bodies are feet.
+"""warpgym's own Ant and Humanoid (the robots Newton simulates): which MJCF file, where they start, which bodies
+are feet. (Gymnasium's tasks and the legged robots are models of their own projects' files: ``warpgym.tasks``.)
 
 The MJCF files are the ones Newton ships (``newton.examples.get_asset``). Their motor gears are
 read straight from the ``<actuator>`` block so that there is one source for them: the file.

@@ -1,4 +1,6 @@
-"""Task definitions: one frozen dataclass per task holds every number the kernels use."""
+"""Task definitions, one frozen dataclass per task holding every number the kernels use: warpgym's own Ant and
+Humanoid here (``TASKS``), Gymnasium's suite in ``suite/``, mjlab's legged tasks as tables of terms in ``legged/``
+(``terms.py``); every task of every family in ``registry.py``."""
 
 from warpgym.tasks.ant import ANT
 from warpgym.tasks.humanoid import HUMANOID

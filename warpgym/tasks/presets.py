@@ -6,6 +6,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from warpgym.tasks.legged import LEGGED as LEGGED_TASKS
+
 # warpgym's Ant and Humanoid: Isaac Gym's rl_games settings, adapted to PPO.
 PRESETS: dict[str, dict[str, Any]] = {
     "Ant": dict(net_dims=(256, 128, 64), horizon_len=16, minibatch_size=32768, repeat_times=4,
@@ -49,5 +51,4 @@ LEGGED = dict(net_dims=(512, 256, 128), horizon_len=24, minibatch_size=24576, re
               desired_kl=0.01, entropy_coef=0.01, gamma=0.99, lambda_gae=0.95, clip_ratio=0.2, value_clip=0.2,
               value_coef=1.0, max_grad_norm=1.0, bounds_coef=0.0, reward_scale=1.0, stagger_episodes=True,
               eval_gap=60.0)
-PRESETS.update({name: LEGGED for name in ("Go1VelocityFlat-v0", "G1VelocityFlat-v0", "Go1VelocityRough-v0",
-                                           "G1VelocityRough-v0")})
+PRESETS.update({name: LEGGED for name in LEGGED_TASKS})

@@ -1,4 +1,4 @@
-"""Every task warpgym runs, both families in one table.
+"""Every task warpgym runs, every family in one table, with what the commands need of each as callables.
 
 - **robots**: warpgym's own Ant and Humanoid (Newton's model, Isaac Gym's task definitions,
   ``LocomotionVecEnv``), scored in native MuJoCo (``warpgym eval``, ``warpgym sim2sim``).
@@ -7,10 +7,11 @@
 - **legged**: legged robots following a velocity command as mjlab defines them (MuJoCo's compile of mjlab's scene,
   ``LeggedVecEnv``), checked against mjlab's own env (tests/test_legged_judge.py).
 
-``make_vec_env``, the Gymnasium ids, ``warpgym train``, ``play``, ``eval`` and the command line's task
-list read a task's entry here; no other module asks which family a name belongs to
-(tests/test_layout.py). Env classes are named as Gymnasium's registry names them, by entry point, so
-this layer imports nothing above it.
+``make_vec_env``, the Gymnasium ids, ``warpgym train`` (its preset), ``play``, ``eval`` (``evaluate``), ``export``
+(``export_contract``) and the command line's task list read a task's entry here; no other module asks which family
+a name belongs to (tests/test_layout.py). Env classes are named as Gymnasium's registry names them, by entry point,
+and the commands' functions import their modules when called (``_command``), so this layer imports nothing above
+it. ``register`` enters a user's own task (a legged task with terms of its own) under its family's contract.
 """
 
 from __future__ import annotations
