@@ -115,7 +115,7 @@ def floor(task: str, num_envs: int, device: str, settings: dict, got: tuple, che
 
 def measure(task: str, name: str, num_envs: int, device: str, steps: int, warmup: int, repeats: int,
             check_steps: int, reference: tuple | None) -> tuple[dict, tuple]:
-    from warpgym.cli.bench_legged import _timed  # noqa: PLC0415
+    from warpgym.cli.bench import timed  # noqa: PLC0415
     from warpgym.cli.bench_suite import mujoco_warp_loop  # noqa: PLC0415
 
     settings = VARIANTS[name]
@@ -134,11 +134,11 @@ def measure(task: str, name: str, num_envs: int, device: str, steps: int, warmup
         for _ in range(warmup):
             env_step()
         raw = raw or mujoco_warp_loop(env, forward=True)
-        physics.append(num_envs * steps / _timed(raw, steps, device))
+        physics.append(num_envs * steps / timed(raw, steps, 1, device)[0])
         env.reset(seed=0)  # the raw loop's states may be anything: the env's timing starts from a reset
         for _ in range(warmup):
             env_step()
-        rates.append(num_envs * steps / _timed(env_step, steps, device))
+        rates.append(num_envs * steps / timed(env_step, steps, 1, device)[0])
     row = {"task": task, "variant": name, "settings": settings, "num_envs": num_envs, "build_s": built,
            "env_steps_per_s": rates, "mjwarp_steps_per_s": physics,
            "faults": {k: int(v) for k, v in env.fault_counters().items()}, "solver_load": env.sim.solver_load(),

@@ -21,7 +21,6 @@ import argparse
 import json
 import statistics
 import sys
-import time
 
 import torch
 import warp as wp
@@ -50,19 +49,12 @@ def next_recorded(k: wp.array[wp.int32], count: int):
     k[0] = (k[0] + 1) % count
 
 
-def synced(device: str) -> None:
-    if device.startswith("cuda"):
-        torch.cuda.synchronize(torch.device(device))
+def seconds(fn, count: int, device: str) -> float:
+    """Seconds of ``count`` calls, the device drained before and after (warpgym's one step timer; every checkout
+    this runs against has it)."""
+    from warpgym.cli.bench import timed  # noqa: PLC0415
 
-
-def timed(fn, count: int, device: str) -> float:
-    """Seconds of ``count`` calls, the device drained before and after."""
-    synced(device)
-    start = time.perf_counter()
-    for _ in range(count):
-        fn()
-    synced(device)
-    return time.perf_counter() - start
+    return timed(fn, count, 1, device)[0]
 
 
 def our_kernel_keys() -> set[str]:
@@ -122,7 +114,7 @@ def share(task: str, num_envs: int, steps: int, repeats: int, device: str) -> di
 
     env_rates, physics_rates = [], []
     for _ in range(repeats):
-        env_rates.append(num_envs * steps / timed(env_step, steps, device))
+        env_rates.append(num_envs * steps / seconds(env_step, steps, device))
         bias = env.state()["encoder_bias"].to(env.device)
         for i in range(steps):  # the worlds as each step starts, and the controls its actions set
             for r, v in zip(rec, views):
@@ -132,7 +124,7 @@ def share(task: str, num_envs: int, steps: int, repeats: int, device: str) -> di
             env.step(actions[i])
         snapshot = [v.clone() for v in views]
         counter.zero_()
-        physics_rates.append(num_envs * steps / timed(replay_step, steps, device))
+        physics_rates.append(num_envs * steps / seconds(replay_step, steps, device))
         for v, s in zip(views, snapshot):  # the env goes on from its own state
             v.copy_(s)
     out = {"task": task, "num_envs": num_envs, "steps": steps, "repeats": repeats,

@@ -17,15 +17,11 @@ from warpgym.cli.bench_suite import mujoco_warp_loop
 from warpgym.envs.legged import LeggedVecEnv
 
 
-def _timed(fn, steps: int, device: str) -> float:
-    if device.startswith("cuda"):
-        torch.cuda.synchronize(torch.device(device))
-    t = time.perf_counter()
-    for _ in range(steps):
-        fn()
-    if device.startswith("cuda"):
-        torch.cuda.synchronize(torch.device(device))
-    return time.perf_counter() - t
+def _seconds(fn, steps: int, device: str) -> float:
+    """Seconds of ``steps`` calls of ``fn``: ``warpgym.cli.bench.timed``, the one step timer, once."""
+    from warpgym.cli.bench import timed  # noqa: PLC0415
+
+    return timed(fn, steps, 1, device)[0]
 
 
 def bench_legged_task(task: str, num_envs: int, device: str, steps: int, warmup: int, repeats: int,
@@ -50,10 +46,10 @@ def bench_legged_task(task: str, num_envs: int, device: str, steps: int, warmup:
         start = [a.numpy().copy() for a in (d.qpos, d.qvel, d.qacc_warmstart, d.ctrl)]
         raw = raw or mujoco_warp_loop(env, forward=True)
         raw()
-        physics.append(num_envs * steps / _timed(raw, steps, device))
+        physics.append(num_envs * steps / _seconds(raw, steps, device))
         for a, value in zip((d.qpos, d.qvel, d.qacc_warmstart, d.ctrl), start):
             a.assign(value)
-        rates.append(num_envs * steps / _timed(env_step, steps, device))
+        rates.append(num_envs * steps / _seconds(env_step, steps, device))
     faults = {name: int(v) for name, v in env.fault_counters().items()}
     load = env.sim.solver_load()
     env.close()

@@ -133,7 +133,7 @@ def main(argv=None) -> int:
             outputs[args.video] = {"fps": args.fps}
         if args.gif:
             outputs[args.gif] = {"fps": args.gif_fps, "width": min(args.gif_width, args.width)}
-        frames, measured = entry_point(entry.clip_drawer)(env, recorder.states(), outputs, args.width, args.height)
+        frames, measured = entry.draw_clip(env, recorder.states(), outputs, args.width, args.height)
         result.update(measured)
         for out, count in frames.items():
             print(f"wrote {out}: {count} frames, {os.path.getsize(out) / 1e6:.2f} MB")

@@ -61,10 +61,6 @@ def reward_sum(env_type, terms) -> tuple[type, object, str]:
     """``(Params, func, source)``: ``func(env, w, tp: Params, weights, dt, values) -> float`` writes each term's
     ``weight * dt * value`` into ``values[w, k]`` (0 where the weight is 0, which skips the term, or where the value
     is not finite) and returns their sum. ``terms``: ``[(name, wp.func, params struct or None)]``."""
-    _check(terms)
-    key = "rewards", env_type, tuple((n, id(f), p) for n, f, p in terms)
-    if key in _MADE:
-        return _MADE[key]
     lines = ["def rewards(env: Env, w: int, tp: Params, weights: wp.array[float], dt: float, "
              "values: wp.array2d[float]) -> float:",
              "    total = float(0.0)"]
@@ -78,18 +74,12 @@ def reward_sum(env_type, terms) -> tuple[type, object, str]:
                   f"    values[w, {k}] = v{k}",
                   f"    total += v{k}"]
     lines.append("    return total")
-    made = _finish("rewards", env_type, terms, lines)
-    _MADE[key] = made
-    return made
+    return _made("rewards", env_type, terms, lines)
 
 
 def termination_flags(env_type, terms, time_outs: list[bool]) -> tuple[type, object, str]:
     """``(Params, func, source)``: ``func(env, w, tp: Params) -> wp.vec2i``, (any failure, any time-out) of the
     table's terminations; ``time_outs[k]``: term k ends an episode as a time-out."""
-    _check(terms)
-    key = "terminations", env_type, tuple((n, id(f), p) for n, f, p in terms), tuple(time_outs)
-    if key in _MADE:
-        return _MADE[key]
     lines = ["def terminations(env: Env, w: int, tp: Params) -> wp.vec2i:",
              "    failed = int(0)",
              "    timed_out = int(0)"]
@@ -98,20 +88,14 @@ def termination_flags(env_type, terms, time_outs: list[bool]) -> tuple[type, obj
         lines += [f"    if {_call(k, name, ptype, 'env', 'w')}:  # {name}",
                   f"        {flag} = 1"]
     lines.append("    return wp.vec2i(failed, timed_out)")
-    made = _finish("terminations", env_type, terms, lines)
-    _MADE[key] = made
-    return made
+    return _made("terminations", env_type, terms, lines)
 
 
 def observation_group(env_type, group: str, terms) -> tuple[type, object, str]:
     """``(Params, func, source)``: ``func(env, w, rng, tp: Params, layout: ObsLayout, out) -> rng`` writes world
     ``w``'s row of the group, each term's entries in turn, noise, clip and scale as ``layout`` gives them (Warp's
     draws advance the state passed in: the function returns it, for the caller to go on drawing from)."""
-    _check(terms)
     tag = f"observe_{group}"
-    key = tag, env_type, tuple((n, id(f), p) for n, f, p in terms)
-    if key in _MADE:
-        return _MADE[key]
     lines = [f"def {tag}(env: Env, w: int, rng: wp.uint32, tp: Params, layout: ObsLayout, "
              "out: wp.array2d[float]) -> wp.uint32:",
              "    at = int(0)"]
@@ -126,13 +110,21 @@ def observation_group(env_type, group: str, terms) -> tuple[type, object, str]:
                   f"        out[w, at + i] = x * layout.scale[{k}]",
                   f"    at = at + layout.size[{k}]"]
     lines.append("    return rng")
-    made = _finish(tag, env_type, terms, lines)
-    _MADE[key] = made
-    return made
+    return _made(tag, env_type, terms, lines)
 
 
-def _finish(tag: str, env_type, terms, lines: list[str]) -> tuple[type, object, str]:
+def _made(tag: str, env_type, terms, lines: list[str]) -> tuple[type, object, str]:
+    """The table's parameter struct and function, made once per source (the same table's function is Warp's same
+    function, its kernels compiled once in a process)."""
+    _check(terms)
     source = "\n".join(lines) + "\n"
+    key = tag, env_type, source, tuple((n, id(f), p) for n, f, p in terms)
+    if key not in _MADE:
+        _MADE[key] = _finish(tag, env_type, terms, source)
+    return _MADE[key]
+
+
+def _finish(tag: str, env_type, terms, source: str) -> tuple[type, object, str]:
     # named by what it holds, so that two tables' structs never share a name and one table's always has the same
     shape = source + "".join(f"{n}:{_struct_key(p)};" for n, _, p in terms if p is not None)
     params = _params_struct(f"{tag}_{hashlib.sha256(shape.encode()).hexdigest()[:16]}", terms)

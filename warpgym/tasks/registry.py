@@ -45,7 +45,7 @@ class TaskEntry:
     # and whether it draws every world or the first (the suite's clips use Gymnasium's renderer, one world)
     clip_keys: tuple[str, ...]
     clip_all_worlds: bool
-    clip_drawer: str  # the function that draws a recorded clip, by entry point (warpgym.media.video)
+    draw_clip: Callable  # draws a recorded clip (warpgym.media.video): (env, states, outputs, width, height)
     training_clips: bool  # `warpgym train --video` can film its evaluations (media.clips draws the robots only)
     scored_in: str  # "native MuJoCo" or "Gymnasium's env": where `warpgym eval` plays a trained policy
     reports_speed: bool  # the env's forward speed is the task's measure (eval/speed beside eval/return)
@@ -80,7 +80,7 @@ def _robot(name: str, episode_length: int, envs: tuple[int, int], iterations: tu
     return TaskEntry(name, "robots", f"warpgym/{name}-v0", episode_length,
                      "warpgym.envs.locomotion:LocomotionVecEnv", "warpgym.envs.single:LocomotionEnv", (),
                      physics_flags=True, clip_keys=(), clip_all_worlds=True,
-                     clip_drawer="warpgym.media.video:draw_robot_clip", training_clips=True,
+                     draw_clip=_command("warpgym.media.video", "draw_robot_clip"), training_clips=True,
                      scored_in="native MuJoCo",
                      reports_speed=True, default_envs=envs, default_iterations=iterations, preset=PRESETS[name],
                      evaluate=_command("warpgym.cli.eval", "in_native_mujoco"))
@@ -90,7 +90,7 @@ def _suite(name: str, episode_length: int) -> TaskEntry:
     return TaskEntry(name, "suite", f"warpgym/{name}", episode_length,
                      "warpgym.envs.suite:SuiteVecEnv", "warpgym.envs.single:SuiteEnv", (("unit_actions", True),),
                      physics_flags=False, clip_keys=("dof_pos", "dof_vel"), clip_all_worlds=False,
-                     clip_drawer="warpgym.media.video:draw_suite_clip", training_clips=False,
+                     draw_clip=_command("warpgym.media.video", "draw_suite_clip"), training_clips=False,
                      scored_in="Gymnasium's env", reports_speed=False, default_envs=(4096, 64),
                      default_iterations=(500, 100), preset=PRESETS[name],
                      evaluate=_command("warpgym.cli.eval", "in_gymnasium"))
@@ -101,7 +101,7 @@ def _legged(name: str, episode_length: int) -> TaskEntry:
     return TaskEntry(name, "legged", f"warpgym/{name}", episode_length,
                      "warpgym.envs.legged:LeggedVecEnv", "warpgym.envs.single:LeggedEnv", (),
                      physics_flags=False, clip_keys=("dof_pos", "dof_vel"), clip_all_worlds=False,
-                     clip_drawer="warpgym.media.video:draw_legged_clip", training_clips=False,
+                     draw_clip=_command("warpgym.media.video", "draw_legged_clip"), training_clips=False,
                      scored_in="native MuJoCo", reports_speed=False, default_envs=(4096, 32),
                      default_iterations=(1000, 30), preset=PRESETS.get(name, LEGGED_PRESET),
                      evaluate=_command("warpgym.cli.eval", "legged_in_native_mujoco"),
