@@ -90,3 +90,6 @@ class ObsLayout:
     lo: wp.array[float]  # (K,)
     hi: wp.array[float]  # (K,)
     scale: wp.array[float]  # (K,) after noise and clip, as mjlab orders them
+    history: wp.array[wp.int32]  # (K,) frames the observation holds of the term, oldest first (1: this one)
+    hist_at: wp.array[wp.int32]  # (K,) where a term with history keeps its frames in ``hist``
+    hist: wp.array2d[float]  # (N, sum of size x history of the terms with history; at least 1)

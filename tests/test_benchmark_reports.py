@@ -234,8 +234,6 @@ def test_suite_learning_promotes_a_candidates_rows_once_the_preset_holds_its_set
     is not scored, and while DIR holds the rows they replace; then written as the preset's rows (``config`` empty, the
     settings kept as ``made_with``), which the table names as the task alone and --score and suite_versions still
     find in the run's own folder."""
-    from agents import config as agents_config
-
     from benchmarks.learning import suite_learning as sl
     from benchmarks.learning import suite_versions as sv
 
@@ -256,7 +254,9 @@ def test_suite_learning_promotes_a_candidates_rows_once_the_preset_holds_its_set
         return path
 
     # a discount no preset has: the candidate is refused until the (patched) preset takes it
-    assert agents_config.PRESETS["Swimmer-v5"].get("gamma") != 0.991
+    from warpgym.tasks.presets import PRESETS
+
+    assert PRESETS["Swimmer-v5"].get("gamma") != 0.991
     for seed in (0, 1):
         doc(src, seed, ["gamma=0.991"])
     doc(dest, 0, [])  # the row the candidate would replace
@@ -264,9 +264,7 @@ def test_suite_learning_promotes_a_candidates_rows_once_the_preset_holds_its_set
     with pytest.raises(SystemExit, match="which Swimmer-v5's preset in warpgym/tasks/presets.py does not hold; change the "
                                          "preset first"):
         sl.main(argv)
-    presets = dict(agents_config.PRESETS)
-    presets["Swimmer-v5"] = dict(presets["Swimmer-v5"], gamma=0.991)
-    monkeypatch.setattr(agents_config, "PRESETS", presets)
+    monkeypatch.setitem(PRESETS["Swimmer-v5"], "gamma", 0.991)  # the task's registry entry holds this very dict
     with pytest.raises(SystemExit, match=r"still holds Swimmer-v5's rows \(Swimmer-v5-seed0.json\); move them to "
                                          ".*superseded/ first"):
         sl.main(argv)

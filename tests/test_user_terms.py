@@ -90,3 +90,39 @@ def test_warpgym_train_trains_a_users_task_from_its_module(tmp_path):
     replay = subprocess.run([sys.executable, "-m", "warpgym", "play", run, "--device", "cpu", "--steps", "2"],
                             capture_output=True, text=True, env=env, cwd=str(tmp_path), timeout=600)
     assert replay.returncode == 2 and "pass --import user_task" in replay.stderr, replay.stderr[-2000:]
+
+
+def test_an_observation_with_history_holds_its_last_frames_oldest_first():
+    """A term with ``history=3``: its three frames after a reset are the first observation, then each step shifts
+    them (oldest first), against the same term without history in the same observation; a world reset in a step
+    starts its frames over."""
+    from kernels.legged import observations as terms
+    from warpgym.envs.legged import LeggedVecEnv
+    from warpgym.tasks.legged.model import policy_terms
+    from warpgym.tasks.terms import Observation
+
+    env = LeggedVecEnv("Go1VelocityFlat-v0", num_envs=3, device="cpu", seed=1, pushes=False, observation_noise=False,
+                       policy_obs={"past_joint_vel": Observation(terms.joint_vel, lambda d: d.joints, history=3)})
+    now = slice(21, 33)  # joint_vel: after the base's 9 entries and the 12 joint positions
+
+    def frames(obs):
+        return obs[:, 48:60].clone(), obs[:, 60:72].clone(), obs[:, 72:84].clone()
+
+    obs, _ = env.reset(seed=0)
+    assert obs.shape == (3, 48 + 36)
+    assert dict((n, s) for n, s, _ in policy_terms(env.task, env.index, 12))["past_joint_vel"] == 36
+    seen = [obs[:, now].clone()]
+    assert all(torch.equal(f, seen[0]) for f in frames(obs))
+    torch.manual_seed(0)
+    for step in range(4):
+        obs, _, terminated, truncated, _ = env.step(torch.rand(3, 12) * 2 - 1)
+        seen.append(obs[:, now].clone())
+        oldest, middle, newest = frames(obs)
+        assert torch.equal(newest, seen[-1])
+        went_on = ~(terminated | truncated)
+        assert torch.equal(middle[went_on], seen[-2][went_on]) and torch.equal(oldest[went_on], seen[max(len(seen) - 3, 0)][went_on])
+        assert float((seen[-1] - seen[-2]).abs().max()) > 0  # the joints move: the frames differ
+    env.close()
+    with pytest.raises(ValueError, match=r"history=0 must be a number of observations, 1 or more"):
+        LeggedVecEnv("Go1VelocityFlat-v0", num_envs=1, device="cpu",
+                     policy_obs={"bad": Observation(terms.joint_vel, 12, history=0)})

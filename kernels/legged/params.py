@@ -122,6 +122,7 @@ class LeggedState:
     foot_clear: wp.array2d[float]  # (N, F) the feet's scanned heights at the last observation (rough ground)
     terrain_normal: wp.array[wp.vec3]  # (N,) the ground's normal under the base at the last observation
     step_count: wp.array[wp.int32]  # (1,) env steps since the env was built (the command curriculum's clock)
+    fresh: wp.array[wp.int32]  # (N,) 1 from a world's reset to its first observation (observation history)
 
 
 @wp.struct

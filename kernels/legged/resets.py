@@ -59,6 +59,7 @@ def reset_legged_worlds(p: LeggedParams, r: LeggedRobot, force_all: int, stagger
         st.contact_time[w, f] = 0.0
     for g in range(NUM_GROUPS):
         st.collision_hits[w, g] = 0
+    st.fresh[w] = 1
     rng = draw_command(p, st, w, rng)
     st.push_time_left[w] = wp.randf(rng, p.push_interval_lo, p.push_interval_hi)
     ep.length[w] = 0

@@ -86,8 +86,8 @@ def step_kernels(rewards, Rewards, terminations, Terminations, policy, Policy, c
         out.done[w] = done
         if done:
             rng = stream(rng_state, w, FINAL_OBSERVATION)
-            rng = policy(env, w, rng, policy_params, policy_layout, out.final_obs)
-            critic(env, w, rng, critic_params, critic_layout, final_critic)
+            rng = policy(env, w, rng, 0, policy_params, policy_layout, out.final_obs)
+            critic(env, w, rng, 0, critic_params, critic_layout, final_critic)
             ep.ended_return[w] = ep.total_return[w]
             ep.ended_length[w] = length
             ep.ended_errors[w, 0] = ep.errors[w, 0]
@@ -110,8 +110,10 @@ def step_kernels(rewards, Rewards, terminations, Terminations, policy, Policy, c
         w = wp.tid()
         for f in range(env.r.foot_site.shape[0]):
             env.st.foot_height[w, f] = foot_height_now(env, w, f)
-        rng = policy(env, w, stream(rng_state, w, OBSERVATION), policy_params, policy_layout, actor)
-        critic(env, w, rng, critic_params, critic_layout, critic_out)
+        fresh = env.st.fresh[w]  # the first observation since the world's reset: a term's history starts from it
+        rng = policy(env, w, stream(rng_state, w, OBSERVATION), fresh, policy_params, policy_layout, actor)
+        critic(env, w, rng, fresh, critic_params, critic_layout, critic_out)
+        env.st.fresh[w] = 0
 
     _KERNELS[key] = legged_step, observe
     return legged_step, observe

@@ -110,7 +110,7 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
         st.air_time, st.contact_time = buf((n, feet)), buf((n, feet))
         st.peak_height, st.foot_height = buf((n, feet)), buf((n, feet))
         st.collision_hits, st.encoder_bias = buf((n, NUM_GROUPS), wp.int32), buf((n, joints))
-        st.step_count = buf(1, wp.int32)
+        st.step_count, st.fresh = buf(1, wp.int32), buf(n, wp.int32)
         st.scan, st.foot_clear = buf((n, max(scan, 1))), buf((n, feet))
         st.terrain_normal = wp.array(np.tile(np.float32([0.0, 0.0, 1.0]), (n, 1)), dtype=wp.vec3, device=dev)
         self._terrain_levels(seed)
@@ -154,10 +154,11 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
         self._rewards = compile_rewards(task.rewards, LeggedEnv, joints, dev, f"{task.name}: rewards")
         self._terminations = compile_terminations(task.terminations, LeggedEnv, joints, dev,
                                                   f"{task.name}: terminations")
+        n = self.num_envs
         self._policy = compile_observations(task.policy_obs, "policy", LeggedEnv, self.dims, joints, dev,
-                                            task.observation_noise, f"{task.name}: policy_obs")
+                                            task.observation_noise, f"{task.name}: policy_obs", n)
         self._critic_obs = compile_observations(task.critic_obs, "critic", LeggedEnv, self.dims, joints, dev,
-                                                task.observation_noise, f"{task.name}: critic_obs")
+                                                task.observation_noise, f"{task.name}: critic_obs", n)
         tables = self._rewards, self._terminations, self._policy, self._critic_obs
         self._step_kernel, self._observe_kernel = step_kernels(*[x for t in tables for x in (t.func, t.params_type)])
 
@@ -211,7 +212,6 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
             self._height_scan = Scan(ScanFrames("body", root, root), p.array(), p.direction, p.alignment,
                                      p.max_distance, num_envs=self.num_envs, device=sim.device)
             self._normal_picks = wp.array(normal_picks(self._height_scan.num_rays), dtype=wp.int32, device=sim.device)
-
         if task.foot_scan is not None:
             p = task.foot_scan
             self._foot_scan = Scan(ScanFrames("site", idx.foot_site, idx.foot_body), p.array(), p.direction,
@@ -228,7 +228,7 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
             self._height_scan.heights(st.scan)
             # the ground's normal under the base, for terms that measure tilt against it (the rough Go1's upright)
             wp.launch(fit_ground_normal, dim=n, inputs=[self._height_scan.s, self._normal_picks],
-                          outputs=[st.terrain_normal], device=dev)
+                      outputs=[st.terrain_normal], device=dev)
         if self._foot_scan is not None:
             self._foot_scan.clearance(st.foot_clear)
 

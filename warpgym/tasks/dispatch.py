@@ -92,23 +92,37 @@ def termination_flags(env_type, terms, time_outs: list[bool]) -> tuple[type, obj
 
 
 def observation_group(env_type, group: str, terms) -> tuple[type, object, str]:
-    """``(Params, func, source)``: ``func(env, w, rng, tp: Params, layout: ObsLayout, out) -> rng`` writes world
-    ``w``'s row of the group, each term's entries in turn, noise, clip and scale as ``layout`` gives them (Warp's
-    draws advance the state passed in: the function returns it, for the caller to go on drawing from)."""
+    """``(Params, func, source)``: ``func(env, w, rng, fresh, tp: Params, layout: ObsLayout, out) -> rng`` writes
+    world ``w``'s row of the group, each term's entries in turn, noise, clip and scale as ``layout`` gives them; a
+    term with history writes its last ``history`` frames, oldest first, and ``fresh`` (the world's first observation
+    since its reset) fills them all with this one, as Isaac Lab's and mjlab's history buffers do. Warp's draws
+    advance the state passed in: the function returns it, for the caller to go on drawing from."""
     tag = f"observe_{group}"
-    lines = [f"def {tag}(env: Env, w: int, rng: wp.uint32, tp: Params, layout: ObsLayout, "
+    lines = [f"def {tag}(env: Env, w: int, rng: wp.uint32, fresh: int, tp: Params, layout: ObsLayout, "
              "out: wp.array2d[float]) -> wp.uint32:",
              "    at = int(0)"]
     for k, (name, _, ptype) in enumerate(terms):
         lines += [f"    # {name}",
-                  f"    for i in range(layout.size[{k}]):",
+                  f"    n{k} = layout.size[{k}]",
+                  f"    h{k} = layout.history[{k}]",
+                  f"    for i in range(n{k}):",
                   f"        x = {_call(k, name, ptype, 'env', 'w', 'i')}",
                   f"        if layout.noise[{k}] != 0.0:",
                   f"            x = x + wp.randf(rng, -layout.noise[{k}], layout.noise[{k}])",
                   f"        if layout.clip[{k}] != 0:",
                   f"            x = wp.clamp(x, layout.lo[{k}], layout.hi[{k}])",
-                  f"        out[w, at + i] = x * layout.scale[{k}]",
-                  f"    at = at + layout.size[{k}]"]
+                  f"        x = x * layout.scale[{k}]",
+                  f"        if h{k} == 1:",
+                  f"            out[w, at + i] = x",
+                  f"        else:",
+                  f"            base = layout.hist_at[{k}]",
+                  f"            for j in range(h{k}):",
+                  f"                if fresh != 0 or j == h{k} - 1:",
+                  f"                    layout.hist[w, base + j * n{k} + i] = x",
+                  f"                else:",
+                  f"                    layout.hist[w, base + j * n{k} + i] = layout.hist[w, base + (j + 1) * n{k} + i]",
+                  f"                out[w, at + j * n{k} + i] = layout.hist[w, base + j * n{k} + i]",
+                  f"    at = at + n{k} * h{k}"]
     lines.append("    return rng")
     return _made(tag, env_type, terms, lines)
 

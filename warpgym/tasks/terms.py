@@ -59,7 +59,9 @@ class Observation:
     """An observation term: ``size`` entries ``func(env, w, i[, params])``, each with uniform noise in [-noise,
     noise] (the policy's; none when a task turns noise off), clamped into ``clip`` (low, high) when given, then
     times ``scale`` (mjlab's order). ``size``: a number, or a function of the env's ``Dims`` (joints, actions,
-    feet, scan rays). ``what``: the entry's meaning in the export contract (default: the function's docstring)."""
+    feet, scan rays). ``history``: the last that many observations of the term, oldest first (``size x history``
+    entries; after a reset every frame is the first observation). ``what``: the entry's meaning in the export
+    contract (default: the function's docstring)."""
 
     func: Any
     size: int | Callable
@@ -68,6 +70,7 @@ class Observation:
     scale: float = 1.0
     params: tuple = ()
     what: str = ""
+    history: int = 1
 
     def __post_init__(self):
         object.__setattr__(self, "params", _frozen(self.params))
@@ -280,12 +283,15 @@ def sizes(table: Terms, dims: Dims, where: str) -> list[int]:
 
 
 def layout(table: Terms, dims: Dims, where: str) -> list[tuple[str, int, int, str]]:
-    """The group's entries term by term: (name, offset, size, what it holds)."""
+    """The group's entries term by term: (name, offset, entries, what they hold); a term with history holds
+    ``size x history`` entries."""
     out, at = [], 0
     for (name, term), n in zip(table.items(), sizes(table, dims, where)):
         what = term.what or " ".join((term.func.func.__doc__ or name).split())
-        out.append((name, at, n, what))
-        at += n
+        if term.history > 1:
+            what += f"; its last {term.history} observations, oldest first"
+        out.append((name, at, n * term.history, what))
+        at += n * term.history
     return out
 
 
@@ -301,6 +307,8 @@ def validate(table: Terms, where: str) -> None:
                 raise ValueError(f"{at}: noise={term.noise!r} must be 0 or a positive number")
             if not _is_number(term.scale):
                 raise ValueError(f"{at}: scale={term.scale!r} must be a finite number")
+            if isinstance(term.history, bool) or not isinstance(term.history, int) or term.history < 1:
+                raise ValueError(f"{at}: history={term.history!r} must be a number of observations, 1 or more")
             if term.clip is not None and not (isinstance(term.clip, tuple) and len(term.clip) == 2
                                               and all(isinstance(c, (int, float)) for c in term.clip)
                                               and term.clip[0] <= term.clip[1]):
@@ -356,8 +364,9 @@ def compile_terminations(table: Terms, env_type, joints: list[str], device: str,
 
 
 def compile_observations(table: Terms, group: str, env_type, dims: Dims, joints: list[str], device: str,
-                         noise: bool, where: str) -> Compiled:
-    """``noise``: False zeroes every term's noise (mjlab's play mode)."""
+                         noise: bool, where: str, num_envs: int) -> Compiled:
+    """``noise``: False zeroes every term's noise (mjlab's play mode); ``num_envs``: the worlds a term with history
+    keeps its frames for."""
     import warp as wp  # noqa: PLC0415
 
     from kernels.common import ObsLayout  # noqa: PLC0415
@@ -370,7 +379,12 @@ def compile_observations(table: Terms, group: str, env_type, dims: Dims, joints:
         return wp.array(np.asarray(values, np.int32 if dtype == wp.int32 else np.float32), dtype=dtype, device=device)
 
     lay = ObsLayout()
-    lay.size = arr(sizes(table, dims, where), wp.int32)
+    size = sizes(table, dims, where)
+    lay.size = arr(size, wp.int32)
+    lay.history = arr([t.history for t in terms], wp.int32)
+    kept = [n * t.history if t.history > 1 else 0 for n, t in zip(size, terms)]
+    lay.hist_at = arr(np.cumsum([0, *kept[:-1]]), wp.int32)
+    lay.hist = wp.zeros((num_envs, max(sum(kept), 1)), dtype=float, device=device)
     lay.noise = arr([t.noise if noise else 0.0 for t in terms])
     lay.clip = arr([int(t.clip is not None) for t in terms], wp.int32)
     lay.lo = arr([t.clip[0] if t.clip is not None else 0.0 for t in terms])
