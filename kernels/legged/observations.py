@@ -125,11 +125,3 @@ def feet_contact(env: LeggedEnv, w: int, i: int) -> float:
 def feet_contact_forces(env: LeggedEnv, w: int, i: int) -> float:
     """each foot's net contact force (world frame), sign x log(1 + |f|), three entries a foot"""
     return signed_log(env.d.sensordata[w, env.r.foot_force[i / 3] + i % 3])
-
-
-@wp.kernel
-def keep_foot_heights(env: LeggedEnv):
-    """The feet's heights at this observation, which the next step's rewards read (mjlab's sense pass)."""
-    w = wp.tid()
-    for f in range(env.r.foot_site.shape[0]):
-        env.st.foot_height[w, f] = foot_height_now(env, w, f)
