@@ -61,8 +61,8 @@ def test_the_ground_variants_reach_the_env_and_step(variant):
     assert np.isfinite(got[0]).all()
 
 
-@pytest.mark.parametrize("variant, field, ground_geoms", [("stairs_heightfield_5cm", "boxes_as_heightfield", 74),
-                                                           ("ground_heightfield_5cm", "ground_as_heightfield", 5)])
+@pytest.mark.parametrize("variant, field, ground_geoms", [("stairs_heightfield_5cm", "stairs_cell", 74),
+                                                           ("ground_heightfield_5cm", "ground_cell", 5)])
 def test_the_ground_variants_build_fewer_ground_geoms(variant, field, ground_geoms):
     env = rs.build("Go1VelocityRough-v0", 1, "cpu", rs.VARIANTS[variant])
     try:

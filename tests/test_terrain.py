@@ -10,14 +10,15 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from benchmarks.physics.ground_rays import compile_alone, heights
 from warpgym.tasks.legged import terrain as tr
 
 HERE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "data", "legged")
 
 
 def compiled(grid, seed):
-    ground = tr.generate(grid, seed)
-    return ground, tr.compile_alone(ground)
+    ground = grid.generate(seed)
+    return ground, compile_alone(ground)
 
 
 @pytest.fixture(scope="module")
@@ -33,7 +34,7 @@ def test_the_same_seed_gives_mjlabs_ground_under_every_ray_and_its_starts(refere
         ground, mjm = compiled(grid, int(seed))
         points = reference[f"{prefix}seed{seed}_points"]
         theirs = reference[f"{prefix}seed{seed}_heights"]
-        ours = tr.heights(mjm, points)
+        ours = heights(mjm, points)
         assert np.isfinite(theirs).all() and np.isfinite(ours).all()
         # the heightfields hold float32 data: the same cells give the same heights to float32's precision
         assert np.abs(ours - theirs).max() < 1e-5, (seed, np.abs(ours - theirs).max())
@@ -49,7 +50,7 @@ def test_a_stairs_patch_rises_a_step_per_ring_and_its_inverse_falls():
     # 8 m patches, 1 m frame, 3 m platform: int((8 - 2 - 3) / 0.6) = 5 rings; the platform 6 steps up (down)
     up, down = ground.corners[0, 0], ground.corners[0, 1]
     rings = [up + np.array([1.0 + 0.3 * k + 0.15, 4.0, 0]) for k in range(5)]
-    z = tr.heights(mjm, np.array([p[:2] for p in rings] + [(up + [4, 4, 0])[:2], (down + [4, 4, 0])[:2]]))
+    z = heights(mjm, np.array([p[:2] for p in rings] + [(up + [4, 4, 0])[:2], (down + [4, 4, 0])[:2]]))
     np.testing.assert_allclose(z[:5], 0.1 * np.arange(1, 6), atol=1e-9)
     assert z[5] == pytest.approx(0.6) and z[6] == pytest.approx(-0.6)
     assert ground.origins[0, 0, 2] == pytest.approx(0.6) and ground.origins[0, 1, 2] == pytest.approx(-0.6)
@@ -81,10 +82,6 @@ def test_kinds_are_drawn_by_their_proportions_and_difficulties_uniformly():
     (lambda: tr.TerrainGrid(sub_terrains=(("flat", tr.Flat()),), num_rows=0), "0 x 20 patches"),
     (lambda: tr.Waves(num_waves=0).patch((8.0, 8.0), 0.5, None), "num_waves=0"),
     (lambda: tr.PyramidSlope(border_width=0.05).patch((8.0, 8.0), 0.5, None), "border_width=0.05"),
-    (lambda: replace(tr.ROUGH, boxes_as_heightfield=-0.05), "boxes_as_heightfield=-0.05"),
-    (lambda: replace(tr.ROUGH, boxes_as_heightfield=3.0), "boxes_as_heightfield=3.0"),
-    (lambda: replace(tr.ROUGH, ground_as_heightfield=-0.05), "ground_as_heightfield=-0.05"),
-    (lambda: replace(tr.ROUGH, boxes_as_heightfield=0.05, ground_as_heightfield=0.05), "give one of them"),
 ])
 def test_bad_settings_name_the_value_and_the_fix(make, message):
     with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")):
@@ -138,84 +135,3 @@ def test_a_clip_of_a_rough_task_colours_only_the_ground_and_refuses_a_model_of_o
     other = tr.generate(replace(tr.ROUGH, num_rows=2, num_cols=4), seed=1)
     with pytest.raises(ValueError, match="colour the model compiled from this ground"):
         colour_ground(mjm, other)
-
-
-def test_stairs_as_heightfields_are_the_boxes_ground_but_at_the_steps_edges():
-    """``boxes_as_heightfield``: each stairs patch one heightfield (554 ground geoms to 74 on the rough tasks' grid).
-    Under rays more than a cell from any step's edge the ground is the boxes' to float32; at the edges it differs by
-    at most a step, never more."""
-    grid = replace(tr.ROUGH, curriculum=True)
-    cell = 0.05
-    boxes, boxes_model = compiled(grid, 0)
-    fields, fields_model = compiled(replace(grid, boxes_as_heightfield=cell), 0)
-    assert (boxes_model.ngeom, fields_model.ngeom) == (554, 74)
-    stairs = [c for c, (name, _) in enumerate(grid.sub_terrains) if name.startswith("pyramid_stairs")]
-    rng = np.random.default_rng(0)
-    points, step = [], 0.0
-    for c in stairs:
-        for r in range(grid.num_rows):
-            corner = boxes.corners[r, c]
-            points += [corner[:2] + rng.uniform(0.0, grid.size[0], 2) for _ in range(40)]
-            step = max(step, tr._lerp(grid.sub_terrains[c][1].step_height_range, boxes.difficulty[r, c]))
-    points = np.array(points)
-    want, got = tr.heights(boxes_model, points), tr.heights(fields_model, points)
-    # a point is on a step's edge when the boxes' ground a cell away differs from its own
-    around = [tr.heights(boxes_model, points + np.array(d)) for d in ((cell, 0), (-cell, 0), (0, cell), (0, -cell))]
-    edge = np.any([np.abs(a - want) > 1e-6 for a in around], axis=0)
-    assert 0.5 * len(points) < (~edge).sum() < len(points)  # most points lie on a tread, some at an edge
-    np.testing.assert_allclose(got[~edge], want[~edge], atol=1e-4)
-    assert np.abs(got - want).max() <= step + 1e-4
-    assert (fields.origins == boxes.origins).all()
-
-
-def test_the_whole_ground_as_one_heightfield_is_the_patches_ground_at_its_nodes():
-    """``ground_as_heightfield``: the grid inside the border as one heightfield (554 ground geoms to 5). At its
-    nodes, away from a step's edge, MuJoCo's rays find the patches' ground to float32 (the heightfield patches
-    included: the resampling reads them as MuJoCo does, two triangles a cell); between nodes it is resampled, so it
-    parts from the patches' ground by at most a step at a step's edge and by millimetres on the heightfield kinds."""
-    import mujoco
-
-    grid = replace(tr.ROUGH, curriculum=True)
-    cell = 0.05
-    patches, patches_model = compiled(grid, 0)
-    whole, whole_model = compiled(replace(grid, ground_as_heightfield=cell), 0)
-    assert (patches_model.ngeom, whole_model.ngeom) == (554, 5)
-    assert whole_model.geom_type[0] == mujoco.mjtGeom.mjGEOM_HFIELD and (whole.origins == patches.origins).all()
-    rng = np.random.default_rng(0)
-    corner = patches.corners[0, 0, :2]
-    extent = np.array([grid.num_rows * grid.size[0], grid.cols * grid.size[1]])
-    nodes = corner + cell * rng.integers(0, np.rint(extent / cell).astype(int) + 1, (600, 2))
-    want, got = tr.heights(patches_model, nodes), tr.heights(whole_model, nodes)
-    # a step's edge: a node of a stairs patch whose ground a cell away is another step's
-    stairs = {k for k, (name, _) in enumerate(grid.sub_terrains) if "stairs" in name}
-    on_stairs = np.isin(patches.kinds_at(nodes), list(stairs))
-    around = [tr.heights(patches_model, nodes + np.array(d)) for d in ((cell, 0), (-cell, 0), (0, cell), (0, -cell))]
-    edge = on_stairs & np.any([np.abs(a - want) > 1e-6 for a in around], axis=0)
-    assert 0.9 * len(nodes) < (~edge).sum() < len(nodes)
-    np.testing.assert_allclose(got[~edge], want[~edge], atol=1e-4)
-    anywhere = corner + rng.uniform(0.0, 1.0, (600, 2)) * extent
-    err = np.abs(tr.heights(whole_model, anywhere) - tr.heights(patches_model, anywhere))
-    steepest = max(tr._lerp(sub.step_height_range, 1.0) for name, sub in grid.sub_terrains if "stairs" in name)
-    assert np.median(err) < 1e-3 and err.max() <= steepest + 1e-4
-
-
-def test_the_whole_ground_heightfield_is_drawn_in_one_colour():
-    from warpgym.media.ground_colours import BORDER, PALETTE, colour_ground
-
-    ground, mjm = compiled(replace(tr.ROUGH, num_rows=2, num_cols=4, ground_as_heightfield=0.1), 1)
-    colour_ground(mjm, ground)
-    np.testing.assert_allclose(mjm.geom_rgba[0, :3], PALETTE[0], atol=1e-6)
-    np.testing.assert_allclose(mjm.geom_rgba[1:, :3], np.tile(BORDER, (4, 1)), atol=1e-6)
-
-
-def test_kinds_at_finds_each_patch_by_its_own_length_and_width():
-    """A point's patch on a grid of 8 x 4-m patches (rows along x, columns along y): a patch's start and points
-    just inside its corners give its kind; reading both axes by the patch's length would give another patch's."""
-    grid = replace(tr.ROUGH, num_rows=3, num_cols=4, size=(8.0, 4.0), curriculum=True)
-    ground = tr.generate(grid, 0)
-    assert len(np.unique(ground.kinds)) > 1  # else any lookup would pass
-    starts = ground.origins.reshape(-1, 3)
-    inside = np.concatenate([ground.corners.reshape(-1, 3)[:, :2] + d for d in ([0.01, 0.01], [7.99, 3.99])])
-    want = ground.kinds.reshape(-1)
-    np.testing.assert_array_equal(ground.kinds_at(starts), want)
-    np.testing.assert_array_equal(ground.kinds_at(inside), np.concatenate([want, want]))

@@ -20,7 +20,7 @@ Writes OUT/fidelity.json after every run and prints two markdown tables. Policie
 training step, the other settings' speeds as shares of it, torso height, the share of steps with no foot
 on the ground and the longest such flight (native MuJoCo, which checks every substep), falls, the
 energy the step pays in (native MuJoCo at both steps: the mechanical energy gained beyond the work of
-every force, per robot and as a share of the motors'; warpgym.native.PowerMeter), and
+every force, per robot and as a share of the motors'; benchmarks/physics/energy.py), and
 whether the policy holds: >= 0.90 at the finer step in both simulators and >= 0.95 in native MuJoCo at
 the training step. Runs: steady samples/s, when the training episodes first reached the task's target
 speed (Ant 3 m/s, Humanoid 2 m/s), diverged resets, the last evaluation. Probes: the four speeds, and
@@ -127,6 +127,7 @@ def _native(job: dict) -> dict:
     os.environ["CUDA_VISIBLE_DEVICES"] = ""
     import torch
 
+    from benchmarks.physics.energy import PowerMeter
     from warpgym.cli import sim2sim
     from agents.checkpoint import load
 
@@ -134,7 +135,7 @@ def _native(job: dict) -> dict:
     t0 = time.perf_counter()
     ckpt = load(job["checkpoint"], torch.device("cpu"))
     row = sim2sim.replay_native(ckpt, job["env_args"], job["substeps"], job["copies"], job["steps"], job["seed"],
-                                energy=True)
+                                account=PowerMeter)
     return {**row, "wall_s": round(time.perf_counter() - t0, 1)}
 
 

@@ -1,4 +1,4 @@
-"""How far the rough ground laid as one heightfield (``TerrainGrid.ground_as_heightfield``) moves from mjlab's, kind
+"""How far the rough ground laid as one heightfield (ground_variants.py's ``ground_cell``) moves from mjlab's, kind
 by kind: MuJoCo's ray casts straight down onto both compiles at the same random points over the grid, the median,
 95th percentile and largest height difference of each kind of patch, and how long MuJoCo takes to compile each.
 CPU only, a few seconds a cell size.
@@ -17,16 +17,18 @@ import numpy as np
 
 def compile_ground(grid, seed: int):
     """(Terrain, MjModel, seconds to generate and compile it)."""
-    from warpgym.tasks.legged import terrain as tr  # noqa: PLC0415
+    from benchmarks.physics.ground_rays import compile_alone  # noqa: PLC0415
 
     start = time.perf_counter()
-    ground = tr.generate(grid, seed)
-    model = tr.compile_alone(ground)
+    ground = grid.generate(seed)
+    model = compile_alone(ground)
     return ground, model, time.perf_counter() - start
 
 
 def differences(cells: list[float], points: int, seed: int) -> list[dict]:
     """Each cell size's row: its heightfield's nodes, compile time and, per kind, the height differences [m]."""
+    from benchmarks.physics.ground_rays import heights, kinds_at  # noqa: PLC0415
+    from benchmarks.physics.ground_variants import Resampled  # noqa: PLC0415
     from warpgym.tasks.legged import terrain as tr  # noqa: PLC0415
 
     grid = replace(tr.ROUGH, curriculum=True)  # as the rough tasks build it: one kind a column
@@ -34,12 +36,12 @@ def differences(cells: list[float], points: int, seed: int) -> list[dict]:
     corner = ground.corners[0, 0, :2]
     extent = np.array([grid.num_rows * grid.size[0], grid.cols * grid.size[1]])
     at = corner + np.random.default_rng(seed).uniform(0.0, 1.0, (points, 2)) * extent
-    want = tr.heights(reference, at)
-    kinds = ground.kinds_at(at)
+    want = heights(reference, at)
+    kinds = kinds_at(ground, at)
     rows = []
     for cell in cells:
-        _, model, seconds = compile_ground(replace(grid, ground_as_heightfield=cell), seed)
-        err = np.abs(tr.heights(model, at) - want)
+        _, model, seconds = compile_ground(Resampled.of(grid, ground_cell=cell), seed)
+        err = np.abs(heights(model, at) - want)
         by_kind = {name: [float(np.median(err[kinds == k])), float(np.percentile(err[kinds == k], 95)),
                           float(err[kinds == k].max())]
                    for k, (name, _) in enumerate(grid.sub_terrains) if (kinds == k).any()}

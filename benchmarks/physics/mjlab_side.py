@@ -432,6 +432,8 @@ def terrain(out: str, seeds: list[int], points: int) -> None:
     from mjlab.terrains.config import ROUGH_TERRAINS_CFG  # noqa: PLC0415
     from mjlab.terrains.terrain_generator import TerrainGenerator  # noqa: PLC0415
 
+    from benchmarks.physics.ground_rays import heights  # noqa: PLC0415  (numpy and MuJoCo only, as mjlab's env has)
+
     rng = np.random.default_rng(0)
     arrays = {}
     for seed in seeds:
@@ -443,16 +445,7 @@ def terrain(out: str, seeds: list[int], points: int) -> None:
             rows, cols = gen.terrain_origins.shape[:2]
             half = np.array([rows * gen.cfg.size[0], cols * gen.cfg.size[1]]) / 2 + 1.0  # 1 m of the border too
             xy = rng.uniform(-half, half, size=(points, 2))
-            # warpgym.tasks.legged.terrain.heights casts the same rays; it is not imported here, where warpgym's
-            # package (Warp's and Newton's imports) is not installed
-            data = mujoco.MjData(mjm)
-            mujoco.mj_forward(mjm, data)
-            z = np.full(points, np.nan)
-            geomid = np.zeros(1, dtype=np.int32)
-            for i, (x, y) in enumerate(xy):
-                dist = mujoco.mj_ray(mjm, data, np.array([x, y, 10.0]), np.array([0.0, 0.0, -1.0]), None, 1, -1, geomid)
-                if dist >= 0:
-                    z[i] = 10.0 - dist
+            z = heights(mjm, xy)  # the rays warpgym's compile is judged by
             arrays[f"{prefix}seed{seed}_points"] = xy
             arrays[f"{prefix}seed{seed}_heights"] = z
             arrays[f"{prefix}seed{seed}_origins"] = gen.terrain_origins

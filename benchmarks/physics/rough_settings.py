@@ -5,8 +5,8 @@ on an H200, against 457 k on flat ground), so the settings that decide how it fi
 levers: the broadphase (MuJoCo Warp picks its all-pairs kind, NXN, for these scenes: 30 robot geoms against 554
 ground geoms; SAP_TILE and SAP_SEGMENTED sort and sweep), the constraint rows per world (mjlab's 1500), the contacts
 a contact sensor considers (mjlab's 500) and the CCD iterations (mjlab's 500); and, not a setting, the ground's
-geometry: the stairs as heightfields (``TerrainGrid.boxes_as_heightfield``: 74 ground geoms) or the whole grid as one
-(``ground_as_heightfield``: 5). For each variant:
+geometry: the stairs as heightfields (ground_variants.py's ``stairs_cell``: 74 ground geoms) or the whole grid as one
+(``ground_cell``: 5). For each variant:
 
 - env-steps/s of the bare step (uniform random actions in [-1, 1], as ``warpgym bench --legged``) and of MuJoCo
   Warp's step alone, the median of ``--repeats``;
@@ -28,7 +28,6 @@ geometry: the stairs as heightfields (``TerrainGrid.boxes_as_heightfield``: 74 g
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import statistics
 import time
@@ -46,12 +45,12 @@ VARIANTS = {  # name: settings changed from the task's (mjlab's); "mjlab" first,
     "sap_tile_njmax_300_maxmatch_64": {"broadphase": "SAP_TILE", "njmax": 300, "contact_sensor_maxmatch": 64},
     # not a setting but the ground's geometry: each stairs patch one heightfield (74 ground geoms instead of 554);
     # it differs from mjlab's ground at the steps' edges by design, so its agreement columns are not a check
-    "stairs_heightfield_5cm": {"boxes_as_heightfield": 0.05},
+    "stairs_heightfield_5cm": {"stairs_cell": 0.05},
     # the whole grid as one heightfield (5 ground geoms): every patch resampled every 5 cm
-    "ground_heightfield_5cm": {"ground_as_heightfield": 0.05},
+    "ground_heightfield_5cm": {"ground_cell": 0.05},
 }
 TASK_FIELDS = ("njmax", "contact_sensor_maxmatch")  # LeggedTask fields
-TERRAIN_FIELDS = ("boxes_as_heightfield", "ground_as_heightfield")  # TerrainGrid fields; the rest are MuJoCo Warp options
+TERRAIN_FIELDS = ("stairs_cell", "ground_cell")  # ground_variants.Resampled fields; the rest are MuJoCo Warp options
 QPOS_TOL = 1e-3  # [m or rad] a world whose qpos moved further apart than this counts as diverged
 
 
@@ -60,13 +59,14 @@ def build(task: str, num_envs: int, device: str, settings: dict):
     step (they are read when a kernel is launched, and the step's graph is captured at the first step)."""
     import mujoco_warp  # noqa: PLC0415
 
+    from benchmarks.physics.ground_variants import Resampled  # noqa: PLC0415
     from warpgym.envs.legged import LeggedVecEnv  # noqa: PLC0415
     from warpgym.tasks.legged import get_legged_task  # noqa: PLC0415
 
     fields = {k: v for k, v in settings.items() if k in TASK_FIELDS}
     ground = {k: v for k, v in settings.items() if k in TERRAIN_FIELDS}
     if ground:
-        fields["terrain"] = dataclasses.replace(get_legged_task(task).terrain, **ground)
+        fields["terrain"] = Resampled.of(get_legged_task(task).terrain, **ground)
     env = LeggedVecEnv(task, num_envs=num_envs, device=device, seed=0, **fields)
     opt = env.sim.m.opt
     if "broadphase" in settings:

@@ -94,7 +94,8 @@ def replay(ckpt, task, setting: dict, substeps: int, copies: int, steps: int, se
 
     from agents.checkpoint import policy_from_checkpoint  # noqa: PLC0415
     from warpgym.cli.sim2sim import play_native  # noqa: PLC0415
-    from warpgym.native import NativeRobot, PowerMeter  # noqa: PLC0415
+    from benchmarks.physics.energy import PowerMeter  # noqa: PLC0415
+    from warpgym.native import NativeRobot  # noqa: PLC0415
 
     substeps = setting.get("substeps", setting.get("finer", 1) * substeps)
     if "joint_speed" in setting:

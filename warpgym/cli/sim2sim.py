@@ -114,21 +114,21 @@ def play_warpgym(env, act, steps: int, seed: int) -> dict:
     return meter.result(fell)
 
 
-def replay_native(ckpt, env_args: dict, substeps: int, copies: int, steps: int, seed: int,
-                  energy: bool = False) -> dict:
-    """``play_native`` of a checkpoint's policy; ``energy`` adds the replay's energy account
-    (``power_w``: ``warpgym.native.PowerMeter``, mean watts per robot until its fall)."""
+def replay_native(ckpt, env_args: dict, substeps: int, copies: int, steps: int, seed: int, account=None) -> dict:
+    """``play_native`` of a checkpoint's policy; ``account`` (made from the MjModel: a ``NativeRobot.on_substep``
+    with a ``watts()``, as benchmarks/physics/energy.py's ``PowerMeter``) adds ``power_w``, its mean watts per robot
+    until the robot's fall."""
     import torch  # noqa: PLC0415
 
     from agents.checkpoint import policy_from_checkpoint  # noqa: PLC0415
-    from warpgym.native import NativeRobot, PowerMeter  # noqa: PLC0415
+    from warpgym.native import NativeRobot  # noqa: PLC0415
     from warpgym.tasks import trained_task  # noqa: PLC0415
 
     task = trained_task(env_args)
     robot = NativeRobot(task, substeps=substeps, copies=copies)
     num_obs = task.observation_size(len(robot.dof_names), len(robot.feet))
     policy, normalize = policy_from_checkpoint(ckpt, num_obs, len(robot.dof_names), torch.device("cpu"))
-    meter = robot.on_substep = PowerMeter(robot.model) if energy else None
+    meter = robot.on_substep = account(robot.model) if account else None
     row = play_native(robot, lambda obs: policy.act_deterministic(normalize(obs)), steps, seed)
     return {**row, "power_w": meter.watts()} if meter else row
 

@@ -13,18 +13,13 @@ BORDER = (0.25, 0.25, 0.25)
 
 def colour_ground(mjm, ground) -> None:
     """Colour the geoms of ``mjm``'s ``terrain`` body (as ``warpgym.tasks.legged.terrain.add_to_spec`` laid them:
-    patch by patch, row by row, then the outer border) by their patch's kind; the ground laid as one heightfield
-    (``ground_as_heightfield``) in one colour."""
+    ``ground.boxes_and_fields()``: its patches' geoms, then the outer border) by their patch's kind
+    (``ground.patch_geom_kinds()``)."""
     import mujoco  # noqa: PLC0415
 
     body = mujoco.mj_name2id(mjm, mujoco.mjtObj.mjOBJ_BODY, "terrain")
     geoms = np.flatnonzero(mjm.geom_bodyid == body)
-    g = ground.grid
-    if g.ground_as_heightfield > 0.0:
-        kinds = [0]  # every patch in one heightfield: one colour, its kinds cannot be told apart
-    else:
-        kinds = [int(ground.kinds[r, c]) for r in range(g.num_rows) for c in range(g.cols)
-                 for _ in ground.patches[r][c].geoms]
+    kinds = ground.patch_geom_kinds()
     if len(geoms) != len(kinds) + 4:
         raise ValueError(f"the terrain body holds {len(geoms)} geoms, the ground {len(kinds)} and a border of 4: "
                          "colour the model compiled from this ground")

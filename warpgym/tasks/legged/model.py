@@ -148,11 +148,11 @@ def compile_task_scene(task: LeggedTask):
     """MuJoCo's compile of the task's scene with its generated ground (rough tasks; none on the flat floor):
     ``(CompiledModel, Terrain or None)``, the same model for the env, its drawings and native MuJoCo."""
     from warpgym.sim.scene import compile_scene  # noqa: PLC0415
-    from warpgym.tasks.legged.terrain import add_to_spec, generate  # noqa: PLC0415
+    from warpgym.tasks.legged.terrain import add_to_spec  # noqa: PLC0415
 
     if task.terrain is None:
         return compile_scene(task.scene_path), None
-    ground = generate(task.terrain, task.terrain_seed)
+    ground = task.terrain.generate(task.terrain_seed)
     return compile_scene(task.scene_path, lambda spec: add_to_spec(spec, ground)), ground
 
 

@@ -11,7 +11,6 @@ rays onto both compiles and compares the heights.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -231,14 +230,6 @@ class TerrainGrid:
     num_cols: int = 20
     curriculum: bool = False
     difficulty_range: tuple[float, float] = (0.0, 1.0)
-    # not mjlab's: > 0 lays each patch built of several boxes (the stairs) as one heightfield sampled every this many
-    # metres, so MuJoCo Warp's collision sees fewer ground geoms (the rough tasks' grid: 74 instead of 554); a step's
-    # edge becomes a ramp one cell wide
-    boxes_as_heightfield: float = 0.0
-    # not mjlab's: > 0 lays the whole grid inside the border as one heightfield sampled every this many metres (five
-    # ground geoms with the border's boxes); every patch is resampled, so the ground moves near a step's edge and
-    # between a heightfield patch's nodes
-    ground_as_heightfield: float = 0.0
 
     def __post_init__(self):
         if not self.sub_terrains:
@@ -251,21 +242,14 @@ class TerrainGrid:
             raise ValueError(f"TerrainGrid: difficulty_range={self.difficulty_range}: give 0 <= min <= max")
         if self.num_rows < 1 or self.num_cols < 1:
             raise ValueError(f"TerrainGrid: {self.num_rows} x {self.num_cols} patches: give at least 1 x 1")
-        cell = self.boxes_as_heightfield
-        if not (cell == 0.0 or 0.0 < cell <= min(self.size) / 4):
-            raise ValueError(f"TerrainGrid: boxes_as_heightfield={cell}: give 0 (boxes, as mjlab) or a cell size in "
-                             f"metres up to a quarter of the {min(self.size):g}-m patch, e.g. 0.05")
-        whole = self.ground_as_heightfield
-        if not (whole == 0.0 or 0.0 < whole <= min(self.size) / 4):
-            raise ValueError(f"TerrainGrid: ground_as_heightfield={whole}: give 0 (each patch its own geoms, as mjlab) "
-                             f"or a cell size in metres up to a quarter of the {min(self.size):g}-m patch, e.g. 0.05")
-        if cell > 0.0 and whole > 0.0:
-            raise ValueError(f"TerrainGrid: boxes_as_heightfield={cell} and ground_as_heightfield={whole}: the whole "
-                             "ground's heightfield holds the stairs too: give one of them, the other 0")
 
     @property
     def cols(self) -> int:
         return len(self.sub_terrains) if self.curriculum else self.num_cols
+
+    def generate(self, seed: int) -> Terrain:
+        """The ground the tasks lay (``generate``); a grid that lays its patches otherwise overrides this."""
+        return generate(self, seed)
 
 
 # mjlab 1.6's ROUGH_TERRAINS_CFG
@@ -292,26 +276,23 @@ class Terrain:
     origins: np.ndarray  # (rows, cols, 3)
     patches: list[list[Patch]]
 
-    def kinds_at(self, points: np.ndarray) -> np.ndarray:
-        """The kind (an index into ``grid.sub_terrains``) of the patch under each (x, y) of ``points``, world frame;
-        a point on the border counts as the nearest patch's."""
-        g = self.grid
-        rc = np.floor((np.asarray(points)[:, :2] - self.corners[0, 0, :2]) / np.asarray(g.size)).astype(int)
-        rc = np.clip(rc, 0, [g.num_rows - 1, g.cols - 1])
-        return self.kinds[rc[:, 0], rc[:, 1]]
+    def patch_geoms(self):
+        """The patches' geoms in the world frame, patch by patch in row-major order."""
+        for r in range(self.grid.num_rows):
+            for c in range(self.grid.cols):
+                corner = self.corners[r, c]
+                for g in self.patches[r][c].geoms:
+                    pos = tuple(float(p + o) for p, o in zip(g.pos, corner))
+                    yield Box(pos, g.half) if isinstance(g, Box) else HField(pos, g.size, g.data)
+
+    def patch_geom_kinds(self) -> list[int]:
+        """The kind of each of ``patch_geoms``' geoms, in their order (what colours the ground by kind)."""
+        return [int(self.kinds[r, c]) for r in range(self.grid.num_rows) for c in range(self.grid.cols)
+                for _ in self.patches[r][c].geoms]
 
     def boxes_and_fields(self):
-        """Every geom in the world frame: the patches' in row-major order (or, with ``ground_as_heightfield``, the one
-        heightfield of them all), then the outer border's four boxes."""
-        if self.grid.ground_as_heightfield > 0.0:
-            yield ground_heightfield(self, self.grid.ground_as_heightfield)
-        else:
-            for r in range(self.grid.num_rows):
-                for c in range(self.grid.cols):
-                    corner = self.corners[r, c]
-                    for g in self.patches[r][c].geoms:
-                        pos = tuple(float(p + o) for p, o in zip(g.pos, corner))
-                        yield Box(pos, g.half) if isinstance(g, Box) else HField(pos, g.size, g.data)
+        """Every geom in the world frame: ``patch_geoms``, then the outer border's four boxes."""
+        yield from self.patch_geoms()
         g = self.grid
         if g.border_width > 0.0:
             inner = (g.num_rows * g.size[0], g.cols * g.size[1])
@@ -344,83 +325,10 @@ def generate(grid: TerrainGrid, seed: int) -> Terrain:
             d = float(rng.uniform(*grid.difficulty_range))
         corner = np.array([-rows * grid.size[0] * 0.5 + r * grid.size[0], -cols * grid.size[1] * 0.5 + c * grid.size[1], 0.0])
         patch = grid.sub_terrains[kind][1].patch(grid.size, d, rng)
-        if grid.boxes_as_heightfield > 0.0 and sum(isinstance(g, Box) for g in patch.geoms) > 1:
-            patch = Patch(patch.origin, (boxes_to_heightfield(patch.geoms, grid.size, grid.boxes_as_heightfield),))
         kinds[r, c], difficulty[r, c], corners[r, c] = kind, d, corner
         origins[r, c] = np.asarray(patch.origin) + corner
         patches[r][c] = patch
     return Terrain(grid, kinds, difficulty, corners, origins, patches)
-
-
-def _tops(geoms, x: np.ndarray, y: np.ndarray, offset=(0.0, 0.0)) -> np.ndarray:
-    """The highest surface of ``geoms`` (their frame moved by ``offset``) over each point (-inf where none is): a
-    box's top, a heightfield's height as MuJoCo lays its data (rows along y, columns along x, each cell two
-    triangles)."""
-    tops = np.full(x.shape, -np.inf)
-    eps = 1e-9
-    for g in geoms:
-        gx, gy = g.pos[0] + offset[0], g.pos[1] + offset[1]
-        if isinstance(g, Box):
-            over = (np.abs(x - gx) <= g.half[0] + eps) & (np.abs(y - gy) <= g.half[1] + eps)
-            tops = np.where(over, np.maximum(tops, g.pos[2] + g.half[2]), tops)
-            continue
-        nrow, ncol = g.data.shape
-        over = (np.abs(x - gx) <= g.size[0] + eps) & (np.abs(y - gy) <= g.size[1] + eps)
-        u = np.clip((x - gx + g.size[0]) / (2 * g.size[0]) * (ncol - 1), 0, ncol - 1)
-        v = np.clip((y - gy + g.size[1]) / (2 * g.size[1]) * (nrow - 1), 0, nrow - 1)
-        c0, r0 = np.minimum(u.astype(int), ncol - 2), np.minimum(v.astype(int), nrow - 2)
-        fu, fv = u - c0, v - r0
-        h00, h10 = g.data[r0, c0], g.data[r0, c0 + 1]
-        h01, h11 = g.data[r0 + 1, c0], g.data[r0 + 1, c0 + 1]
-        # MuJoCo's two triangles of a cell share the diagonal from node (r, c) to node (r + 1, c + 1)
-        level = np.where(fu >= fv, h00 + fu * (h10 - h00) + fv * (h11 - h10),
-                         h00 + fv * (h01 - h00) + fu * (h11 - h01))
-        tops = np.where(over, np.maximum(tops, g.pos[2] + g.size[2] * level), tops)
-    return tops
-
-
-def _as_heightfield(tops: np.ndarray, center, half, low: float) -> HField:
-    """Sampled heights (rows along y) as one heightfield centred at ``center``; its base reaches down to ``low``."""
-    lo, hi = float(tops.min()), float(tops.max())
-    elevation = max(hi - lo, 1e-6)  # MuJoCo needs a positive elevation
-    base = max(lo - low, 0.05)  # down to the ground's bottom, at least 5 cm
-    data = ((tops - lo) / elevation).astype(np.float32)
-    return HField((center[0], center[1], lo), (half[0], half[1], elevation, base), data)
-
-
-def boxes_to_heightfield(boxes, size, cell: float) -> HField:
-    """The ground a patch's boxes make, sampled every ``cell`` metres as one heightfield over the patch: at each
-    sample the highest top of the boxes over it. Between two samples MuJoCo interpolates, so a vertical face becomes a
-    slope one cell wide; everywhere else the surface is the boxes'."""
-    n = int(round(size[0] / cell)) + 1, int(round(size[1] / cell)) + 1
-    x, y = np.meshgrid(np.linspace(0.0, size[0], n[0]), np.linspace(0.0, size[1], n[1]))  # MuJoCo's order
-    low = min(b.pos[2] - b.half[2] for b in boxes)
-    tops = _tops(boxes, x, y)
-    return _as_heightfield(np.where(np.isfinite(tops), tops, low), (size[0] / 2, size[1] / 2),
-                           (size[0] / 2, size[1] / 2), low)
-
-
-def ground_heightfield(terrain: Terrain, cell: float) -> HField:
-    """Every patch of ``terrain`` sampled every ``cell`` metres into one heightfield over the grid inside the border
-    (world frame): the highest surface of a patch's geoms at each sample, the higher patch's on a shared edge."""
-    grid = terrain.grid
-    extent = grid.num_rows * grid.size[0], grid.cols * grid.size[1]
-    x0, y0 = terrain.corners[0, 0, 0], terrain.corners[0, 0, 1]
-    xs = x0 + np.linspace(0.0, extent[0], int(round(extent[0] / cell)) + 1)
-    ys = y0 + np.linspace(0.0, extent[1], int(round(extent[1] / cell)) + 1)
-    tops = np.full((len(ys), len(xs)), -np.inf)  # rows along y: MuJoCo's order
-    low = 0.0
-    for r in range(grid.num_rows):
-        for c in range(grid.cols):
-            corner, patch = terrain.corners[r, c], terrain.patches[r][c]
-            # only the samples on this patch (its edges included): a patch's geoms reach no further
-            i = slice(*np.searchsorted(xs, [corner[0] - 1e-9, corner[0] + grid.size[0] + 1e-9]))
-            j = slice(*np.searchsorted(ys, [corner[1] - 1e-9, corner[1] + grid.size[1] + 1e-9]))
-            x, y = np.meshgrid(xs[i], ys[j])
-            tops[j, i] = np.maximum(tops[j, i], _tops(patch.geoms, x, y, offset=corner[:2]))
-            low = min(low, *(g.pos[2] - (g.half[2] if isinstance(g, Box) else g.size[3]) for g in patch.geoms))
-    tops = np.where(np.isfinite(tops), tops, low)
-    return _as_heightfield(tops, (x0 + extent[0] / 2, y0 + extent[1] / 2), (extent[0] / 2, extent[1] / 2), low)
 
 
 def add_to_spec(spec, terrain: Terrain, body_name: str = "terrain") -> None:
@@ -438,28 +346,3 @@ def add_to_spec(spec, terrain: Terrain, body_name: str = "terrain") -> None:
                                  ncol=g.data.shape[1], userdata=g.data.flatten().tolist())
             body.add_geom(name=f"terrain_{i}", type=mujoco.mjtGeom.mjGEOM_HFIELD, hfieldname=hf.name,
                           pos=list(g.pos), mass=0)
-
-
-def compile_alone(terrain: Terrain):
-    """The terrain alone (no robot, no light) compiled by MuJoCo: the model ``heights`` casts its rays onto."""
-    import mujoco  # noqa: PLC0415
-
-    spec = mujoco.MjSpec()
-    add_to_spec(spec, terrain)
-    return spec.compile()
-
-
-def heights(mjm, points: np.ndarray, top: float = 10.0, bodyexclude: int = -1) -> np.ndarray:
-    """The ground's height under each (x, y) of ``points``: MuJoCo's ray cast straight down from ``top`` (NaN where
-    nothing is hit). The judge of the generator: the same rays on mjlab's compile and on this one."""
-    import mujoco  # noqa: PLC0415
-
-    data = mujoco.MjData(mjm)
-    mujoco.mj_forward(mjm, data)
-    out = np.full(len(points), math.nan)
-    geomid = np.zeros(1, dtype=np.int32)
-    for i, (x, y) in enumerate(points):
-        dist = mujoco.mj_ray(mjm, data, np.array([x, y, top]), np.array([0.0, 0.0, -1.0]), None, 1, bodyexclude, geomid)
-        if dist >= 0:
-            out[i] = top - dist
-    return out
