@@ -74,3 +74,27 @@ def test_the_training_clock_starts_with_the_process():
     from warpgym.cli import process_start_time
 
     assert process_start_time() == pytest.approx(psutil.Process().create_time(), abs=0.05)
+
+
+def test_bench_times_tasks_of_every_family_in_one_table_from_their_entries(capsys, tmp_path):
+    """``warpgym bench --tasks``: each family's row comes from its registry entry's ``bench`` (the suite's, the
+    legged tasks' and the robots' own timings), the table one row per task and size, the rates positive."""
+    import json
+    import statistics
+
+    from warpgym.cli import bench
+    from warpgym.tasks.registry import REGISTRY
+
+    assert all(callable(e.bench) for e in REGISTRY.values())
+    names = ["Swimmer-v5", "Go1VelocityFlat-v0", "Ant"]
+    out = tmp_path / "bench.json"
+    assert bench.main(["--tasks", *names, "--num-envs", "2", "--steps", "2", "--repeats", "1", "--warmup", "1",
+                       "--device", "cpu", "--out", str(out)]) == 0
+    table = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| ") and "---" not in line]
+    assert [row.split(" | ")[0].strip("| ") for row in table[1:]] == names
+    rows = json.loads(out.read_text())["rows"]
+    assert [r["task"] for r in rows] == names
+    for r in rows:
+        for key in ("env_steps_per_s", "mjwarp_steps_per_s"):
+            value = r[key]
+            assert (statistics.median(value) if isinstance(value, list) else value) > 0, r

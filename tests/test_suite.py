@@ -414,10 +414,9 @@ def test_tensor_api_views_of_the_suites_worlds(suite_envs):
 
 
 def test_bench_times_the_task_step_beside_mujoco_warps_from_the_same_states():
-    from warpgym.cli.bench import gpu_memory_used, timed
-    from warpgym.cli.bench_suite import bench_suite_task
+    from warpgym.tasks.registry import task_entry
 
-    row = bench_suite_task("Swimmer-v5", 4, DEVICE, steps=3, repeats=2, timed=timed, memory_used=gpu_memory_used)
+    row = task_entry("Swimmer-v5").bench("Swimmer-v5", 4, DEVICE, 3, 20, 2, None)
     assert row["env_steps_per_s"] > 0 and row["mjwarp_steps_per_s"] > 0
     assert len(row["env_seconds"]) == len(row["mjwarp_seconds"]) == 2
     assert row["faults"] == {"nan_actions": 0, "diverged_resets": 0, "solver_overflows": 0}

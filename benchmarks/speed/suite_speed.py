@@ -124,7 +124,6 @@ def main(argv=None) -> int:
     import torch  # noqa: PLC0415
 
     from warpgym.cli import write_json  # noqa: PLC0415
-    from warpgym.cli.bench import gpu_memory_used, timed  # noqa: PLC0415
     from warpgym.cli.bench_suite import bench_suite_task  # noqa: PLC0415
     from warpgym.tasks.registry import task_names  # noqa: PLC0415
 
@@ -146,7 +145,7 @@ def main(argv=None) -> int:
         if not args.skip_gpu:
             for n in args.num_envs:
                 try:
-                    r = bench_suite_task(name, n, device, args.steps, args.repeats, timed, gpu_memory_used)
+                    r = bench_suite_task(name, n, device, args.steps, 20, args.repeats)
                 except Exception as e:  # one size that does not fit must not cost the rest
                     r = {"task": name, "num_envs": n, "error": repr(e)[:300]}
                 out["gpu"].append(r)

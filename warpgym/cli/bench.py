@@ -10,7 +10,12 @@ Each figure is the median of --repeats timings of --steps steps, after a warm-up
 NAME=VALUE (repeatable) times other solver settings, e.g. --physics ls_iterations=2.
 
     warpgym bench --robots ant humanoid --num-envs 1024 4096 16384
-    warpgym bench --tasks Hopper-v5 Humanoid-v5 --num-envs 4096 32768   (Gymnasium's suite: bench_suite.py)
+
+``--tasks`` times any task's whole step beside MuJoCo Warp's own step of the same worlds, each family as its registry
+entry's ``bench`` says (the suite: bench_suite.py; the legged tasks: bench_legged.py; Ant and Humanoid: the loops
+above), in one table:
+
+    warpgym bench --tasks Hopper-v5 Go1VelocityFlat-v0 Ant --num-envs 4096 8192
 """
 
 from __future__ import annotations
@@ -148,12 +153,13 @@ def bench_one(robot: str, num_envs: int, device: str, steps: int, repeats: int, 
 def parser() -> CommandParser:
     ap = CommandParser(prog="warpgym bench", description=__doc__)
     ap.add_argument("--robots", nargs="+", default=["ant", "humanoid"], choices=sorted(TASK_OF_ROBOT))
-    ap.add_argument("--tasks", nargs="+", default=None, metavar="NAME-v5",
-                    help="Gymnasium's MuJoCo tasks instead of the robots: MuJoCo Warp's step against the task's")
+    ap.add_argument("--tasks", nargs="+", default=None, metavar="NAME",
+                    help="tasks of any family instead of the robots (Hopper-v5, Go1VelocityFlat-v0, Ant, module:Name): "
+                         "the task's step with random actions against MuJoCo Warp's own step of the same worlds")
     ap.add_argument("--legged", nargs="+", default=None, metavar="NAME-v0",
-                    help="the legged velocity tasks instead (Go1VelocityFlat-v0 ... G1VelocityRough-v0): the env's step "
-                         "with random actions, as benchmarks/learning/mjlab_side_by_side.py times mjlab's")
-    ap.add_argument("--warmup", type=positive_int(20), default=20, help="--legged: steps before each timing")
+                    help="the same as --tasks (kept for the scripts that time older commits with it)")
+    ap.add_argument("--warmup", type=positive_int(20), default=20,
+                    help="--tasks: steps before each timing (Ant and Humanoid: 3)")
     ap.add_argument("--num-envs", nargs="+", type=positive_int(4096), default=[1024, 4096, 16384])
     ap.add_argument("--device", default=None)
     ap.add_argument("--steps", type=positive_int(200), default=200, help="steps per timing")
@@ -179,22 +185,21 @@ def main(argv=None) -> int:
         Physics.from_dict(physics)
     except ValueError as e:
         ap.error(f"--physics: {e}")
-    from warpgym.tasks.legged import get_legged_task  # noqa: PLC0415
-    from warpgym.tasks.suite import get_suite_task  # noqa: PLC0415
+    from warpgym.tasks.registry import canonical  # noqa: PLC0415
 
-    for flag, names, get in (("--legged", args.legged, get_legged_task), ("--tasks", args.tasks, get_suite_task)):
-        try:
-            for name in names or ():
-                get(name)
-        except ValueError as e:
-            ap.error(f"{flag}: {e}")
+    flag, names = ("--legged", args.legged) if args.legged else ("--tasks", args.tasks)
+    try:
+        names = [canonical(name) for name in names or ()]
+    except ValueError as e:
+        ap.error(f"{flag}: {e}")
+    if names and physics:
+        ap.error(f"--physics {' '.join(args.physics)}: it sets Ant's and Humanoid's physics under --robots; the "
+                 "tasks of --tasks run with their own")
     device = resolve_device(args.device)
     gpu = torch.cuda.get_device_name(torch.device(device)) if device.startswith("cuda") else platform.processor()
 
-    if args.legged:
-        return bench_legged(args, device, gpu, argv)
-    if args.tasks:
-        return bench_suite(args, device, gpu, argv)
+    if names:
+        return bench_tasks(names, args, device, gpu, argv)
     rows = []
     for robot in args.robots:
         for n in args.num_envs:
@@ -227,41 +232,35 @@ def save_results(args, device, gpu, argv, rows) -> None:
         write_json(args.out, {"meta": meta, "results": rows, "rows": rows})
 
 
-def bench_legged(args, device, gpu, argv) -> int:
-    from warpgym.cli.bench_legged import bench_legged_task  # noqa: PLC0415
+def bench_robot_task(task: str, num_envs: int, device: str, steps: int, warmup: int, repeats: int,
+                     njmax: int | None = None) -> dict:
+    """``bench_one`` of a robot task (Ant, Humanoid) as ``--tasks`` times it: its default physics, 3 warm-up steps."""
+    return {"task": task, **bench_one(task.lower(), num_envs, device, steps, repeats, {}, njmax)}
+
+
+def _median(value) -> float:
+    return statistics.median(value) if isinstance(value, list) else value
+
+
+def bench_tasks(names: list[str], args, device, gpu, argv) -> int:
+    """Each task's row from its registry entry's ``bench``, then one table of them all."""
+    from warpgym.tasks.registry import task_entry  # noqa: PLC0415
 
     rows = []
-    for name in args.legged:
+    for name in names:
         for n in args.num_envs:
             for njmax in args.njmax:
-                r = bench_legged_task(name, n, device, args.steps, args.warmup, args.repeats, gpu_memory_used, njmax)
+                r = task_entry(name).bench(name, n, device, args.steps, args.warmup, args.repeats, njmax)
                 rows.append(r)
-                print(json.dumps(r), flush=True)
-    print(f"\n{gpu}, {args.steps} steps after {args.warmup} x {args.repeats} repeats, median env-steps/s")
-    print("| task | envs | njmax | MuJoCo Warp (steps + forward) | warpgym env | env/MuJoCo Warp |")
+                print(json.dumps({k: v for k, v in r.items() if not k.endswith("seconds")}), flush=True)
+    print(f"\n{gpu}, {args.steps} steps x {args.repeats} repeats, median env-steps/s (MuJoCo Warp: its own step of "
+          "the task's worlds, with the forward pass the legged tasks' step ends with)")
+    print("| task | envs | njmax | MuJoCo Warp | warpgym env | env/MuJoCo Warp |")
     print("|---|---:|---:|---:|---:|---:|")
     for r in rows:
-        env, phys = (sorted(r[k])[len(r[k]) // 2] for k in ("env_steps_per_s", "mjwarp_steps_per_s"))
-        print(f"| {r['task']} | {r['num_envs']} | {r['njmax']} | {phys / 1e6:.3f}M | {env / 1e6:.3f}M | {env / phys:.3f} |")
-    if args.out:
-        save_results(args, device, gpu, argv, rows)
-    return 0
-
-
-def bench_suite(args, device, gpu, argv) -> int:
-    from warpgym.cli.bench_suite import bench_suite_task  # noqa: PLC0415
-    rows = []
-    for name in args.tasks:
-        for n in args.num_envs:
-            r = bench_suite_task(name, n, device, args.steps, args.repeats, timed, gpu_memory_used)
-            rows.append(r)
-            print(json.dumps({k: v for k, v in r.items() if not k.endswith("seconds")}), flush=True)
-    print(f"\n{gpu}, {args.steps} steps x {args.repeats} repeats, median env-steps/s")
-    print("| task | envs | MuJoCo Warp | warpgym env | env/MuJoCo Warp |")
-    print("|---|---:|---:|---:|---:|")
-    for r in rows:
-        print(f"| {r['task']} | {r['num_envs']} | {r['mjwarp_steps_per_s'] / 1e6:.3f}M | "
-              f"{r['env_steps_per_s'] / 1e6:.3f}M | {r['env_over_mjwarp']:.3f} |")
+        env, phys = _median(r["env_steps_per_s"]), _median(r["mjwarp_steps_per_s"])
+        print(f"| {r['task']} | {r['num_envs']} | {r.get('njmax') or '-'} | {phys / 1e6:.3f}M | {env / 1e6:.3f}M "
+              f"| {env / phys:.3f} |")
     save_results(args, device, gpu, argv, rows)
     return 0
 

@@ -25,8 +25,10 @@ def _seconds(fn, steps: int, device: str) -> float:
 
 
 def bench_legged_task(task: str, num_envs: int, device: str, steps: int, warmup: int, repeats: int,
-                      memory_used, njmax: int | None = None) -> dict:
+                      njmax: int | None = None) -> dict:
     """``njmax``: constraint rows per world MuJoCo Warp makes room for (default: the task's, mjlab's 300)."""
+    from warpgym.cli.bench import gpu_memory_used as memory_used  # noqa: PLC0415
+
     before = memory_used(device)
     start = time.perf_counter()
     env = LeggedVecEnv(task, num_envs=num_envs, device=device, seed=0, **({"njmax": njmax} if njmax else {}))

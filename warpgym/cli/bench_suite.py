@@ -34,8 +34,14 @@ def mujoco_warp_loop(env, forward: bool = False):
     return steps if graph is None else (lambda: wp.capture_launch(graph))
 
 
-def bench_suite_task(task: str, num_envs: int, device: str, steps: int, repeats: int, timed, memory_used) -> dict:
-    """Median env-steps/s of MuJoCo Warp's step and of the task's whole step on ``num_envs`` worlds."""
+def bench_suite_task(task: str, num_envs: int, device: str, steps: int, warmup: int, repeats: int,
+                     njmax: int | None = None) -> dict:
+    """Median env-steps/s of MuJoCo Warp's step and of the task's whole step on ``num_envs`` worlds, after ``warmup``
+    steps (the capture, the first resets). The suite keeps the file's own compile: ``njmax`` is refused."""
+    from warpgym.cli.bench import gpu_memory_used as memory_used, timed  # noqa: PLC0415
+
+    if njmax is not None:
+        raise ValueError(f"njmax={njmax}: {task} runs MuJoCo's compile of Gymnasium's file as it is; leave --njmax out")
     before = memory_used(device)
     env = SuiteVecEnv(task, num_envs=num_envs, device=device, seed=0)
     env.reset(seed=0)
@@ -48,7 +54,7 @@ def bench_suite_task(task: str, num_envs: int, device: str, steps: int, repeats:
         env.step(pool[k[0] % len(pool)])
         k[0] += 1
 
-    for _ in range(20):  # capture, first resets
+    for _ in range(warmup):
         env_step()
     mem = memory_used(device) - before
     raw = mujoco_warp_loop(env)
@@ -74,7 +80,7 @@ def bench_suite_task(task: str, num_envs: int, device: str, steps: int, repeats:
     faults = {name: int(v) for name, v in env.fault_counters().items()}
     load = env.sim.solver_load()
     env.close()
-    return {"task": task, "num_envs": num_envs, "frame_skip": env.sim.frame_skip,
+    return {"task": task, "num_envs": num_envs, "njmax": None, "frame_skip": env.sim.frame_skip,
             "env_steps_per_s": num_envs * steps / med[0], "mjwarp_steps_per_s": num_envs * steps / med[1],
             "env_over_mjwarp": med[1] / med[0], "env_seconds": env_s, "mjwarp_seconds": raw_s,
             "gpu_mem_mib": mem / 2**20, "faults": faults, "solver_load": load}

@@ -58,6 +58,9 @@ class TaskEntry:
     # env's own observation and action, docs/tasks.md)
     evaluate: Callable = None
     export_contract: Callable | None = None
+    # `warpgym bench --tasks`: (name, num_envs, device, steps, warmup, repeats, njmax) -> a row of the task's step
+    # beside MuJoCo Warp's own (env_steps_per_s, mjwarp_steps_per_s: a median or each timing)
+    bench: Callable = None
     asymmetric: bool = False  # the critic has an observation group of its own (info["critic_obs"])
 
     def defaults(self, device_kind: str) -> tuple[int, int]:
@@ -83,7 +86,8 @@ def _robot(name: str, episode_length: int, envs: tuple[int, int], iterations: tu
                      draw_clip=_command("warpgym.media.video", "draw_robot_clip"), training_clips=True,
                      scored_in="native MuJoCo",
                      reports_speed=True, default_envs=envs, default_iterations=iterations, preset=PRESETS[name],
-                     evaluate=_command("warpgym.cli.eval", "in_native_mujoco"))
+                     evaluate=_command("warpgym.cli.eval", "in_native_mujoco"),
+                     bench=_command("warpgym.cli.bench", "bench_robot_task"))
 
 
 def _suite(name: str, episode_length: int) -> TaskEntry:
@@ -93,7 +97,8 @@ def _suite(name: str, episode_length: int) -> TaskEntry:
                      draw_clip=_command("warpgym.media.video", "draw_suite_clip"), training_clips=False,
                      scored_in="Gymnasium's env", reports_speed=False, default_envs=(4096, 64),
                      default_iterations=(500, 100), preset=PRESETS[name],
-                     evaluate=_command("warpgym.cli.eval", "in_gymnasium"))
+                     evaluate=_command("warpgym.cli.eval", "in_gymnasium"),
+                     bench=_command("warpgym.cli.bench_suite", "bench_suite_task"))
 
 
 def _legged(name: str, episode_length: int) -> TaskEntry:
@@ -105,7 +110,8 @@ def _legged(name: str, episode_length: int) -> TaskEntry:
                      scored_in="native MuJoCo", reports_speed=False, default_envs=(4096, 32),
                      default_iterations=(1000, 30), preset=PRESETS.get(name, LEGGED_PRESET),
                      evaluate=_command("warpgym.cli.eval", "legged_in_native_mujoco"),
-                     export_contract=deployment_contract, asymmetric=True)
+                     export_contract=deployment_contract, asymmetric=True,
+                     bench=_command("warpgym.cli.bench_legged", "bench_legged_task"))
 
 
 # 8192 Ants and 4096 Humanoids reach their targets soonest on one H100 (docs/benchmarks.md, "Envs per GPU");
