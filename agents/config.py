@@ -3,7 +3,7 @@ started from) where the idea matches.
 
 Units: ``horizon_len`` is env steps per env per iteration (the ElegantRL tutorial's ``target_step``);
 ``minibatch_size`` is the mini-batch size in samples (CleanRL's name; its ``batch_size`` is the whole
-rollout, and configs saved before 2026-11-26 wrote ``batch_size``: ``RENAMED``); ``repeat_times`` is the
+rollout, and older runs' configs wrote ``batch_size``: ``RENAMED``); ``repeat_times`` is the
 number of passes over each rollout; ``eval_gap`` is wall-clock seconds between evaluations; ``save_gap`` is iterations
 between checkpoints.
 """

@@ -78,7 +78,8 @@ def test_the_training_clock_starts_with_the_process():
 
 def test_bench_times_tasks_of_every_family_in_one_table_from_their_entries(capsys, tmp_path):
     """``warpgym bench --tasks``: each family's row comes from its registry entry's ``bench`` (the suite's, the
-    legged tasks' and the robots' own timings), the table one row per task and size, the rates positive."""
+    legged tasks' and the robots' own timings), the table one row per task and size, the rates positive; the tasks
+    of ``--legged`` (its older name) join those of ``--tasks``."""
     import json
     import statistics
 
@@ -86,9 +87,9 @@ def test_bench_times_tasks_of_every_family_in_one_table_from_their_entries(capsy
     from warpgym.tasks.registry import REGISTRY
 
     assert all(callable(e.bench) for e in REGISTRY.values())
-    names = ["Swimmer-v5", "Go1VelocityFlat-v0", "Ant"]
+    names = ["Swimmer-v5", "Ant", "Go1VelocityFlat-v0"]
     out = tmp_path / "bench.json"
-    assert bench.main(["--tasks", *names, "--num-envs", "2", "--steps", "2", "--repeats", "1", "--warmup", "1",
+    assert bench.main(["--tasks", *names[:2], "--legged", names[2], "--num-envs", "2", "--steps", "2", "--repeats", "1", "--warmup", "1",
                        "--device", "cpu", "--out", str(out)]) == 0
     table = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| ") and "---" not in line]
     assert [row.split(" | ")[0].strip("| ") for row in table[1:]] == names

@@ -105,7 +105,7 @@ def gpu_memory_used(device: str) -> int:
 
 
 def bench_one(robot: str, num_envs: int, device: str, steps: int, repeats: int, physics: dict,
-              njmax: int | None = None) -> dict:
+              njmax: int | None = None, warmup: int = 3) -> dict:
     mem0 = gpu_memory_used(device)
     t0 = time.perf_counter()
     env = LocomotionVecEnv(TASK_OF_ROBOT[robot], num_envs=num_envs, device=device, seed=0,
@@ -121,7 +121,7 @@ def bench_one(robot: str, num_envs: int, device: str, steps: int, repeats: int, 
         k[0] += 1
 
     t0 = time.perf_counter()
-    for _ in range(3):  # compile kernels and capture graphs outside the timings
+    for _ in range(warmup):  # compile kernels and capture graphs outside the timings
         env_step()
         sim.step()
     raw = raw_newton_loop(sim)
@@ -159,7 +159,7 @@ def parser() -> CommandParser:
     ap.add_argument("--legged", nargs="+", default=None, metavar="NAME-v0",
                     help="the same as --tasks (kept for the scripts that time older commits with it)")
     ap.add_argument("--warmup", type=positive_int(20), default=20,
-                    help="--tasks: steps before each timing (Ant and Humanoid: 3)")
+                    help="--tasks: steps before the timings (--robots: 3)")
     ap.add_argument("--num-envs", nargs="+", type=positive_int(4096), default=[1024, 4096, 16384])
     ap.add_argument("--device", default=None)
     ap.add_argument("--steps", type=positive_int(200), default=200, help="steps per timing")
@@ -187,11 +187,12 @@ def main(argv=None) -> int:
         ap.error(f"--physics: {e}")
     from warpgym.tasks.registry import canonical  # noqa: PLC0415
 
-    flag, names = ("--legged", args.legged) if args.legged else ("--tasks", args.tasks)
-    try:
-        names = [canonical(name) for name in names or ()]
-    except ValueError as e:
-        ap.error(f"{flag}: {e}")
+    names = []
+    for flag, given in (("--tasks", args.tasks), ("--legged", args.legged)):
+        try:
+            names += [canonical(name) for name in given or ()]
+        except ValueError as e:
+            ap.error(f"{flag}: {e}")
     if names and physics:
         ap.error(f"--physics {' '.join(args.physics)}: it sets Ant's and Humanoid's physics under --robots; the "
                  "tasks of --tasks run with their own")
@@ -234,8 +235,8 @@ def save_results(args, device, gpu, argv, rows) -> None:
 
 def bench_robot_task(task: str, num_envs: int, device: str, steps: int, warmup: int, repeats: int,
                      njmax: int | None = None) -> dict:
-    """``bench_one`` of a robot task (Ant, Humanoid) as ``--tasks`` times it: its default physics, 3 warm-up steps."""
-    return {"task": task, **bench_one(task.lower(), num_envs, device, steps, repeats, {}, njmax)}
+    """``bench_one`` of a robot task (Ant, Humanoid) as ``--tasks`` times it: its default physics."""
+    return {"task": task, **bench_one(task.lower(), num_envs, device, steps, repeats, {}, njmax, warmup)}
 
 
 def _median(value) -> float:
