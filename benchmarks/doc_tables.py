@@ -84,7 +84,7 @@ BLOCKS = {
                     first(1)),
     "legged": ("docs/benchmarks.md", "benchmarks.learning.mjlab_side_by_side", ["--report", *LEGGED], first(3)),
     "before-after": ("docs/benchmarks.md", "benchmarks.speed.before_after", ["--report", *BEFORE_AFTER], first(1)),
-    "legged-terms": ("docs/tasks.md", "warpgym.tasks.term_tables", [], first(3)),
+    "legged-terms": ("docs/tasks.md", "warpgym.tasks.term_tables", [], first(4)),
     "legged-7min": ("docs/history.md", "benchmarks.learning.mjlab_side_by_side",
                     ["--report", "docs/bench/legged/side_by_side_2026-11-28.json"], first(3)),
     # the page: each policy's speeds in both simulators; the log: its training run

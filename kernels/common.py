@@ -1,5 +1,6 @@
 """What every family of tasks uses alike: the outputs a step returns, the reset noise's random state,
-the running counts of faults (agents.protocol) and the layout of an observation group of terms."""
+the running counts of faults (agents.protocol), the layout of an observation group of terms and the timers of a
+task's interval events."""
 
 import warp as wp
 
@@ -93,3 +94,20 @@ class ObsLayout:
     history: wp.array[wp.int32]  # (K,) frames the observation holds of the term, oldest first (1: this one)
     hist_at: wp.array[wp.int32]  # (K,) where a term with history keeps its frames in ``hist``
     hist: wp.array2d[float]  # (N, sum of size x history of the terms with history; at least 1)
+
+
+@wp.struct
+class Intervals:
+    """The timers of a task's interval events, by the event's place among them (E of them)."""
+
+    lo: wp.array[float]  # (E,) seconds between an event's runs, uniform in [lo, hi]
+    hi: wp.array[float]  # (E,)
+    left: wp.array2d[float]  # (N, max(E, 1)) seconds to each event's next run
+
+
+@wp.func
+def restart_intervals(iv: Intervals, w: int, rng: wp.uint32) -> wp.uint32:
+    """A reset world's time to each interval event's next run, drawn afresh (mjlab's event manager at a reset)."""
+    for k in range(iv.lo.shape[0]):
+        iv.left[w, k] = wp.randf(rng, iv.lo[k], iv.hi[k])
+    return rng

@@ -91,7 +91,7 @@ def test_the_contract_is_the_layout_the_env_observes_and_acts_by(run, tmp_path):
     act = contract["action"]
     assert len(act["joints"]) == len(act["default_joint_pos"]) == len(act["stiffness"]) == contract["num_actions"]
 
-    env = LeggedVecEnv(TASK, num_envs=2, device="cpu", seed=0, observation_noise=False, pushes=False)
+    env = LeggedVecEnv(TASK, num_envs=2, device="cpu", seed=0, observation_noise=False, events={"push_robot": None})
     env.reset(seed=0)
     action = torch.linspace(-0.5, 0.5, 12).repeat(2, 1)
     obs, *_ = env.step(action)

@@ -31,7 +31,7 @@ def test_the_tasks_are_in_the_registry_and_gymnasium():
         assert entry.family == "legged" and entry.gym_id == f"warpgym/{name}" and entry.episode_length == 1000
         ground = "Rough" if "Rough" in name else "Flat"
         assert task.mirrors == f"Mjlab-Velocity-{ground}-Unitree-{name.split('Velocity')[0]}"
-    envs = gym.make_vec("warpgym/G1VelocityFlat-v0", num_envs=2, device="cpu", pushes=False)
+    envs = gym.make_vec("warpgym/G1VelocityFlat-v0", num_envs=2, device="cpu", events={"push_robot": None})
     obs, info = envs.reset(seed=0)
     # mjlab's widths: the G1's policy sees 99 entries and its critic 111 (the Go1's 48 and 72)
     assert obs.shape == (2, 99) and info["critic_obs"].shape == (2, 111) and envs.num_actions == 29
@@ -51,7 +51,9 @@ def test_widths_and_terms(go1):
 
 @pytest.mark.parametrize("changes, words", [
     ({"lin_vel_x": (1.0, -1.0)}, "lin_vel_x=(1.0, -1.0) must be a (low, high) pair"),
-    ({"push_interval": (-1.0, 3.0)}, "push_interval=(-1.0, 3.0) must be positive seconds"),
+    ({"events": {"push_robot": {"interval": (-1.0, 3.0)}}}, "interval=(-1.0, 3.0) must be (low, high) seconds"),
+    ({"events": {"reset_base": {"params": {"yaw": (3.0, -3.0)}}}}, "yaw=(3.0, -3.0) must be a (low, high) range"),
+    ({"events": {"push_robot": {"mode": "sometimes"}}}, "mode='sometimes' must be one of"),
     ({"foot_sites": ("robot/FR", "robot/XX", "robot/RR", "robot/RL")}, "has no site 'robot/XX'; its sites are"),
     ({"rewards": {"fly": 1.0}}, "rewards: no term 'fly'; its terms are"),
     ({"rewards": {"pose": {"params": {"std_walking": 0.3}}}}, "std_walking=0.3"),
@@ -81,7 +83,8 @@ def test_a_written_state_replays_step_for_step(go1):
     for _ in range(5):
         go1.step(torch.rand(4, 12) * 2 - 1)
     # no push or new command within the step (their draws, and the policy's noise, come from the step's random state)
-    saved = {**go1.state(), "push_time_left": torch.full((4,), 100.0), "command_time_left": torch.full((4,), 100.0)}
+    saved = {**go1.state(), "push_robot_time_left": torch.full((4,), 100.0),
+             "command_time_left": torch.full((4,), 100.0)}
     actions = torch.rand(4, 12) * 2 - 1
     go1.write_state(saved)
     first = go1.step(actions)[4]["critic_obs"].clone()
@@ -123,14 +126,14 @@ def test_a_push_changes_the_base_velocity_within_its_ranges():
     """A push due this step adds a draw within mjlab's ranges to the base's world velocity: from rest (no gravity
     in play within the step for the frozen check, the push is the only change), the base's linear velocity after
     the step differs from an unpushed copy's by at most the range's bound."""
-    calm = LeggedVecEnv("Go1VelocityFlat-v0", num_envs=8, device="cpu", seed=4, pushes=False)
+    calm = LeggedVecEnv("Go1VelocityFlat-v0", num_envs=8, device="cpu", seed=4, events={"push_robot": None})
     pushed = LeggedVecEnv("Go1VelocityFlat-v0", num_envs=8, device="cpu", seed=4)
+    assert "push_robot_time_left" not in calm.STATE_KEYS  # no push, no timer
     calm.reset(seed=4)
     pushed.reset(seed=4)
     state = calm.state()
-    state["push_time_left"] = torch.zeros(8)  # due now
-    pushed.write_state(state)
-    calm.write_state({**state, "push_time_left": torch.full((8,), 100.0)})
+    pushed.write_state({**state, "push_robot_time_left": torch.zeros(8)})  # due now
+    calm.write_state(state)
     actions = torch.zeros(8, 12)
     calm.step(actions)
     pushed.step(actions)
@@ -138,7 +141,7 @@ def test_a_push_changes_the_base_velocity_within_its_ranges():
     bound = torch.tensor([0.5, 0.5, 0.4]) + 1e-4
     assert (dv.abs() <= bound).all() and dv.abs().max() > 0.05
     # and the next push is drawn 1-3 s ahead
-    left = pushed.state()["push_time_left"]
+    left = pushed.state()["push_robot_time_left"]
     assert ((left >= 1.0) & (left <= 3.0)).all()
     calm.close()
     pushed.close()

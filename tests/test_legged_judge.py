@@ -90,6 +90,14 @@ def on_boxes(env, before) -> np.ndarray:
     return np.isin(before["terrain_kind"], boxes)
 
 
+def as_ours(env, recorded: dict) -> dict:
+    """A recorded mjlab state under warpgym's state keys: the recordings name the timer of mjlab's one interval
+    event (push_robot) push_time_left."""
+    renamed = {("push_robot_time_left" if key == "push_time_left" else key): v for key, v in recorded.items()}
+    assert "push_robot_time_left" in renamed, "the recording lacks mjlab's push timer"
+    return {key: value for key, value in renamed.items() if key in env.STATE_KEYS}
+
+
 def test_one_step_from_mjlabs_state_matches_mjlabs_step(judged):
     task, ref, env = judged
     names = [str(n) for n in ref["term_names"]]
@@ -97,7 +105,7 @@ def test_one_step_from_mjlabs_state_matches_mjlabs_step(judged):
     seen = np.zeros(len(names), int)
     for k in range(ref["action"].shape[0]):
         before = {key[7:]: ref[key][k] for key in ref.files if key.startswith("before/")}
-        state = {key: value for key, value in before.items() if key in env.STATE_KEYS}
+        state = as_ours(env, before)
         state["step_count"] = int(before["step_count"])
         env.write_state(state)
         obs, reward, terminated, truncated, info = env.step(torch.as_tensor(ref["action"][k]))
@@ -147,7 +155,7 @@ def test_observations_of_mjlabs_next_states_match_mjlabs(judged):
     task, ref, env = judged
     for k in range(ref["action"].shape[0]):
         after = {key[6:]: ref[key][k] for key in ref.files if key.startswith("after/")}
-        state = {key: value for key, value in after.items() if key in env.STATE_KEYS}
+        state = as_ours(env, after)
         state["step_count"] = int(after["step_count"])
         env.write_state(state)
         obs, info = env.observe()
@@ -199,7 +207,7 @@ def test_draws_follow_mjlabs_distributions():
             for key, value in (("command", s["command"].numpy()), ("heading_target", s["heading_target"].numpy()),
                                ("time_left", s["command_time_left"].numpy()), ("heading", (kind & HEADING) > 0),
                                ("standing", (kind & STANDING) > 0), ("forward", (kind & FORWARD) > 0),
-                               ("push_time_left", s["push_time_left"].numpy()), ("qpos", s["qpos"].numpy())):
+                               ("push_time_left", s["push_robot_time_left"].numpy()), ("qpos", s["qpos"].numpy())):
                 draws.setdefault(key, []).append(value)
         ours = {k: np.concatenate(v) for k, v in draws.items()}
         env.close()

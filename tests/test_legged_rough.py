@@ -16,7 +16,7 @@ N = 8  # one world a kind, and one more on the first (the flat kind's proportion
 
 @pytest.fixture(scope="module")
 def go1():
-    env = LeggedVecEnv("Go1VelocityRough-v0", num_envs=N, device="cpu", seed=0, pushes=False, observation_noise=False)
+    env = LeggedVecEnv("Go1VelocityRough-v0", num_envs=N, device="cpu", seed=0, events={"push_robot": None}, observation_noise=False)
     env.reset(seed=0)
     yield env
     env.close()

@@ -7,6 +7,7 @@ import torch
 
 from warpgym.native_legged import SCHEDULE, commands, native_episodes, warpgym_episodes
 from warpgym.tasks.legged import LEGGED
+from warpgym.tasks.terms import of_mode
 
 pytestmark = pytest.mark.slow
 
@@ -44,7 +45,7 @@ def test_on_rough_ground_native_mujoco_scans_the_ground_as_warpgym_does_and_trac
 
     task = LEGGED["Go1VelocityRough-v0"].replace(episode_length_s=2.0)
     kinds = len(task.terrain.sub_terrains)
-    env = LeggedVecEnv(task, num_envs=kinds, device="cpu", pushes=False, randomize=False, observation_noise=False)
+    env = LeggedVecEnv(task, num_envs=kinds, device="cpu", events=of_mode(task.events, "reset"), observation_noise=False)
     starts = start_patches(env.terrain, kinds, level=9)
     state = env.state()
     qpos, idx = state["qpos"].clone(), env.index

@@ -1,6 +1,6 @@
-"""A user's own reward and observation terms (tests/user_terms.py, a module outside warpgym): in the step's tables
-from Python and from `warpgym train`, computed inside the step as warpgym's own terms are, and a half-declared
-term refused in one line that names it."""
+"""A user's own reward, observation and event terms (tests/user_terms.py, a module outside warpgym): in the step's
+tables from Python and from `warpgym train`, computed inside the step as warpgym's own terms are, and a
+half-declared term refused in one line that names it."""
 
 import json
 import os
@@ -22,7 +22,7 @@ def test_a_users_terms_join_the_tasks_tables_and_read_the_step_as_its_own_do():
     import warpgym  # noqa: F401  (the ids)
     from tests import user_terms
 
-    envs = gym.make_vec("warpgym/Go1VelocityFlat-v0", num_envs=3, device="cpu", pushes=False,
+    envs = gym.make_vec("warpgym/Go1VelocityFlat-v0", num_envs=3, device="cpu", events={"push_robot": None},
                         rewards=user_terms.REWARDS, policy_obs=user_terms.OBSERVATIONS)
     obs, info = envs.reset(seed=0)
     assert obs.shape == (3, 48 + 1)  # the Go1's 48 entries, the user's one after them
@@ -43,10 +43,34 @@ def test_a_users_terms_join_the_tasks_tables_and_read_the_step_as_its_own_do():
     envs.close()
 
 
+def test_a_users_event_runs_at_each_reset_after_the_tasks_own():
+    """The user's reset event sets the base's upward speed within its range after every reset, the task's reset
+    pose still drawn; a world that goes on keeps falling under gravity instead."""
+    from tests import user_terms
+    from warpgym.envs.legged import LeggedVecEnv
+
+    env = LeggedVecEnv("Go1VelocityFlat-v0", num_envs=16, device="cpu", seed=3, events=user_terms.EVENTS)
+    plain = LeggedVecEnv("Go1VelocityFlat-v0", num_envs=16, device="cpu", seed=3)
+    assert list(env.task.events)[-1] == "lift" and list(env.task.events)[:-1] == list(plain.task.events)
+    up = env.index.root_dof + 2
+    for seed in (0, 1):
+        env.reset(seed=seed)
+        plain.reset(seed=seed)
+        lifted, state = env.state()["qvel"][:, up], plain.state()
+        assert ((lifted >= 1.0) & (lifted <= 2.0)).all() and lifted.std() > 0.05
+        assert torch.equal(state["qvel"][:, up], torch.zeros(16))
+        # the events before it drew as the plain task's do: the same reset poses
+        assert torch.allclose(env.state()["qpos"], state["qpos"])
+    env.step(torch.zeros(16, 12))
+    assert (env.state()["qvel"][:, up] < lifted).all()
+    env.close()
+    plain.close()
+
+
 def wrong(kind: str):
     """A term declared half or wrong, as a user might."""
     from tests import user_terms
-    from warpgym.tasks.terms import Observation, Reward
+    from warpgym.tasks.terms import Event, Observation, Reward
 
     return {
         "unknown": {"rewards": {"half": {"weight": 1.0}}},
@@ -54,6 +78,8 @@ def wrong(kind: str):
         "missing": {"rewards": {"user_action_rate": Reward(user_terms.scaled_action_rate, -0.1)}},
         "not a function": {"policy_obs": {"height": Observation(lambda env, w, i: 0.0, 1)}},
         "drop": {"policy_obs": {"base height": None}},
+        "event without its random state": {"events": {"lift": Event(user_terms.base_height, "reset")}},
+        "event on no schedule": {"events": {"lift": Event(user_terms.lift_base, "interval", {"speed": (1.0, 2.0)})}},
     }[kind]
 
 
@@ -63,6 +89,8 @@ def wrong(kind: str):
     ("missing", "['user_action_rate']: scaled_action_rate's parameters are ['scale']; missing ['scale']"),
     ("not a function", "is not a @wp.func"),
     ("drop", "no term 'base height' to drop"),
+    ("event without its random state", "base_height must take and return the random state"),
+    ("event on no schedule", "['lift']: interval=None must be (low, high) seconds between its runs"),
 ])
 def test_a_half_declared_term_is_one_line_that_names_it(kind, words):
     from warpgym.envs.legged import LeggedVecEnv
@@ -101,7 +129,8 @@ def test_an_observation_with_history_holds_its_last_frames_oldest_first():
     from warpgym.tasks.legged.model import policy_terms
     from warpgym.tasks.terms import Observation
 
-    env = LeggedVecEnv("Go1VelocityFlat-v0", num_envs=3, device="cpu", seed=1, pushes=False, observation_noise=False,
+    env = LeggedVecEnv("Go1VelocityFlat-v0", num_envs=3, device="cpu", seed=1, events={"push_robot": None},
+                       observation_noise=False,
                        policy_obs={"past_joint_vel": Observation(terms.joint_vel, lambda d: d.joints, history=3)})
     now = slice(21, 33)  # joint_vel: after the base's 9 entries and the 12 joint positions
 

@@ -21,6 +21,7 @@ import numpy as np
 
 from warpgym.tasks.legged import LeggedTask
 from warpgym.tasks.legged.model import compile_task_scene, resolve
+from warpgym.tasks.terms import of_mode
 
 # vx, vy [m/s], yaw rate [rad/s]: forward, a turn while walking, sideways, backward, turning in place, standing
 SCHEDULE = ((1.0, 0.0, 0.0), (0.6, 0.0, 0.4), (0.0, 0.5, 0.0), (-0.6, 0.0, 0.0), (0.0, 0.0, -0.5), (0.0, 0.0, 0.0))
@@ -138,7 +139,7 @@ class PolicyView:
     def __init__(self, task: LeggedTask):
         from warpgym.envs.legged import LeggedVecEnv  # noqa: PLC0415  (the env above this layer, built on demand)
 
-        self.env = LeggedVecEnv(task, num_envs=1, device="cpu", seed=0, randomize=False, pushes=False,
+        self.env = LeggedVecEnv(task, num_envs=1, device="cpu", seed=0, events=of_mode(task.events, "reset"),
                                 observation_noise=False)
 
     def __call__(self, d, action: np.ndarray, command: np.ndarray, scan: np.ndarray | None = None) -> np.ndarray:
@@ -237,7 +238,7 @@ def warpgym_episodes(task: LeggedTask, act, episodes: int, device: str = "cpu", 
 
     from warpgym.envs.legged import LeggedVecEnv  # noqa: PLC0415
 
-    env = LeggedVecEnv(task, num_envs=episodes, device=device, seed=0, randomize=False, pushes=False,
+    env = LeggedVecEnv(task, num_envs=episodes, device=device, seed=0, events=of_mode(task.events, "reset"),
                        observation_noise=False, rel_standing_envs=0.0, rel_heading_envs=0.0, rel_forward_envs=0.0,
                        resampling_time=(1e6, 1e6))
     idx = env.index

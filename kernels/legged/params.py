@@ -1,12 +1,14 @@
 """What the legged velocity tasks' kernels read and write: the task's numbers (``LeggedParams``, filled by
-``warpgym.tasks.legged``), the robot's indices in MuJoCo's model (``LeggedRobot``), MuJoCo Warp's arrays
-(``MjLegged``), the per-world task state (``LeggedState``: command, timers, contact times, action history,
-randomised encoder bias), the terrain curriculum (``TerrainLevels``) and the episode bookkeeping
-(``LeggedEpisodes``). ``LeggedEnv`` holds all but the last: it is what every term function reads (the contract a
-user's own reward, observation or termination is written against, ``warpgym.tasks.terms``).
+``warpgym.tasks.legged``), the robot's indices in MuJoCo's model (``LeggedRobot``), MuJoCo Warp's data
+(``MjLegged``) and the model fields randomised per world (``MjLeggedModel``), the per-world task state
+(``LeggedState``: command, timers, contact times, action history, randomised encoder bias), the terrain curriculum
+(``TerrainLevels``) and the episode bookkeeping (``LeggedEpisodes``). ``LeggedEnv`` holds all but the last: it is
+what every term function reads (the contract a user's own reward, observation, termination or event is written
+against, ``warpgym.tasks.terms``).
 
-Shapes: N worlds, J actuated joints (hinges, in the model's order, which is the action's), F feet,
-K reward terms, S command stages (or height scan rays), H contact group sensors, Q = nq, V = nv, B bodies, T sites, D sensor data entries.
+Shapes: N worlds, J actuated joints (hinges, in the model's order, which is the action's), F feet, G foot geoms,
+K reward terms, S command stages (or height scan rays), H contact group sensors, Q = nq, V = nv, B bodies, T sites,
+D sensor data entries.
 """
 
 import warp as wp
@@ -46,17 +48,6 @@ class LeggedParams:
     max_command_steps: float  # resample_hi / dt: the tracking errors' divisor
     collision_force: float  # contact force [N] above which a contact group's physics step counts
     foot_scan: int  # 1: the feet's heights are scanned (rough ground), else the sites' heights above z = 0
-    # events
-    push_interval_lo: float  # seconds between pushes, uniform in [lo, hi]
-    push_interval_hi: float
-    push_lo: wp.array[float]  # (6,) velocity added by a push: x, y, z, roll, pitch, yaw (world frame)
-    push_hi: wp.array[float]
-    reset_lo: wp.array[float]  # (4,) x, y, z, yaw of the reset pose, added to the default root pose
-    reset_hi: wp.array[float]
-    joint_pos_offset_lo: float
-    joint_pos_offset_hi: float
-    joint_vel_lo: float
-    joint_vel_hi: float
 
 
 @wp.struct
@@ -64,6 +55,7 @@ class LeggedRobot:
     root_body: int
     upright_body: int  # whose tilt the upright reward scores
     angvel_body: int  # whose roll and pitch rates body_ang_vel charges
+    com_body: int  # whose centre of mass the base_com event moves
     root_qpos: int  # qpos address of the free joint
     root_dof: int
     joint_qpos: wp.array[wp.int32]  # (J,)
@@ -75,6 +67,7 @@ class LeggedRobot:
     joint_actuator: wp.array[wp.int32]  # (J,) the actuator (control) of each joint
     action_scale: wp.array[float]  # (J,)
     foot_site: wp.array[wp.int32]  # (F,)
+    foot_geom: wp.array[wp.int32]  # (G,) the feet's collision geoms (their friction is randomised)
     foot_body: wp.array[wp.int32]  # (F,) the body each foot's site is fixed to
     foot_found: wp.array[wp.int32]  # (F,) sensordata address of each foot's contact count
     foot_force: wp.array[wp.int32]  # (F,) ... of its net contact force (world frame)
@@ -102,6 +95,15 @@ class MjLegged:
 
 
 @wp.struct
+class MjLeggedModel:
+    """MuJoCo Warp's model fields that events change per world (one row a world), and their compiled values."""
+
+    geom_friction: wp.array2d[wp.vec3]  # (N, G)
+    body_ipos: wp.array2d[wp.vec3]  # (N, B) each body's centre of mass in its frame
+    body_ipos0: wp.array[wp.vec3]  # (B,) the compiled model's
+
+
+@wp.struct
 class LeggedState:
     """What a world carries from step to step beside MuJoCo's state."""
 
@@ -111,13 +113,12 @@ class LeggedState:
     heading_target: wp.array[float]  # (N,)
     command_kind: wp.array[wp.int32]  # (N,) HEADING | STANDING | FORWARD
     command_time_left: wp.array[float]  # (N,) seconds to the next resample
-    push_time_left: wp.array[float]  # (N,) seconds to the next push
     air_time: wp.array2d[float]  # (N, F) seconds each foot has been off the ground
     contact_time: wp.array2d[float]  # (N, F) ... on it
     peak_height: wp.array2d[float]  # (N, F) highest foot height of the swing in progress
     foot_height: wp.array2d[float]  # (N, F) foot heights when the last observation was made
     collision_hits: wp.array2d[wp.int32]  # (N, NUM_GROUPS) physics steps of this step with a contact of each group
-    encoder_bias: wp.array2d[float]  # (N, J) randomised once per world
+    encoder_bias: wp.array2d[float]  # (N, J) randomised once per world (the encoder_bias event)
     scan: wp.array2d[float]  # (N, max(S, 1)) the height scan (unscaled, no noise) at the last observation
     foot_clear: wp.array2d[float]  # (N, F) the feet's scanned heights at the last observation (rough ground)
     terrain_normal: wp.array[wp.vec3]  # (N,) the ground's normal under the base at the last observation
@@ -154,10 +155,12 @@ class TerrainLevels:
 @wp.struct
 class LeggedEnv:
     """Everything a term function of a legged task reads: ``env.p`` the task's numbers, ``env.r`` the robot's
-    indices, ``env.d`` MuJoCo Warp's data, ``env.st`` the task's per-world state, ``env.t`` the terrain levels."""
+    indices, ``env.d`` MuJoCo Warp's data, ``env.m`` its model fields that events randomise, ``env.st`` the task's
+    per-world state, ``env.t`` the terrain levels."""
 
     p: LeggedParams
     r: LeggedRobot
     d: MjLegged
+    m: MjLeggedModel
     st: LeggedState
     t: TerrainLevels

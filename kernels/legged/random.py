@@ -4,7 +4,7 @@ the same numbers for a world."""
 RESET = 0
 COMMAND = 1
 OBSERVATION = 2
-PUSH = 3
+INTERVAL = 3  # the interval events (pushes) and their timers
 STARTUP = 4  # the randomisation drawn once when the env is built
 FINAL_OBSERVATION = 5  # the noise of an ended episode's last observation
 

@@ -1,7 +1,7 @@
 """After a control step's physics (mjlab's ManagerBasedRlEnv.step, between the physics and the resets): the
 step counters, terminations, every reward term, the ended episodes' statistics and last observations, and the
-pushes that fall due; and the observation pass after the resets. Both kernels are made per task from its tables
-of terms (``step_kernels``), the terms called in the tables' order.
+interval events that fall due (pushes); and the observation pass after the resets. Both kernels are made per task
+from its tables of terms (``step_kernels``), the terms called in the tables' order.
 
 mjlab reads all of it from MuJoCo's data as the last physics step left it: positions and velocities are the new
 state's, but body frames, com velocities, site positions and sensor data are those the last physics step's
@@ -12,11 +12,10 @@ control step); a term of weight 0 is skipped, as mjlab skips it; a value that is
 
 import warp as wp
 
-from kernels.common import ObsLayout, StepOutputs, state_is_finite, stream
-from kernels.legged.frames import angular_velocity, point_velocity, rotate_inverse
+from kernels.common import Intervals, ObsLayout, StepOutputs, state_is_finite, stream
 from kernels.legged.observations import foot_height_now
-from kernels.legged.params import LeggedEnv, LeggedEpisodes, LeggedParams, LeggedRobot, LeggedState, MjLegged
-from kernels.legged.random import FINAL_OBSERVATION, OBSERVATION, PUSH
+from kernels.legged.params import LeggedEnv, LeggedEpisodes, LeggedState
+from kernels.legged.random import FINAL_OBSERVATION, INTERVAL, OBSERVATION
 
 wp.set_module_options({"enable_backward": False})
 
@@ -26,42 +25,21 @@ def count_step(st: LeggedState):
     st.step_count[0] = st.step_count[0] + 1
 
 
-@wp.func
-def push(p: LeggedParams, r: LeggedRobot, d: MjLegged, w: int, rng: wp.uint32):
-    """mjlab's push_by_setting_velocity: the base's world velocity (from the last forward pass) plus a uniform
-    draw, written into the free joint's qvel (linear in the world frame, angular in the base's, through the
-    orientation in qpos). Draws from a copy of the caller's random state."""
-    root = r.root_body
-    lin = point_velocity(d, w, root, root, d.xpos[w, root])
-    ang = angular_velocity(d, w, root)
-    for i in range(3):
-        lin[i] = lin[i] + wp.randf(rng, p.push_lo[i], p.push_hi[i])
-    for i in range(3):
-        ang[i] = ang[i] + wp.randf(rng, p.push_lo[3 + i], p.push_hi[3 + i])
-    a = r.root_qpos + 3
-    q = wp.quat(d.qpos[w, a], d.qpos[w, a + 1], d.qpos[w, a + 2], d.qpos[w, a + 3])
-    ang_b = rotate_inverse(q, ang)
-    for i in range(3):
-        d.qvel[w, r.root_dof + i] = lin[i]
-        d.qvel[w, r.root_dof + 3 + i] = ang_b[i]
-
-
-def step_kernels(rewards, Rewards, terminations, Terminations, policy, Policy, critic, Critic):
-    """The step's and the observation's kernels of one task's tables (``warpgym.tasks.dispatch``: the generated functions
-    and their parameter structs), made once per table."""
-    key = rewards, terminations, policy, critic
+def step_kernels(rewards, Rewards, terminations, Terminations, policy, Policy, critic, Critic, events, Events):
+    """The step's and the observation's kernels of one task's tables (``warpgym.tasks.dispatch``: the generated
+    functions and their parameter structs; ``events``: its interval events'), made once per table."""
+    key = rewards, terminations, policy, critic, events
     if key in _KERNELS:
         return _KERNELS[key]
 
     @wp.kernel(enable_backward=False, module="unique")
     def legged_step(env: LeggedEnv, rng_state: wp.array[wp.int32], reward_params: Rewards, weights: wp.array[float],
                     termination_params: Terminations, policy_params: Policy, policy_layout: ObsLayout,
-                    critic_params: Critic, critic_layout: ObsLayout, ep: LeggedEpisodes, out: StepOutputs,
-                    final_critic: wp.array2d[float]):
+                    critic_params: Critic, critic_layout: ObsLayout, event_params: Events, timers: Intervals,
+                    ep: LeggedEpisodes, out: StepOutputs, final_critic: wp.array2d[float]):
         w = wp.tid()
         p = env.p
         d = env.d
-        st = env.st
         length = ep.length[w] + 1
         ep.length[w] = length
         ended = terminations(env, w, termination_params)
@@ -94,12 +72,10 @@ def step_kernels(rewards, Rewards, terminations, Terminations, policy, Policy, c
             ep.ended_errors[w, 1] = ep.errors[w, 1]
 
         # after the terms, which read the velocities the physics left (mjlab's interval events follow its rewards)
-        st.push_time_left[w] = st.push_time_left[w] - p.dt
-        if st.push_time_left[w] < 1.0e-6:
-            rng = stream(rng_state, w, PUSH)
-            st.push_time_left[w] = wp.randf(rng, p.push_interval_lo, p.push_interval_hi)
-            if not diverged:
-                push(p, env.r, d, w, rng)
+        live = int(1)
+        if diverged:
+            live = 0
+        events(env, w, stream(rng_state, w, INTERVAL), live, event_params, timers, p.dt)
 
     @wp.kernel(enable_backward=False, module="unique")
     def observe(env: LeggedEnv, rng_state: wp.array[wp.int32], policy_params: Policy, policy_layout: ObsLayout,

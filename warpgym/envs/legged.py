@@ -2,9 +2,9 @@
 stays on the device.
 
 A step, as mjlab's ``ManagerBasedRlEnv.step`` orders it: the actions into position targets, ``decimation``
-physics steps (each followed by the feet's contact bookkeeping), terminations, reward terms and pushes from the
-data the physics left, the finished worlds reset, MuJoCo's forward pass of every world, the commands' timers and
-steering, and both observations; all one graph launch. ``obs`` is the policy's observation (with noise);
+physics steps (each followed by the feet's contact bookkeeping), terminations, reward terms and interval events
+(pushes) from the data the physics left, the finished worlds reset (with their reset events), MuJoCo's forward
+pass of every world, the commands' timers and steering, and both observations; all one graph launch. ``obs`` is the policy's observation (with noise);
 ``info["critic_obs"]`` is the critic's (privileged: no noise or encoder bias, the feet's heights, air times,
 contacts and forces), ``info["final_critic_obs"]`` the one an episode ended on.
 """
@@ -20,8 +20,9 @@ from gymnasium.vector.utils import batch_space
 
 from kernels.legged.commands import update_commands
 from kernels.legged.control import apply_legged_actions, track_feet
-from kernels.legged.params import NUM_GROUPS, LeggedEnv, LeggedEpisodes, LeggedState, MjLegged, TerrainLevels
-from kernels.legged.resets import randomize_worlds, reset_legged_worlds
+from kernels.legged.params import (NUM_GROUPS, LeggedEnv, LeggedEpisodes, LeggedState, MjLegged, MjLeggedModel,
+                                   TerrainLevels)
+from kernels.legged.resets import reset_kernels
 from kernels.legged.scan import fit_ground_normal
 from kernels.legged.step import count_step, step_kernels
 from kernels.legged.terrain_levels import move_levels
@@ -32,9 +33,11 @@ from warpgym.tasks.legged import LeggedTask, get_legged_task
 from warpgym.tasks.legged.levels import bounds, start_levels
 from warpgym.tasks.legged.model import compile_task_scene, dims, kernel_structs, resolve
 from warpgym.tasks.legged.scan import normal_picks
-from warpgym.tasks.terms import compile_observations, compile_rewards, compile_terminations, layout
+from warpgym.tasks.terms import (compile_events, compile_observations, compile_rewards, compile_terminations, layout,
+                                 of_mode)
 
-# the model fields randomised per world, and those MuJoCo Warp's set_const derives from them (mjlab's list)
+# the model fields events may change per world (MjLeggedModel), and those MuJoCo Warp's set_const derives from them
+# (mjlab's list)
 RANDOMISED_FIELDS = ("geom_friction", "body_ipos")
 DERIVED_FIELDS = ("body_subtreemass", "dof_invweight0", "body_invweight0", "tendon_length0", "tendon_invweight0",
                   "actuator_acc0")
@@ -48,10 +51,10 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
         task: "Go1VelocityFlat-v0", "G1VelocityFlat-v0" or a ``LeggedTask``.
         num_envs: parallel environments.
         device: "cpu" or "cuda:N" (default: cuda:0 when present).
-        seed: seed of every random draw (randomisation, resets, commands, pushes, noise); ``reset(seed=...)``
-            replaces it for what follows.
+        seed: seed of every random draw (events, commands, noise); ``reset(seed=...)`` replaces it for what
+            follows.
         max_episode_steps: the time limit in control steps (default: the task's 20 s, 1000 steps).
-        **kwargs: the task's fields (``LeggedTask``: command ranges, reward weights, noise, pushes, ...).
+        **kwargs: the task's fields (``LeggedTask``: command ranges, changes of its tables of terms, ...).
     """
 
     metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
@@ -96,7 +99,7 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
         self.action_space = batch_space(self.single_action_space, n)
 
         dev, buf = sim.device, self._buf
-        self.params, self.robot, randomization = kernel_structs(task, idx, dev)
+        self.params, self.robot = kernel_structs(task, idx, dev)
         d = sim.d
         self._mj = view = MjLegged()
         view.qpos, view.qvel, view.ctrl = d.qpos, d.qvel, d.ctrl
@@ -106,7 +109,7 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
         self._state = st = LeggedState()
         st.action, st.prev_action = buf((n, a)), buf((n, a))
         st.command, st.heading_target, st.command_kind = buf((n, 3)), buf(n), buf(n, wp.int32)
-        st.command_time_left, st.push_time_left = buf(n), buf(n)
+        st.command_time_left = buf(n)
         st.air_time, st.contact_time = buf((n, feet)), buf((n, feet))
         st.peak_height, st.foot_height = buf((n, feet)), buf((n, feet))
         st.collision_hits, st.encoder_bias = buf((n, NUM_GROUPS), wp.int32), buf((n, joints))
@@ -124,7 +127,7 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
 
         out = self._alloc_common(n, o, a, seed)
         self._tables(dev)
-        self._randomize(randomization)
+        self._startup()
         sim.after_substep = lambda: wp.launch(track_feet, dim=n, inputs=[self.params, self.robot, self._mj,
                                                                           self._state], device=dev)
         t = sim.to_torch
@@ -147,10 +150,15 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
     # ------------------------------------------------------------------ the task's tables of terms
     def _tables(self, dev: str) -> None:
         """The task's tables as its kernels take them (``warpgym.tasks.terms``), the state every term reads
-        (``LeggedEnv``), and the step's and observation's kernels made from the tables."""
-        task, joints = self.task, self.index.joint_names
+        (``LeggedEnv``), and the kernels made from the tables: the step's, the observation's, the reset's and the
+        startup's."""
+        task, joints, sim = self.task, self.index.joint_names, self.sim
+        sim.per_world(*RANDOMISED_FIELDS, *DERIVED_FIELDS)
+        self._model = m = MjLeggedModel()
+        m.geom_friction, m.body_ipos = sim.m.geom_friction, sim.m.body_ipos
+        m.body_ipos0 = wp.array(sim.mjm.body_ipos.astype(np.float32), dtype=wp.vec3, device=dev)
         self._env = env = LeggedEnv()
-        env.p, env.r, env.d, env.st, env.t = self.params, self.robot, self._mj, self._state, self._levels
+        env.p, env.r, env.d, env.m, env.st, env.t = self.params, self.robot, self._mj, m, self._state, self._levels
         self._rewards = compile_rewards(task.rewards, LeggedEnv, joints, dev, f"{task.name}: rewards")
         self._terminations = compile_terminations(task.terminations, LeggedEnv, joints, dev,
                                                   f"{task.name}: terminations")
@@ -159,8 +167,15 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
                                             task.observation_noise, f"{task.name}: policy_obs", n)
         self._critic_obs = compile_observations(task.critic_obs, "critic", LeggedEnv, self.dims, joints, dev,
                                                 task.observation_noise, f"{task.name}: critic_obs", n)
-        tables = self._rewards, self._terminations, self._policy, self._critic_obs
+        self._events = compile_events(task.events, LeggedEnv, joints, dev, n, f"{task.name}: events")
+        self._timers = self._events["interval"].arrays
+        self._timer_names = list(of_mode(task.events, "interval"))
+        tables = self._rewards, self._terminations, self._policy, self._critic_obs, self._events["interval"]
         self._step_kernel, self._observe_kernel = step_kernels(*[x for t in tables for x in (t.func, t.params_type)])
+        reset, startup = self._events["reset"], self._events["startup"]
+        self._reset_kernel, self._startup_kernel = reset_kernels(reset.func, reset.params_type, startup.func,
+                                                                 startup.params_type)
+        self.STATE_KEYS = self.BASE_STATE_KEYS + tuple(f"{name}_time_left" for name in self._timer_names)
 
     def _observe_inputs(self) -> list:
         return [self._policy.params, self._policy.arrays, self._critic_obs.params, self._critic_obs.arrays]
@@ -232,16 +247,13 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
         if self._foot_scan is not None:
             self._foot_scan.clearance(st.foot_clear)
 
-    # ------------------------------------------------------------------ the randomisation drawn once
-    def _randomize(self, rz) -> None:
-        """mjlab's startup events, per world: foot friction, the centre of mass offset, the encoder bias; then the
-        model constants that depend on them."""
+    # ------------------------------------------------------------------ the startup events
+    def _startup(self) -> None:
+        """mjlab's startup events, per world (the legged tasks': foot friction, the centre of mass offset, the
+        encoder bias); then the model constants that depend on them."""
         sim = self.sim
-        sim.per_world(*RANDOMISED_FIELDS, *DERIVED_FIELDS)
-        ipos = sim.mjm.body_ipos[self.index.com_body]
-        wp.launch(randomize_worlds, dim=self.num_envs,
-                  inputs=[rz, self._rng_state, wp.vec3(*ipos.astype(np.float32))],
-                  outputs=[sim.m.geom_friction, sim.m.body_ipos, self._state.encoder_bias], device=sim.device)
+        wp.launch(self._startup_kernel, dim=self.num_envs,
+                  inputs=[self._env, self._rng_state, self._events["startup"].params], device=sim.device)
         sim.set_const()
         wp.launch(_advance, dim=1, inputs=[self._rng_state], device=sim.device)
 
@@ -256,8 +268,8 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
         sim.simulate(after_forward=True)
         wp.launch(self._step_kernel, dim=n,
                   inputs=[self._env, self._rng_state, self._rewards.params, self._rewards.arrays,
-                          self._terminations.params, *self._observe_inputs(), self._episodes, self._out,
-                          self._final_critic], device=dev)
+                          self._terminations.params, *self._observe_inputs(), self._events["interval"].params,
+                          self._timers, self._episodes, self._out, self._final_critic], device=dev)
         self._finish_step()
 
     def _launch_reset(self, force_all: int) -> None:
@@ -265,9 +277,9 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
         if self.terrain is not None:  # mjlab's curriculum runs first in its reset
             wp.launch(move_levels, dim=n, inputs=[self._levels, self.robot, self._mj, self._state, force_all,
                                                   self._rng_state, self._out], device=dev)
-        wp.launch(reset_legged_worlds, dim=n, inputs=[self.params, self.robot, force_all, self._stagger,
-                                                      self._rng_state, self._levels.origin, self._mj, self._state,
-                                                      self._episodes, self._out], device=dev)
+        wp.launch(self._reset_kernel, dim=n, inputs=[self._env, force_all, self._stagger, self._rng_state,
+                                                     self._events["reset"].params, self._timers, self._episodes,
+                                                     self._out], device=dev)
         sim.forward()
         self._sense()
         wp.launch(update_commands, dim=n, inputs=[self.params, self.robot, force_all, self._rng_state, self._out.done,
@@ -275,20 +287,23 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
         self._launch_observe()
 
     # ------------------------------------------------------------------ the task's state (Tensor API)
-    STATE_KEYS = ("qpos", "qvel", "warm_start", "action", "prev_action", "command", "heading_target", "command_kind",
-                  "command_time_left", "push_time_left", "air_time", "contact_time", "peak_height", "foot_height",
-                  "encoder_bias", "length", "errors", "foot_friction", "body_ipos", "terrain_level", "terrain_kind",
-                  "env_origin", "terrain_normal")
+    # and, per interval event, "<name>_time_left" (the push_robot event's: push_robot_time_left)
+    BASE_STATE_KEYS = ("qpos", "qvel", "warm_start", "action", "prev_action", "command", "heading_target",
+                       "command_kind", "command_time_left", "air_time", "contact_time", "peak_height", "foot_height",
+                       "encoder_bias", "length", "errors", "foot_friction", "body_ipos", "terrain_level",
+                       "terrain_kind", "env_origin", "terrain_normal")
 
     def _state_views(self) -> dict[str, torch.Tensor]:
         """Writable torch views of everything a world carries from step to step: MuJoCo's state, the task's
         (command, timers, contact times, action history; on rough ground its level, kind, start and the ground's
-        normal under the base from the last scan) and the randomised model fields."""
+        normal under the base from the last scan), the interval events' timers and the randomised model fields."""
         t, st, d, m, ep, lv = self.sim.to_torch, self._state, self.sim.d, self.sim.m, self._episodes, self._levels
+        left = t(self._timers.left)
         return {"qpos": t(d.qpos), "qvel": t(d.qvel), "warm_start": t(d.qacc_warmstart), "action": t(st.action),
                 "prev_action": t(st.prev_action), "command": t(st.command), "heading_target": t(st.heading_target),
                 "command_kind": t(st.command_kind), "command_time_left": t(st.command_time_left),
-                "push_time_left": t(st.push_time_left), "air_time": t(st.air_time), "contact_time": t(st.contact_time),
+                **{f"{name}_time_left": left[:, k] for k, name in enumerate(self._timer_names)},
+                "air_time": t(st.air_time), "contact_time": t(st.contact_time),
                 "peak_height": t(st.peak_height), "foot_height": t(st.foot_height), "encoder_bias": t(st.encoder_bias),
                 "length": t(ep.length), "errors": t(ep.errors), "geom_friction": t(m.geom_friction),
                 "body_ipos": t(m.body_ipos), "terrain_level": t(lv.level), "terrain_kind": t(lv.kind),

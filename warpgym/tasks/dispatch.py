@@ -18,7 +18,7 @@ import linecache
 
 import warp as wp
 
-from kernels.common import ObsLayout
+from kernels.common import Intervals, ObsLayout
 
 
 _MADE: dict[str, tuple] = {}
@@ -127,6 +127,34 @@ def observation_group(env_type, group: str, terms) -> tuple[type, object, str]:
     return _made(tag, env_type, terms, lines)
 
 
+def event_calls(env_type, mode: str, terms) -> tuple[type, object, str]:
+    """``(Params, func, source)``: ``func(env, w, rng, tp: Params) -> rng`` runs the ``mode`` events (startup or
+    reset) for world ``w`` in turn, each drawing from the state the one before it left."""
+    tag = f"events_{mode}"
+    lines = [f"def {tag}(env: Env, w: int, rng: wp.uint32, tp: Params) -> wp.uint32:"]
+    for k, (name, _, ptype) in enumerate(terms):
+        lines.append(f"    rng = {_call(k, name, ptype, 'env', 'w', 'rng')}  # {name}")
+    lines.append("    return rng")
+    return _made(tag, env_type, terms, lines)
+
+
+def interval_calls(env_type, terms) -> tuple[type, object, str]:
+    """``(Params, func, source)``: ``func(env, w, rng, live, tp: Params, iv: Intervals, dt) -> rng`` counts each
+    interval event's timer down by ``dt``; one that falls due draws its next interval and, where ``live`` (the
+    world's state is finite), runs (mjlab's event manager: due below 1e-6 s)."""
+    lines = ["def events_interval(env: Env, w: int, rng: wp.uint32, live: int, tp: Params, iv: Intervals, "
+             "dt: float) -> wp.uint32:"]
+    for k, (name, _, ptype) in enumerate(terms):
+        lines += [f"    # {name}",
+                  f"    iv.left[w, {k}] = iv.left[w, {k}] - dt",
+                  f"    if iv.left[w, {k}] < 1.0e-6:",
+                  f"        iv.left[w, {k}] = wp.randf(rng, iv.lo[{k}], iv.hi[{k}])",
+                  "        if live != 0:",
+                  f"            rng = {_call(k, name, ptype, 'env', 'w', 'rng')}"]
+    lines.append("    return rng")
+    return _made("events_interval", env_type, terms, lines)
+
+
 def _made(tag: str, env_type, terms, lines: list[str]) -> tuple[type, object, str]:
     """The table's parameter struct and function, made once per source (the same table's function is Warp's same
     function, its kernels compiled once in a process)."""
@@ -142,7 +170,7 @@ def _finish(tag: str, env_type, terms, source: str) -> tuple[type, object, str]:
     # named by what it holds, so that two tables' structs never share a name and one table's always has the same
     shape = source + "".join(f"{n}:{_struct_key(p)};" for n, _, p in terms if p is not None)
     params = _params_struct(f"{tag}_{hashlib.sha256(shape.encode()).hexdigest()[:16]}", terms)
-    scope = {"wp": wp, "Env": env_type, "Params": params, "ObsLayout": ObsLayout,
+    scope = {"wp": wp, "Env": env_type, "Params": params, "ObsLayout": ObsLayout, "Intervals": Intervals,
              **{f"f{k}": func for k, (_, func, _) in enumerate(terms)}}
     return params, _compile(tag, source, scope), source
 

@@ -1,7 +1,7 @@
 """docs/tasks.md's tables of the legged tasks' terms, printed from the tasks' own tables (``python -m
 warpgym.tasks.term_tables``; ``benchmarks.doc_tables`` writes and checks the page's block from it): each reward term's
-function, weight per task and parameters, each observation term's entries, noise and scale per group, and each
-termination."""
+function, weight per task and parameters, each observation term's entries, noise and scale per group, each
+termination and each event."""
 
 from __future__ import annotations
 
@@ -21,6 +21,8 @@ def _value(value) -> str:
         return "per joint"
     if isinstance(value, float):
         return f"{value:.4g}"
+    if isinstance(value, tuple):
+        return "(" + ", ".join(_value(v) for v in value) + ")"
     return str(value)
 
 
@@ -85,8 +87,22 @@ def terminations() -> str:
     return "\n".join(lines)
 
 
+def events() -> str:
+    tasks = [LEGGED[name] for name, _ in COLUMNS]
+    lines = ["| event | function | runs | parameters | tasks |", "|---|---|---|---|---|"]
+    for name in _names([t.events for t in tasks]):
+        have = [t.events.get(name) for t in tasks]
+        term = next(x for x in have if x is not None)
+        runs = {"startup": "once, when the env is built", "reset": "at each reset"}.get(term.mode)
+        if runs is None:
+            runs = f"every {term.interval[0]:g}-{term.interval[1]:g} s"
+        params = {_params(x) for x in have if x is not None}
+        lines.append(f"| `{name}` | `{term.func.key}` | {runs} | {'; '.join(sorted(params))} | {_tasks_with(have)} |")
+    return "\n".join(lines)
+
+
 def main(argv=None) -> int:
-    print(rewards() + "\n\n" + observations() + "\n\n" + terminations())
+    print(rewards() + "\n\n" + observations() + "\n\n" + terminations() + "\n\n" + events())
     return 0
 
 

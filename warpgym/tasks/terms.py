@@ -1,11 +1,14 @@
-"""Tasks as tables of terms: a task's rewards, observations and terminations, each declared once as a term (a Warp
-function, its weight or noise, clip and scale, its parameters by name) in an ordered table (``Terms``). Everything
+"""Tasks as tables of terms: a task's rewards, observations, terminations and events, each declared once as a term (a
+Warp function, its weight or noise, clip and scale, or when it runs, its parameters by name) in an ordered table
+(``Terms``). Everything
 else comes from the tables: the functions the step's kernels call (``warpgym.tasks.dispatch``), the parameter structs,
 the observation's layout (sizes and offsets, ``layout``), the export contract and the docs' term tables.
 
 A term's function is a ``@wp.func`` over the state its family names (the legged tasks': ``kernels.legged.params.
 LeggedEnv``): ``(env, w)`` for a reward (a float) or a termination (a bool), ``(env, w, i)`` for entry ``i`` of
-an observation; a parameter struct as its last argument, when it has parameters. A user's own term is such a
+an observation, ``(env, w, rng) -> rng`` for an event (it draws from ``rng`` and returns the state after its
+draws); a parameter struct as its last argument, when it has parameters. A ``wp.vec2`` parameter is a (low, high)
+range, checked as one. A user's own term is such a
 function in the user's own module::
 
     @wp.struct
@@ -89,7 +92,32 @@ class Termination:
         object.__setattr__(self, "params", _frozen(self.params))
 
 
-TERM_TYPES = {"reward": Reward, "observation": Observation, "termination": Termination}
+EVENT_MODES = ("startup", "reset", "interval")
+
+
+@dataclass(frozen=True)
+class Event:
+    """An event (mjlab's event terms): ``func(env, w, rng[, params]) -> rng`` run for a world once when the env is
+    built (``mode="startup"``: a model field's or the task state's randomisation, then MuJoCo Warp's ``set_const``),
+    at each of its resets (``"reset"``: its start pose), or every ``interval`` (low, high) seconds, drawn uniformly
+    per world and again at its resets (``"interval"``: pushes). A table's events of one mode run in its order."""
+
+    func: Any
+    mode: str
+    params: tuple = ()
+    interval: tuple | None = None
+
+    def __post_init__(self):
+        object.__setattr__(self, "params", _frozen(self.params))
+
+
+TERM_TYPES = {"reward": Reward, "observation": Observation, "termination": Termination, "event": Event}
+
+
+def of_mode(table: Terms, *modes: str) -> Terms:
+    """The events of ``table`` run in ``modes``, in the table's order (``of_mode(task.events, "reset")``: the
+    nominal robot, no randomisation or pushes)."""
+    return Terms("event", [(n, t) for n, t in table.items() if t.mode in modes])
 
 
 class Terms(Mapping):
@@ -164,6 +192,10 @@ def _is_number(v) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
 
 
+def _is_range(v) -> bool:
+    return isinstance(v, (tuple, list)) and len(v) == 2 and all(_is_number(x) for x in v) and v[0] <= v[1]
+
+
 # ---------------------------------------------------------------------------------------------------------------
 # parameters: a value per field of the term's parameter struct
 
@@ -209,8 +241,13 @@ def signature(term, kind: str, where: str):
     if not isinstance(func, wp.Function):
         raise TypeError(f"{where}: {func!r} is not a @wp.func: decorate the term's function with @wp.func")
     args = list(func.input_types.items())
-    lead = 3 if kind == "observation" else 2
-    form = "(env, w, i[, params])" if kind == "observation" else "(env, w[, params])"
+    lead = 3 if kind in ("observation", "event") else 2
+    form = {"observation": "(env, w, i[, params])", "event": "(env, w, rng[, params]) -> rng"}.get(
+        kind, "(env, w[, params])")
+    if kind == "event" and (len(args) < 3 or args[2][1] is not wp.uint32
+                            or func.func.__annotations__.get("return") is not wp.uint32):
+        raise TypeError(f"{where}: {func.key} must take and return the random state: an event's function is "
+                        f"{form}, rng a wp.uint32")
     if len(args) not in (lead, lead + 1):
         raise TypeError(f"{where}: {func.key} takes {[a for a, _ in args]}; a {kind} term's function takes {form}")
     if len(args) == lead:
@@ -256,6 +293,11 @@ def param_struct(term, kind: str, where: str, joints: list[str], device: str):
             if not _is_number(value):
                 raise ValueError(f"{where}: {name}={value!r} must be a finite number")
             value = float(value)
+        elif var.type is wp.vec2:  # a (low, high) range
+            if not _is_range(value):
+                raise ValueError(f"{where}: {name}={value!r} must be a (low, high) range of finite numbers with "
+                                 "low <= high, e.g. (-0.5, 0.5)")
+            value = wp.vec2(*value)
         else:
             value = var.type(*value) if isinstance(value, (tuple, list)) else value
         setattr(out, name, value)
@@ -313,6 +355,15 @@ def validate(table: Terms, where: str) -> None:
                                               and all(isinstance(c, (int, float)) for c in term.clip)
                                               and term.clip[0] <= term.clip[1]):
                 raise ValueError(f"{at}: clip={term.clip!r} must be a (low, high) pair or None")
+        if table.kind == "event":
+            if term.mode not in EVENT_MODES:
+                raise ValueError(f"{at}: mode={term.mode!r} must be one of {list(EVENT_MODES)}")
+            if term.mode == "interval" and not (_is_range(term.interval) and term.interval[0] > 0):
+                raise ValueError(f"{at}: interval={term.interval!r} must be (low, high) seconds between its runs, "
+                                 "0 < low <= high, e.g. (1.0, 3.0)")
+            if term.mode != "interval" and term.interval is not None:
+                raise ValueError(f"{at}: interval={term.interval!r} is for mode='interval' events; this one's mode "
+                                 f"is {term.mode!r}")
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -391,3 +442,31 @@ def compile_observations(table: Terms, group: str, env_type, dims: Dims, joints:
     lay.hi = arr([t.clip[1] if t.clip is not None else 0.0 for t in terms])
     lay.scale = arr([t.scale for t in terms])
     return Compiled(func, params_type, _filled(params_type, table, where, joints, device), lay, source)
+
+
+def compile_events(table: Terms, env_type, joints: list[str], device: str, num_envs: int,
+                   where: str = "events") -> dict[str, Compiled]:
+    """Each mode's events as the kernels take them (``EVENT_MODES`` -> ``Compiled``); the interval events' timers
+    (``kernels.common.Intervals``, one row a world) are the interval mode's arrays."""
+    import warp as wp  # noqa: PLC0415
+
+    from kernels.common import Intervals  # noqa: PLC0415
+    from warpgym.tasks.dispatch import event_calls, interval_calls  # noqa: PLC0415
+
+    out = {}
+    for mode in EVENT_MODES:
+        sub = of_mode(table, mode)
+        terms = _dispatch_terms(sub, where)
+        timers = None
+        if mode == "interval":
+            params_type, func, source = interval_calls(env_type, terms)
+            timers = Intervals()
+            timers.lo = wp.array(np.array([t.interval[0] for t in sub.values()], np.float32), dtype=float,
+                                 device=device)
+            timers.hi = wp.array(np.array([t.interval[1] for t in sub.values()], np.float32), dtype=float,
+                                 device=device)
+            timers.left = wp.zeros((num_envs, max(len(sub), 1)), dtype=float, device=device)
+        else:
+            params_type, func, source = event_calls(env_type, mode, terms)
+        out[mode] = Compiled(func, params_type, _filled(params_type, sub, where, joints, device), timers, source)
+    return out

@@ -1,11 +1,12 @@
 """What the legged robots' velocity tasks share (mjlab's ``make_velocity_env_cfg`` and its flat-ground edits): the
-command, the tables of terms (rewards, the policy's and the critic's observations, terminations; each term a Warp
-function of ``kernels/legged`` with its weight or noise and its parameters, ``warpgym.tasks.terms``), pushes,
-resets and the randomisation drawn when an env is built. Each robot's file beside this one names its parts in its
-scene and sets what its mjlab config sets for it.
+command and the tables of terms (rewards, the policy's and the critic's observations, terminations and events:
+resets, pushes and the randomisation drawn when an env is built; each term a Warp function of ``kernels/legged``
+with its weight, noise or schedule and its parameters, ``warpgym.tasks.terms``). Each robot's file beside this one
+names its parts in its scene and sets what its mjlab config sets for it.
 
 Every field is a constructor keyword of the env (``gym.make_vec("warpgym/Go1VelocityFlat-v0", num_envs=4096,
-lin_vel_x=(-2.0, 2.0), rewards={"foot_slip": -0.2})``); ``replace`` checks a change and ``validate`` the whole.
+lin_vel_x=(-2.0, 2.0), rewards={"foot_slip": -0.2}, events={"push_robot": None})``); ``replace`` checks a change and
+``validate`` the whole.
 """
 
 from __future__ import annotations
@@ -15,14 +16,16 @@ import os
 from dataclasses import dataclass, fields, replace
 from typing import ClassVar
 
+from kernels.legged import events as ev
 from kernels.legged import observations as obs
 from kernels.legged import rewards as rew
 from kernels.legged import terminations as ends
 from kernels.legged.params import SELF_COLLISION, SHANK_GROUND, TRUNK_GROUND
-from warpgym.tasks.terms import Dims, Observation, PerJoint, Reward, Termination, Terms, validate as validate_terms
+from warpgym.tasks.terms import Dims, Event, Observation, PerJoint, Reward, Termination, Terms
+from warpgym.tasks.terms import validate as validate_terms
 
 ASSETS = os.path.join(os.path.dirname(os.path.abspath(__file__)), "assets")
-TABLES = ("rewards", "policy_obs", "critic_obs", "terminations")  # a task's tables of terms
+TABLES = ("rewards", "policy_obs", "critic_obs", "terminations", "events")  # a task's tables of terms
 
 # mjlab's reward terms of the velocity tasks (make_velocity_env_cfg), in its config's order, before a robot's config
 # changes them (0: the term is off); the posture's stds per joint are the robot's
@@ -97,6 +100,21 @@ TERMINATIONS = Terms("termination", {
 })
 
 
+# mjlab's events (make_velocity_env_cfg), by its names: the reset pose, a push every 1-3 s, and the startup
+# randomisation of the feet's friction, the base's centre of mass and the encoders' bias
+EVENTS = Terms("event", {
+    "reset_base": Event(ev.reset_root_pose, "reset", {"x": (-0.5, 0.5), "y": (-0.5, 0.5), "z": (0.01, 0.05),
+                                                      "yaw": (-3.14, 3.14)}),
+    "reset_robot_joints": Event(ev.reset_joints_by_offset, "reset", {"position": (0.0, 0.0), "velocity": (0.0, 0.0)}),
+    "push_robot": Event(ev.push_by_setting_velocity, "interval", {
+        "x": (-0.5, 0.5), "y": (-0.5, 0.5), "z": (-0.4, 0.4), "roll": (-0.52, 0.52), "pitch": (-0.52, 0.52),
+        "yaw": (-0.78, 0.78)}, interval=(1.0, 3.0)),
+    "foot_friction": Event(ev.randomize_foot_friction, "startup", {"axis": 0, "value": (0.3, 1.2), "log_uniform": 0}),
+    "base_com": Event(ev.randomize_com, "startup", {"x": (-0.025, 0.025), "y": (-0.025, 0.025), "z": (-0.03, 0.03)}),
+    "encoder_bias": Event(ev.randomize_encoder_bias, "startup", {"bias": (-0.015, 0.015)}),
+})
+
+
 def with_height_scan(table: Terms, max_distance: float, noise: float) -> Terms:
     """``table`` with the height scan after the command (mjlab's place for it), scaled by 1 / its reach."""
     scan = replace(HEIGHT_SCAN, scale=1.0 / max_distance, noise=noise)
@@ -153,11 +171,12 @@ class LeggedTask:
     # mjlab's command curriculum: from env step `step` on, the ranges given (None: unchanged) replace the earlier
     command_stages: tuple = ((5000 * 24, (-1.5, 2.0), None, (-0.7, 0.7)), (10000 * 24, (-2.0, 3.0), None, None))
     # the tables of terms (warpgym.tasks.terms): rewards, the policy's and the critic's observations (on rough ground
-    # with the height scan), the terminations beside the time limit; ``replace`` takes their changes
+    # with the height scan), the terminations beside the time limit, the events; ``replace`` takes their changes
     rewards: Terms = REWARDS
     policy_obs: Terms = POLICY_OBS
     critic_obs: Terms = CRITIC_OBS
     terminations: Terms = TERMINATIONS
+    events: Terms = EVENTS
     # the force [N] above which a contact group's sensor counts a touch (mjlab's contact sensors' threshold)
     self_collision_force: float = 10.0
     # rough ground (terrain=None: the scene's floor): a TerrainGrid (warpgym.tasks.legged.terrain, curriculum=True)
@@ -173,22 +192,6 @@ class LeggedTask:
     foot_scan: object = None
     # the observation terms' noise (mjlab's play mode turns it off)
     observation_noise: bool = True
-    # events: the reset pose's offset, pushes, the randomisation drawn when the env is built
-    reset_x: tuple[float, float] = (-0.5, 0.5)
-    reset_y: tuple[float, float] = (-0.5, 0.5)
-    reset_z: tuple[float, float] = (0.01, 0.05)
-    reset_yaw: tuple[float, float] = (-3.14, 3.14)
-    joint_position_offset: tuple[float, float] = (0.0, 0.0)
-    joint_velocity: tuple[float, float] = (0.0, 0.0)
-    pushes: bool = True
-    push_interval: tuple[float, float] = (1.0, 3.0)
-    # velocity added by a push: x, y, z [m/s], roll, pitch, yaw rate [rad/s]
-    push_velocity: tuple = ((-0.5, 0.5), (-0.5, 0.5), (-0.4, 0.4), (-0.52, 0.52), (-0.52, 0.52), (-0.78, 0.78))
-    randomize: bool = True
-    # (axis, low, high, distribution): 0 sliding, 1 torsional, 2 rolling; one draw per world for all foot geoms
-    foot_friction: tuple = ((0, 0.3, 1.2, "uniform"),)
-    com_offset: tuple = ((-0.025, 0.025), (-0.025, 0.025), (-0.03, 0.03))
-    encoder_bias: tuple[float, float] = (-0.015, 0.015)
 
     # fields that describe the task rather than configure it
     OWN: ClassVar[tuple[str, ...]] = ("name", "mirrors")
@@ -234,18 +237,9 @@ class LeggedTask:
         def fail(name, why):
             raise ValueError(f"{self.name}: {name}={getattr(self, name)!r} {why}")
 
-        ranges = ("lin_vel_x", "lin_vel_y", "ang_vel_z", "heading", "resampling_time", "reset_x",
-                  "reset_y", "reset_z", "reset_yaw", "joint_position_offset", "joint_velocity", "push_interval",
-                  "encoder_bias")
-        for name in ranges:
+        for name in ("lin_vel_x", "lin_vel_y", "ang_vel_z", "heading", "resampling_time"):
             if not _is_range(getattr(self, name)):
                 fail(name, "must be a (low, high) pair of finite numbers with low <= high, e.g. (-1.0, 1.0)")
-        for name in ("push_velocity", "com_offset"):
-            value, size = getattr(self, name), 6 if name == "push_velocity" else 3
-            if not (isinstance(value, tuple) and len(value) == size and all(_is_range(v) for v in value)):
-                fail(name, f"must be {size} (low, high) pairs with low <= high")
-        if self.push_interval[0] <= 0:
-            fail("push_interval", "must be positive seconds between pushes, e.g. (1.0, 3.0); pushes=False turns them off")
         if self.resampling_time[0] <= 0:
             fail("resampling_time", "must be positive seconds, e.g. (3.0, 8.0)")
         for name in ("decimation", "nconmax", "njmax", "contact_sensor_maxmatch"):
@@ -272,10 +266,12 @@ class LeggedTask:
             if not (isinstance(stage, tuple) and len(stage) == 4 and isinstance(stage[0], int) and stage[0] >= 0
                     and all(r is None or _is_range(r) for r in stage[1:])):
                 fail("command_stages", "must hold (step, lin_vel_x, lin_vel_y, ang_vel_z) with ranges or None")
-        for axis in self.foot_friction:
-            if not (isinstance(axis, tuple) and len(axis) == 4 and axis[0] in (0, 1, 2) and _is_range(axis[1:3])
-                    and axis[1] > 0 and axis[3] in ("uniform", "log_uniform")):
-                fail("foot_friction", "must hold (axis 0-2, low > 0, high, 'uniform' or 'log_uniform') entries")
+        for name, event in self.events.items():
+            if event.func is ev.randomize_foot_friction:
+                p = dict(event.params)
+                if p.get("axis") not in (0, 1, 2) or not _is_range(p.get("value")) or p["value"][0] <= 0:
+                    raise ValueError(f"{self.name}: events[{name!r}] params={p!r}: axis must be 0 (sliding), 1 "
+                                     "(torsional) or 2 (rolling) and value a (low, high) range with low > 0")
         if self.terrain is not None and not getattr(self.terrain, "curriculum", False):
             fail("terrain", "must be a TerrainGrid with curriculum=True (one kind a column, levels along rows), "
                             "e.g. dataclasses.replace(terrain.ROUGH, curriculum=True)")

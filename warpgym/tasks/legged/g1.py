@@ -47,7 +47,6 @@ class G1VelocityFlat(LeggedTask):
         "body_ang_vel": -0.05, "angular_momentum": -0.02, "self_collisions": -1.0,
         "pose": {"params": {"std_standing": PerJoint(((".*", 0.05),)), "std_walking": PerJoint(WALKING),
                             "std_running": PerJoint(RUNNING)}}}, "G1VelocityFlat-v0: rewards")
-    foot_friction: tuple = ((0, 0.3, 1.2, "uniform"),)
 
 
 @dataclass(frozen=True)

@@ -8,11 +8,12 @@ friction randomised per axis, the trunk's centre of mass offset.
 
 from dataclasses import dataclass, replace
 
+from kernels.legged import events as ev
 from kernels.legged import terminations as ends
-from warpgym.tasks.legged.base import CRITIC_OBS, POLICY_OBS, REWARDS, TERMINATIONS, LeggedTask, with_height_scan
+from warpgym.tasks.legged.base import CRITIC_OBS, EVENTS, POLICY_OBS, REWARDS, TERMINATIONS, LeggedTask, with_height_scan
 from warpgym.tasks.legged.scan import GO1_FOOT_SCAN, TERRAIN_SCAN
 from warpgym.tasks.legged.terrain import ROUGH
-from warpgym.tasks.terms import PerJoint, Termination
+from warpgym.tasks.terms import Event, PerJoint, Termination, Terms
 
 # mjlab's rough tasks build its ROUGH_TERRAINS_CFG in curriculum mode: one kind a column, ten levels
 ROUGH_CURRICULUM = replace(ROUGH, curriculum=True)
@@ -20,6 +21,19 @@ ROUGH_CURRICULUM = replace(ROUGH, curriculum=True)
 FEET = ("FR", "FL", "RR", "RL")
 HIP_THIGH = r".*(FR|FL|RR|RL)_(hip|thigh)_joint.*"
 CALF = r".*(FR|FL|RR|RL)_calf_joint.*"
+
+
+def _friction(axis: int, low: float, high: float, log_uniform: int) -> Event:
+    return Event(ev.randomize_foot_friction, "startup", {"axis": axis, "value": (low, high), "log_uniform": log_uniform})
+
+
+# condim-6 feet: sliding, torsional and rolling friction each drawn (mjlab's foot_friction_slide, _spin, _roll), in
+# the place of the base's one axis
+GO1_EVENTS = Terms("event", [
+    *((n, EVENTS[n]) for n in ("reset_base", "reset_robot_joints", "push_robot")),
+    ("foot_friction_slide", _friction(0, 0.3, 1.5, 0)), ("foot_friction_spin", _friction(1, 1e-4, 2e-2, 1)),
+    ("foot_friction_roll", _friction(2, 1e-5, 5e-3, 1)),
+    *((n, EVENTS[n]) for n in ("base_com", "encoder_bias"))])
 
 
 @dataclass(frozen=True)
@@ -39,8 +53,7 @@ class Go1VelocityFlat(LeggedTask):
         "std_standing": PerJoint(((HIP_THIGH, 0.05), (CALF, 0.1))),
         "std_walking": PerJoint(((HIP_THIGH, 0.3), (CALF, 0.6))),
         "std_running": PerJoint(((HIP_THIGH, 0.3), (CALF, 0.6)))}}}, "Go1VelocityFlat-v0: rewards")
-    # condim-6 feet: sliding, torsional and rolling friction each drawn
-    foot_friction: tuple = ((0, 0.3, 1.5, "uniform"), (1, 1e-4, 2e-2, "log_uniform"), (2, 1e-5, 5e-3, "log_uniform"))
+    events: object = GO1_EVENTS
 
 
 @dataclass(frozen=True)

@@ -157,11 +157,10 @@ def compile_task_scene(task: LeggedTask):
 
 
 def kernel_structs(task: LeggedTask, idx: RobotIndex, device: str):
-    """The kernels' view of the task: ``LeggedParams``, ``LeggedRobot`` and the startup ``Randomization``."""
+    """The kernels' view of the task and its robot: ``LeggedParams`` and ``LeggedRobot``."""
     import warp as wp  # noqa: PLC0415
 
     from kernels.legged.params import LeggedParams, LeggedRobot  # noqa: PLC0415
-    from kernels.legged.resets import Randomization  # noqa: PLC0415
 
     def arr(values, dtype=float):
         return wp.array(np.asarray(values, np.int32 if dtype == wp.int32 else np.float32), dtype=dtype, device=device)
@@ -184,17 +183,9 @@ def kernel_structs(task: LeggedTask, idx: RobotIndex, device: str):
     p.max_command_steps = task.resampling_time[1] / p.dt
     p.collision_force = task.self_collision_force
     p.foot_scan = int(task.foot_scan is not None)
-    # no pushes: the timer starts beyond any episode
-    p.push_interval_lo, p.push_interval_hi = task.push_interval if task.pushes else (1e30, 1e30)
-    p.push_lo = arr([r[0] for r in task.push_velocity])
-    p.push_hi = arr([r[1] for r in task.push_velocity])
-    p.reset_lo = arr([task.reset_x[0], task.reset_y[0], task.reset_z[0], task.reset_yaw[0]])
-    p.reset_hi = arr([task.reset_x[1], task.reset_y[1], task.reset_z[1], task.reset_yaw[1]])
-    p.joint_pos_offset_lo, p.joint_pos_offset_hi = task.joint_position_offset
-    p.joint_vel_lo, p.joint_vel_hi = task.joint_velocity
 
     r = LeggedRobot()
-    r.root_body, r.upright_body, r.angvel_body = idx.root_body, idx.upright_body, idx.angvel_body
+    r.root_body, r.upright_body, r.angvel_body, r.com_body = idx.root_body, idx.upright_body, idx.angvel_body, idx.com_body
     r.root_qpos, r.root_dof = idx.root_qpos, idx.root_dof
     r.joint_qpos, r.joint_dof = arr(idx.joint_qpos, wp.int32), arr(idx.joint_dof, wp.int32)
     r.default_root, r.default_joint_pos = arr(idx.default_root), arr(idx.default_joint_pos)
@@ -202,18 +193,8 @@ def kernel_structs(task: LeggedTask, idx: RobotIndex, device: str):
     r.joint_actuator = arr(idx.joint_actuator, wp.int32)
     r.action_scale = arr(idx.action_scale)
     r.foot_site, r.foot_body = arr(idx.foot_site, wp.int32), arr(idx.foot_body, wp.int32)
+    r.foot_geom = arr(idx.foot_geoms, wp.int32)
     r.foot_found, r.foot_force = arr(idx.foot_found, wp.int32), arr(idx.foot_force, wp.int32)
     r.imu_lin_vel, r.imu_ang_vel, r.angmom = idx.imu_lin_vel, idx.imu_ang_vel, idx.angmom
     r.hit_force, r.hit_group = arr(idx.hit_force, wp.int32), arr(idx.hit_group, wp.int32)
-
-    rz = Randomization()
-    axes = task.foot_friction if task.randomize else ()
-    rz.foot_geoms = arr(idx.foot_geoms, wp.int32)
-    rz.friction_axis = arr([a[0] for a in axes], wp.int32)
-    rz.friction_lo, rz.friction_hi = arr([a[1] for a in axes]), arr([a[2] for a in axes])
-    rz.friction_log = arr([int(a[3] == "log_uniform") for a in axes], wp.int32)
-    rz.com_body = idx.com_body
-    com = task.com_offset if task.randomize else ((0.0, 0.0),) * 3
-    rz.com_lo, rz.com_hi = wp.vec3(*[c[0] for c in com]), wp.vec3(*[c[1] for c in com])
-    rz.bias_lo, rz.bias_hi = task.encoder_bias if task.randomize else (0.0, 0.0)
-    return p, r, rz
+    return p, r
