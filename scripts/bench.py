@@ -1,4 +1,4 @@
-"""`python scripts/bench.py ARGS` in a source checkout is `warpgym bench ARGS` (warpgym/cli/bench.py)."""
+"""`python scripts/bench.py ARGS` in a source checkout is `warpgym bench ARGS` (warpgym/cli/bench/)."""
 
 import os
 import sys

@@ -1,4 +1,4 @@
-"""`python scripts/eval.py ARGS` in a source checkout is `warpgym eval ARGS` (warpgym/cli/eval.py)."""
+"""`python scripts/eval.py ARGS` in a source checkout is `warpgym eval ARGS` (warpgym/cli/eval/)."""
 
 import os
 import sys

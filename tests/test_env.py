@@ -235,7 +235,7 @@ def test_replayed_cpu_graph_steps_exactly_like_launches_from_python():
     assert torch.equal(runs[0], runs[1])
 
 
-@pytest.mark.parametrize("module, name", [("warpgym.envs.locomotion", "LocomotionVecEnv"),
+@pytest.mark.parametrize("module, name", [("warpgym.envs.robots", "LocomotionVecEnv"),
                                           ("warpgym.envs.suite", "SuiteVecEnv")])
 def test_an_env_whose_constructor_raised_still_closes(module, name):
     """A wrong kwarg raises in the constructor, before the renderer is set; Gymnasium's ``VectorEnv.__del__`` then

@@ -141,8 +141,8 @@ def test_training_rows_report_the_conveyor_speed(conveyor):
 
 @pytest.mark.parametrize("steps", [EPISODE + 10, 25], ids=["past an episode's end", "cut short"])
 def test_sim2sim_reports_the_conveyor_speed_in_both_simulators(conveyor, steps):
-    from warpgym.native import NativeRobot
-    from warpgym.tasks import get_task
+    from warpgym.native.robots import NativeRobot
+    from warpgym.tasks.robots import get_task
 
     assert close(sim2sim.play_warpgym(conveyor, still, steps, seed=0)["forward_speed"])
     robot = NativeConveyor(NativeRobot(get_task("Ant").replace(power_scale=0.0), copies=2))

@@ -85,7 +85,7 @@ def test_warpgym_imports_run_one_way_down_its_layers():
         parts = module.split(".")
         if parts[0] != "warpgym" or len(parts) == 1:
             return None
-        return "native" if parts[1] in ("native", "native_legged") else parts[1]
+        return parts[1]
 
     upward = []
     for folder, _, files in os.walk(os.path.join(ROOT, "warpgym")):
@@ -157,6 +157,26 @@ def test_benchmarks_are_a_package_in_folders_by_what_they_measure_and_edit_no_im
                 text = open(os.path.join(folder, name)).read()
                 edits += [os.path.relpath(os.path.join(folder, name), ROOT)] if "sys.path" in text else []
     assert not edits, edits
+
+
+def test_each_family_has_a_module_named_for_it_in_every_layer():
+    """A family's own code sits where its name says, layer by layer (CONTRIBUTING.md, "Where things go"): its task
+    definitions in tasks/F/, its kernels in kernels/F/, its vector env in envs/F.py, its judge outside warpgym in
+    native/F.py, its `warpgym bench` and `warpgym eval` in cli/bench/F.py and cli/eval/F.py; and its registry
+    entry's commands call into those modules."""
+    from warpgym.tasks.registry import REGISTRY
+
+    families = {e.family for e in REGISTRY.values()}
+    assert families == {"robots", "suite", "legged"}, families
+    for f in sorted(families):
+        for path in (f"warpgym/tasks/{f}/__init__.py", f"kernels/{f}/__init__.py", f"warpgym/envs/{f}.py",
+                     f"warpgym/native/{f}.py", f"warpgym/cli/bench/{f}.py", f"warpgym/cli/eval/{f}.py"):
+            assert os.path.isfile(os.path.join(ROOT, path)), path
+    for name, e in REGISTRY.items():
+        f = e.family
+        assert e.vector_entry_point.startswith(f"warpgym.envs.{f}:"), (name, e.vector_entry_point)
+        assert e.evaluate.__name__.startswith(f"warpgym.cli.eval.{f}."), (name, e.evaluate.__name__)
+        assert e.bench.__name__.startswith(f"warpgym.cli.bench.{f}."), (name, e.bench.__name__)
 
 
 def test_kernels_are_laid_out_by_family():

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 import torch
 
-from warpgym.native import NativeRobot, observation_slices, quat_rotate, quat_rotate_inv
+from warpgym.native.robots import NativeRobot, observation_slices, quat_rotate, quat_rotate_inv
 from warpgym.sim.physics import Physics
 
 TOLERANCE = 1e-3

@@ -1,11 +1,11 @@
-"""The legged tasks' sim-to-sim check (warpgym.native_legged, ``warpgym eval`` of a legged run): the same policy
+"""The legged tasks' sim-to-sim check (warpgym.native.legged, ``warpgym eval`` of a legged run): the same policy
 over the same schedule of commands in native MuJoCo (float64, ``mj_step``) and in warpgym's env tracks alike."""
 
 import numpy as np
 import pytest
 import torch
 
-from warpgym.native_legged import SCHEDULE, commands, native_episodes, warpgym_episodes
+from warpgym.native.legged import SCHEDULE, commands, native_episodes, warpgym_episodes
 from warpgym.tasks.legged import LEGGED
 from warpgym.tasks.terms import of_mode
 
@@ -40,7 +40,7 @@ def test_on_rough_ground_native_mujoco_scans_the_ground_as_warpgym_does_and_trac
     import mujoco
 
     from warpgym.envs.legged import LeggedVecEnv
-    from warpgym.native_legged import height_scan, start_patches, start_pose, start_yaws
+    from warpgym.native.legged import height_scan, start_patches, start_pose, start_yaws
     from warpgym.tasks.legged.model import compile_task_scene
 
     task = LEGGED["Go1VelocityRough-v0"].replace(episode_length_s=2.0)
@@ -83,11 +83,11 @@ def test_on_rough_ground_native_mujoco_scans_the_ground_as_warpgym_does_and_trac
 
 
 def test_tracking_means_weigh_each_step_and_split_by_kind_of_ground():
-    """Both replays' tracking (warpgym.native_legged.tracking): every step of every episode weighs the same, so a
+    """Both replays' tracking (warpgym.native.legged.tracking): every step of every episode weighs the same, so a
     fallen episode's few steps count for little; per kind, only that kind's episodes."""
     from types import SimpleNamespace
 
-    from warpgym.native_legged import tracking
+    from warpgym.native.legged import tracking
 
     ground = SimpleNamespace(grid=SimpleNamespace(sub_terrains=[("flat", None), ("stairs", None)]))
     sums = [[10.0, 1.0], [2.0, 2.0], [30.0, 3.0]]  # error sums (xy, yaw) of three episodes

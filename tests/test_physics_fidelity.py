@@ -70,7 +70,7 @@ def same_speed(a: float, b: float) -> bool:
 
 @pytest.mark.slow
 def test_an_exploiting_gait_flies_on_the_old_physics_and_not_on_the_tasks():
-    from warpgym.tasks import get_task
+    from warpgym.tasks.robots import get_task
 
     coarse, fine = replay("ant_flying_policy.pt", 3, OLD_ANT_PHYSICS), replay("ant_flying_policy.pt", 12, OLD_ANT_PHYSICS)
     # the mechanism, on the old physics: speed and height come from the step, not the robot
@@ -85,7 +85,7 @@ def trained_with(name: str):
     """The substeps and physics a committed policy was trained with (its checkpoint's config); a
     setting added since then has its default."""
     from agents.checkpoint import load
-    from warpgym.tasks import trained_task
+    from warpgym.tasks.robots import trained_task
 
     task = trained_task(load(os.path.join(DATA, name), torch.device("cpu"))["config"]["env_args"])
     return task.substeps, task.physics
@@ -102,7 +102,7 @@ def test_the_humanoids_old_step_pays_out_speed_that_a_finer_step_does_not():
 @pytest.mark.slow
 @pytest.mark.parametrize("task_name, policies", [("Ant", ANT_POLICIES), ("Humanoid", HUMANOID_POLICIES)])
 def test_a_gait_trained_on_the_default_physics_keeps_its_speed_at_a_finer_step(task_name, policies):
-    from warpgym.tasks import get_task
+    from warpgym.tasks.robots import get_task
 
     task = get_task(task_name)
     trained_on_default = [n for n in policies if trained_with(n) == (task.substeps, task.physics)]
@@ -123,7 +123,7 @@ def test_a_policy_recorded_before_a_physics_setting_existed_replays_without_it()
     that physics on the task, with the checkpoint's substeps."""
     from agents.checkpoint import load
     from warpgym.sim.physics import recorded
-    from warpgym.tasks import get_task, trained_task
+    from warpgym.tasks.robots import get_task, trained_task
 
     env_args = load(os.path.join(DATA, "humanoid_5x4_seed1_policy.pt"), torch.device("cpu"))["config"]["env_args"]
     saved = env_args["physics"]
@@ -156,7 +156,7 @@ def test_the_seed1_humanoid_gait_leans_on_joint_damping_and_no_constraint_pays_e
     abdomen and hip flexion joints; the motors put energy in, contacts and joint limits take it out."""
     from benchmarks.physics.step_sensitivity import parse_setting, replay as native_replay
     from agents.checkpoint import load
-    from warpgym.tasks import trained_task
+    from warpgym.tasks.robots import trained_task
 
     ckpt = load(os.path.join(DATA, "humanoid_5x4_seed1_policy.pt"), torch.device("cpu"))
     task = trained_task(ckpt["config"]["env_args"])
@@ -175,7 +175,7 @@ def test_the_humanoids_step_pays_its_seed1_gait_energy_and_the_ants_pays_none():
     takes none, which also checks the bookkeeping (a missed force would show up there)."""
     from benchmarks.physics.step_sensitivity import parse_setting, replay as native_replay
     from agents.checkpoint import load
-    from warpgym.tasks import trained_task
+    from warpgym.tasks.robots import trained_task
 
     def power(name, setting):
         ckpt = load(os.path.join(DATA, name), torch.device("cpu"))
@@ -193,7 +193,7 @@ def test_the_humanoids_step_pays_its_seed1_gait_energy_and_the_ants_pays_none():
 
 def test_matched_damping_is_the_identity_at_its_own_step_and_lighter_at_a_finer_one():
     from benchmarks.physics.step_sensitivity import match_damping
-    from warpgym.native import NativeRobot
+    from warpgym.native.robots import NativeRobot
 
     same, finer = NativeRobot("Humanoid", substeps=5), NativeRobot("Humanoid", substeps=10)
     before = finer.model.dof_damping[finer.dof_adr].copy()
@@ -210,9 +210,9 @@ def test_exact_damping_is_the_same_in_both_simulators_and_fades_as_the_step_shri
     """Physics(exact_damping=True) scales each hinge's damping by (e^x - 1) / x, x = h d / I: warpgym
     (from its solver's model) and native MuJoCo (from the MJCF) scale alike, and the scale tends to 1
     at a finer step."""
-    from warpgym.native import NativeRobot
+    from warpgym.native.robots import NativeRobot
     from warpgym.sim import Sim
-    from warpgym.tasks import get_task
+    from warpgym.tasks.robots import get_task
 
     task = get_task("Humanoid")
     mjcf = task.physics.replace(motor_speed=None, armature=None)  # the MJCF's damping and rotors alone
@@ -234,12 +234,12 @@ def test_exact_damping_is_the_same_in_both_simulators_and_fades_as_the_step_shri
 def test_motor_back_emf_is_joint_damping_of_gear_over_no_load_speed_in_both_simulators():
     """Physics(motor_speed=w0) adds gear / w0 to the damping of every motor's joint (a DC motor at the
     full command stalls at w0), in warpgym and native MuJoCo alike, before exact_damping scales it."""
-    from warpgym.native import NativeRobot
+    from warpgym.native.robots import NativeRobot
     from warpgym.sim import Sim
     from warpgym.sim.physics import exact_damping_scale
     import mujoco
 
-    from warpgym.tasks import get_task
+    from warpgym.tasks.robots import get_task
 
     task = get_task("Humanoid")
     mjcf = task.physics.replace(motor_speed=None, armature=None)

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import warp as wp
 
-from warpgym.native_legged import yaw_rotation
+from warpgym.native.legged import yaw_rotation
 from warpgym.sim.rays import RayCaster, Scan, ScanFrames
 from warpgym.tasks.legged import terrain as T
 from warpgym.tasks.legged.scan import G1_FOOT_SCAN, GO1_FOOT_SCAN, TERRAIN_SCAN, grid_offsets, ring_offsets

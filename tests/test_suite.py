@@ -11,7 +11,7 @@ import pytest
 import torch
 
 from conftest import DEVICE
-from warpgym.envs.conformance import (
+from warpgym.native.suite import (
     compare_steps,
     gymnasium_env,
     gymnasium_episodes,
@@ -426,7 +426,7 @@ def test_one_action_sequence_ends_where_gymnasiums_does_after_1000_steps(suite_e
     """A long-horizon check the one-step gaps cannot make: Swimmer's 1000-step return under a fixed
     swimming stroke (no feedback, so no closed loop to part the float32 and float64 trajectories), from
     Gymnasium's own reset states, agrees with Gymnasium's episode by episode."""
-    from warpgym.envs.conformance import open_loop_returns
+    from warpgym.native.suite import open_loop_returns
 
     env = suite_envs("Swimmer-v5")
     steps = np.arange(1000)[:, None]
@@ -441,7 +441,7 @@ def test_a_policy_plays_the_same_episodes_in_both_envs_from_gymnasiums_starts(su
     the same feedback policy in warpgym's worlds. Reacher's return is mostly its target's distance, which
     each start draws: the returns spread by more than 10 % over the starts, and paired, the episodes agree
     one by one."""
-    from warpgym.envs.conformance import gymnasium_policy_episodes, warpgym_policy_episodes
+    from warpgym.native.suite import gymnasium_policy_episodes, warpgym_policy_episodes
 
     env = suite_envs("Reacher-v5")
     weights = torch.randn(env.num_obs, env.num_actions, generator=torch.Generator().manual_seed(0))
@@ -463,7 +463,7 @@ def test_reward_terms_sum_to_the_return_and_agree_episode_by_episode(suite_envs)
     """The reward terms ``warpgym eval`` prints: Gymnasium's info entries summed per episode add up to the
     return (HumanoidStandup pays 1 a step beside them), and warpgym's, over the same episodes, agree with
     Gymnasium's term by term."""
-    from warpgym.envs.conformance import gymnasium_policy_episodes, warpgym_policy_episodes
+    from warpgym.native.suite import gymnasium_policy_episodes, warpgym_policy_episodes
 
     weights = torch.randn(400, 17, generator=torch.Generator().manual_seed(1))
     for name, actions, rest_per_step in (("Reacher-v5", 2, 0.0), ("InvertedDoublePendulum-v5", 1, 0.0),
@@ -491,7 +491,7 @@ def test_a_v5_policy_plays_v4_and_is_paid_v4s_reward():
     """``warpgym eval --env-version 4``: the policy sees the part of v4's observation that is v5's and
     plays the same episodes from the same reset seeds (the same actions: the control terms agree), and
     v4 pays Reacher's distance as it was before each step, which the v5 run's observations give."""
-    from warpgym.envs.conformance import gymnasium_policy_episodes
+    from warpgym.native.suite import gymnasium_policy_episodes
 
     weights = torch.randn(10, 2, generator=torch.Generator().manual_seed(0))
     seen = []
@@ -517,7 +517,7 @@ def test_nudged_starts_move_every_coordinate_and_nothing_else():
     """``gymnasium_policy_episodes(nudge=...)``: Gymnasium's reset states moved by exactly the nudge in
     every qpos coordinate, the velocities and the first observation as drawn; Reacher's return moves
     with its start, and no further than the move's size suggests."""
-    from warpgym.envs.conformance import gymnasium_policy_episodes
+    from warpgym.native.suite import gymnasium_policy_episodes
 
     def act(obs):
         return 0.1 * torch.tanh(obs[:, :2])

@@ -36,7 +36,7 @@ def test_short_cpu_run_writes_logs_checkpoint_plots_resumes_and_plays(tmp_path, 
     saved = json.load(open(os.path.join(run, "config.json")))
     assert saved["num_envs"] == 8 and saved["minibatch_size"] == 32  # 8 envs x 8 steps, two mini-batches
     # the whole physics it trained with, so that later replays use it whatever the defaults become
-    from warpgym.tasks import ANT
+    from warpgym.tasks.robots import ANT
 
     assert saved["env_args"]["substeps"] == ANT.substeps and saved["env_args"]["physics"] == ANT.physics.to_dict()
     # asked for the step capture (the default), a CPU run collects eagerly and its summary says so
@@ -137,7 +137,7 @@ def test_fidelity_replays_a_probe_in_four_settings_and_reports_it(tmp_path, caps
     with open(os.path.join(out, "fidelity.json")) as f:
         probes = json.load(f)["probes"]
     assert [p["candidate"] for p in probes] == ["default", "nov22"]
-    from warpgym.tasks import ANT
+    from warpgym.tasks.robots import ANT
 
     for p, n in zip(probes, (ANT.substeps, 3)):  # the task's step, then nov22's 3 substeps
         assert sorted(p["rows"]) == ["finer", "native", "native_finer", "warpgym"]

@@ -14,7 +14,7 @@ pytest.importorskip("PIL")
 
 
 def _fixed_state(task: str, copies: int = 1, below_floor: bool = False) -> dict:
-    from warpgym.native import NativeRobot
+    from warpgym.native.robots import NativeRobot
 
     robot = NativeRobot(task, copies=copies)
     robot.reset(np.random.default_rng(0))

@@ -94,7 +94,7 @@ def train_one(task: str, seed: int, minutes: float, marks: tuple[float, ...], ev
     from stable_baselines3.common.env_util import make_vec_env  # noqa: PLC0415
     from stable_baselines3.common.vec_env import VecNormalize  # noqa: PLC0415
 
-    from warpgym.envs.conformance import gymnasium_policy_episodes  # noqa: PLC0415
+    from warpgym.native.suite import gymnasium_policy_episodes  # noqa: PLC0415
 
     torch.set_num_threads(1)
     kw, n_envs = hyperparameters(task)

@@ -19,7 +19,7 @@ from benchmarks.harness import read_report
 
 
 def measure(name: str, samples: dict, episodes: int, seed: int) -> dict:
-    from warpgym.envs.conformance import (  # noqa: PLC0415
+    from warpgym.native.suite import (  # noqa: PLC0415
         compare_steps,
         gymnasium_episodes,
         gymnasium_samples,

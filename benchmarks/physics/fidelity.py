@@ -223,7 +223,7 @@ def candidate_label(run: dict) -> str:
 
 
 def _task(name: str):
-    from warpgym.tasks import get_task
+    from warpgym.tasks.robots import get_task
 
     return get_task(name)
 

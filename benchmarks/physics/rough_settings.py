@@ -116,7 +116,7 @@ def floor(task: str, num_envs: int, device: str, settings: dict, got: tuple, che
 def measure(task: str, name: str, num_envs: int, device: str, steps: int, warmup: int, repeats: int,
             check_steps: int, reference: tuple | None) -> tuple[dict, tuple]:
     from warpgym.cli.bench import timed  # noqa: PLC0415
-    from warpgym.cli.bench_suite import mujoco_warp_loop  # noqa: PLC0415
+    from warpgym.cli.bench.suite import mujoco_warp_loop  # noqa: PLC0415
 
     settings = VARIANTS[name]
     start = time.perf_counter()

@@ -95,7 +95,7 @@ def replay(ckpt, task, setting: dict, substeps: int, copies: int, steps: int, se
     from agents.checkpoint import policy_from_checkpoint  # noqa: PLC0415
     from warpgym.cli.sim2sim import play_native  # noqa: PLC0415
     from benchmarks.physics.energy import PowerMeter  # noqa: PLC0415
-    from warpgym.native import NativeRobot  # noqa: PLC0415
+    from warpgym.native.robots import NativeRobot  # noqa: PLC0415
 
     substeps = setting.get("substeps", setting.get("finer", 1) * substeps)
     if "joint_speed" in setting:
@@ -130,7 +130,7 @@ def joint_table(task, substeps: int) -> list[dict]:
     implicit Euler's damping falls short: it damps ln(1 + x) / x of the continuous rate)."""
     import mujoco  # noqa: PLC0415
 
-    from warpgym.native import NativeRobot  # noqa: PLC0415
+    from warpgym.native.robots import NativeRobot  # noqa: PLC0415
     from warpgym.sim.physics import hinge_inverse_inertia  # noqa: PLC0415
 
     robot = NativeRobot(task, substeps=substeps)
@@ -146,7 +146,7 @@ def sensitivity(path: str, settings: list[dict], args) -> dict:
     import torch  # noqa: PLC0415
 
     from agents.checkpoint import load  # noqa: PLC0415
-    from warpgym.tasks import trained_task  # noqa: PLC0415
+    from warpgym.tasks.robots import trained_task  # noqa: PLC0415
 
     ckpt = load(path, torch.device("cpu"))
     env_args = ckpt["config"]["env_args"]

@@ -124,7 +124,7 @@ def main(argv=None) -> int:
     import torch  # noqa: PLC0415
 
     from warpgym.cli import write_json  # noqa: PLC0415
-    from warpgym.cli.bench_suite import bench_suite_task  # noqa: PLC0415
+    from warpgym.cli.bench.suite import bench_suite_task  # noqa: PLC0415
     from warpgym.tasks.registry import task_names  # noqa: PLC0415
 
     tasks = args.tasks or task_names("suite")

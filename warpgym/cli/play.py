@@ -7,7 +7,7 @@
 
 Each env plays one episode with the action mean (no exploration noise), cut short after --steps.
 Forward speed, here as everywhere in warpgym, is the distance travelled towards the target over the
-time the episode lasted (warpgym.tasks.LocomotionTask.forward_speed). With --video or --gif the
+time the episode lasted (warpgym.tasks.robots.LocomotionTask.forward_speed). With --video or --gif the
 physics runs in warpgym as in training, and each control step's state is drawn by MuJoCo's renderer
 from the same MJCF (headless: EGL or OSMesa; pip install "warpgym[video]"). MP4 runs at 60 fps (one
 frame per 1/60 s control step), GIF at 20. A clip's forward speed counts the strides it shows; a

@@ -91,7 +91,7 @@ def build_config(args, task: str, num_envs: int, device: str, saved: dict | None
     # the learner's env: for Gymnasium's tasks, actions in [-1, 1] mapped onto the control ranges
     common = {"task": task, "device": device, "max_episode_steps": args.episode_length, **dict(entry.learner_kwargs)}
     if entry.physics_flags:
-        from warpgym.tasks import get_task  # noqa: PLC0415
+        from warpgym.tasks.robots import get_task  # noqa: PLC0415
 
         # The whole physics goes into the config, not only what the flags changed: a checkpoint then
         # replays (play.py, sim2sim.py) with the physics it was trained with, whatever the defaults later.

@@ -7,7 +7,7 @@ Plays the deterministic policy for one episode (--steps control steps) in four s
     warpgym        at the training step (the checkpoint's substeps) and at --finer times as many substeps
     native MuJoCo  the same MJCF in the ``mujoco`` package (C, CPU, float64), at the training step and
                    --finer times finer, with the observation and action mapping computed from MuJoCo's
-                   own data (warpgym/native.py)
+                   own data (warpgym/native/robots.py)
 and prints for each: forward speed (each robot's first episode: the distance it travelled towards the
 target over the time until it fell or the replay ended, warpgym's one definition; the mean over
 robots), torso height while up, falls, the largest joint speed, and the share of steps with no foot on
@@ -71,7 +71,7 @@ def feet_pressed(feet_obs: np.ndarray, k: int) -> np.ndarray:
 
 
 def feet_columns(task, num_actions: int, num_feet: int) -> slice:
-    from warpgym.native import observation_slices  # noqa: PLC0415
+    from warpgym.native.robots import observation_slices  # noqa: PLC0415
 
     return observation_slices(task, num_actions, num_feet)["feet"]
 
@@ -121,8 +121,8 @@ def replay_native(ckpt, env_args: dict, substeps: int, copies: int, steps: int, 
     import torch  # noqa: PLC0415
 
     from agents.checkpoint import policy_from_checkpoint  # noqa: PLC0415
-    from warpgym.native import NativeRobot  # noqa: PLC0415
-    from warpgym.tasks import trained_task  # noqa: PLC0415
+    from warpgym.native.robots import NativeRobot  # noqa: PLC0415
+    from warpgym.tasks.robots import trained_task  # noqa: PLC0415
 
     task = trained_task(env_args)
     robot = NativeRobot(task, substeps=substeps, copies=copies)
@@ -182,7 +182,7 @@ def main(argv=None) -> int:
 
     from agents.checkpoint import load, load_for_command  # noqa: PLC0415
     from warpgym.sim.device import resolve_device  # noqa: PLC0415
-    from warpgym.tasks import get_task  # noqa: PLC0415
+    from warpgym.tasks.robots import get_task  # noqa: PLC0415
 
     device = resolve_device(args.device)
     envs = args.envs or (256 if device.startswith("cuda") else 8)

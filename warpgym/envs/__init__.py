@@ -4,7 +4,7 @@ MuJoCo Warp; ``make_vec_env`` builds any task's from its registry entry."""
 
 from importlib import import_module
 
-from warpgym.envs.locomotion import LocomotionVecEnv
+from warpgym.envs.robots import LocomotionVecEnv
 
 
 def entry_point(path: str):

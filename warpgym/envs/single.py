@@ -7,7 +7,7 @@ import numpy as np
 import torch
 
 from warpgym.envs.legged import LeggedVecEnv
-from warpgym.envs.locomotion import LocomotionVecEnv
+from warpgym.envs.robots import LocomotionVecEnv
 from warpgym.envs.suite import SuiteVecEnv
 
 

@@ -1,7 +1,7 @@
 """Frames of warpgym robots, drawn by MuJoCo's OpenGL renderer from the same MJCF, headless.
 
 The physics stays in warpgym: each frame the robots' states (warpgym's layout, docs/tensor_api.md)
-are written into native MuJoCo copies of the robot (``warpgym.native``, the mapping
+are written into native MuJoCo copies of the robot (``warpgym.native.robots``, the mapping
 ``warpgym sim2sim`` uses) and drawn; nothing is simulated here. ``K`` robots are drawn side by
 side in one scene, as Isaac Gym's viewer shows its envs, each shifted by its place in a grid.
 
@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from warpgym.native import NativeRobot
+from warpgym.native.robots import NativeRobot
 from warpgym.media.ground_colours import colour_ground
 from warpgym.tasks.legged.model import compile_task_scene
 

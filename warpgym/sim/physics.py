@@ -1,5 +1,5 @@
 """The physics settings a robot is simulated with, beyond its MJCF: one definition that ``Sim``, the
-native MuJoCo twin (``warpgym.native``) and ``warpgym train --physics`` share.
+native MuJoCo twin (``warpgym.native.robots``) and ``warpgym train --physics`` share.
 
 docs/history.md ("Physics settings: the investigation") says which values were tried and why the defaults are what
 they are.

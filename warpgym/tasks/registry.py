@@ -20,7 +20,7 @@ import importlib
 from dataclasses import dataclass
 from typing import Callable
 
-from warpgym.tasks import TASKS as ROBOTS
+from warpgym.tasks.robots import TASKS as ROBOTS
 from warpgym.tasks.legged import LEGGED, LeggedTask
 from warpgym.tasks.legged.contract import deployment_contract
 from warpgym.tasks.names import imported
@@ -81,13 +81,13 @@ def _command(module: str, name: str) -> Callable:
 
 def _robot(name: str, episode_length: int, envs: tuple[int, int], iterations: tuple[int, int]) -> TaskEntry:
     return TaskEntry(name, "robots", f"warpgym/{name}-v0", episode_length,
-                     "warpgym.envs.locomotion:LocomotionVecEnv", "warpgym.envs.single:LocomotionEnv", (),
+                     "warpgym.envs.robots:LocomotionVecEnv", "warpgym.envs.single:LocomotionEnv", (),
                      physics_flags=True, clip_keys=(), clip_all_worlds=True,
                      draw_clip=_command("warpgym.media.video", "draw_robot_clip"), training_clips=True,
                      scored_in="native MuJoCo",
                      reports_speed=True, default_envs=envs, default_iterations=iterations, preset=PRESETS[name],
-                     evaluate=_command("warpgym.cli.eval", "in_native_mujoco"),
-                     bench=_command("warpgym.cli.bench", "bench_robot_task"))
+                     evaluate=_command("warpgym.cli.eval.robots", "evaluate"),
+                     bench=_command("warpgym.cli.bench.robots", "bench_robot_task"))
 
 
 def _suite(name: str, episode_length: int) -> TaskEntry:
@@ -97,8 +97,8 @@ def _suite(name: str, episode_length: int) -> TaskEntry:
                      draw_clip=_command("warpgym.media.video", "draw_suite_clip"), training_clips=False,
                      scored_in="Gymnasium's env", reports_speed=False, default_envs=(4096, 64),
                      default_iterations=(500, 100), preset=PRESETS[name],
-                     evaluate=_command("warpgym.cli.eval", "in_gymnasium"),
-                     bench=_command("warpgym.cli.bench_suite", "bench_suite_task"))
+                     evaluate=_command("warpgym.cli.eval.suite", "evaluate"),
+                     bench=_command("warpgym.cli.bench.suite", "bench_suite_task"))
 
 
 def _legged(name: str, episode_length: int) -> TaskEntry:
@@ -109,9 +109,9 @@ def _legged(name: str, episode_length: int) -> TaskEntry:
                      draw_clip=_command("warpgym.media.video", "draw_legged_clip"), training_clips=False,
                      scored_in="native MuJoCo", reports_speed=False, default_envs=(4096, 32),
                      default_iterations=(1000, 30), preset=PRESETS.get(name, LEGGED_PRESET),
-                     evaluate=_command("warpgym.cli.eval", "legged_in_native_mujoco"),
+                     evaluate=_command("warpgym.cli.eval.legged", "evaluate"),
                      export_contract=deployment_contract, asymmetric=True,
-                     bench=_command("warpgym.cli.bench_legged", "bench_legged_task"))
+                     bench=_command("warpgym.cli.bench.legged", "bench_legged_task"))
 
 
 # 8192 Ants and 4096 Humanoids reach their targets soonest on one H100 (docs/benchmarks.md, "Envs per GPU");

@@ -13,7 +13,7 @@ With all three, both seeds keep 0.96-1.03 of their speed at 4x finer at 1, 2, 5 
 """
 
 from warpgym.sim.physics import Physics
-from warpgym.tasks.locomotion import LocomotionTask
+from warpgym.tasks.robots.base import LocomotionTask
 
 HUMANOID = LocomotionTask(
     name="Humanoid",

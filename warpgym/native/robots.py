@@ -24,7 +24,7 @@ import numpy as np
 
 from warpgym.sim.physics import Physics, exact_damping_scale, motor_damping
 from warpgym.sim.robots import hinge_joint_names, mjcf_path, robot_spec
-from warpgym.tasks import LocomotionTask, get_task
+from warpgym.tasks.robots import LocomotionTask, get_task
 
 # Newton's ground plane as MuJoCo Warp receives it (ShapeConfig defaults): friction, condim, margin.
 GROUND_FRICTION = (1.0, 0.005, 0.0001)

@@ -13,7 +13,7 @@ settings", holds the measurements.
 """
 
 from warpgym.sim.physics import Physics
-from warpgym.tasks.locomotion import LocomotionTask
+from warpgym.tasks.robots.base import LocomotionTask
 
 ANT = LocomotionTask(
     name="Ant",

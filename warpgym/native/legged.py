@@ -175,7 +175,7 @@ def ends_episode(task: LeggedTask, idx, d, touched: bool) -> bool:
                 return True
         else:
             raise ValueError(f"{task.name}: terminations[{name!r}] ({term.func.key}) has no native MuJoCo "
-                             "counterpart in warpgym.native_legged.ends_episode: add one there, or drop the term "
+                             "counterpart in warpgym.native.legged.ends_episode: add one there, or drop the term "
                              "for the replay")
     return False
 

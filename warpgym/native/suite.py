@@ -1,5 +1,6 @@
 """warpgym's suite against Gymnasium's own envs: one step from the same states, and the distributions
-of random-action episodes. Used by tests/test_suite.py and benchmarks/physics/conformance.py.
+of random-action episodes. Used by `warpgym eval`, tests/test_suite.py and
+benchmarks/physics/conformance.py.
 
 "The same state" is everything Gymnasium's ``step`` reads before it simulates: qpos, qvel, the
 solver's warm start, and the position the forward speed is measured from (a body position as the
@@ -12,13 +13,16 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 import torch
 
 from kernels.suite import params as G
-from warpgym.envs.suite import SuiteVecEnv
 from warpgym.tasks.suite import SUITE, GymTask, get_suite_task
+
+if TYPE_CHECKING:  # the env is a layer above; these functions take one built by the caller
+    from warpgym.envs.suite import SuiteVecEnv
 
 
 def gymnasium_env(task: str | GymTask, version: int = 5, **kwargs):

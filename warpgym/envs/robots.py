@@ -19,7 +19,7 @@ from kernels.robots.step import locomotion_step
 from kernels.robots.resets import reset_finished_envs
 from warpgym.envs.graph_env import GraphVecEnv
 from warpgym.sim.simulator import Sim
-from warpgym.tasks import LocomotionTask, get_task
+from warpgym.tasks.robots import LocomotionTask, get_task
 
 
 # VectorEnv is named again beside GraphVecEnv (which is one): skrl's wrap_env(env) and other learners tell a

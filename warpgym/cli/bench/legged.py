@@ -13,7 +13,7 @@ import time
 
 import torch
 
-from warpgym.cli.bench_suite import mujoco_warp_loop
+from warpgym.cli.bench.suite import mujoco_warp_loop
 from warpgym.envs.legged import LeggedVecEnv
 
 
