@@ -1,4 +1,4 @@
-"""benchmarks/multi_gpu/rllib_vs_warpgym.py --report: the rows of several earlier runs in one table."""
+"""benchmarks/learning/learners.py --report: the rows of several earlier runs in one table."""
 
 import copy
 import json
@@ -8,7 +8,7 @@ import shutil
 
 import pytest
 
-from benchmarks.multi_gpu import rllib_vs_warpgym as cmp
+from benchmarks.learning import learners as cmp
 
 COMMON = {"device": "NVIDIA H200", "num_envs": 4096, "seconds": 180.0, "hparams": "preset", "settings": {"Ant": {}}}
 
@@ -901,7 +901,7 @@ def test_a_folder_of_several_tasks_asks_which(tmp_path):
     ("benchmarks.reliability.exits", ["docs/bench/reliability/gpu_exits_h200.json"], 4),
     ("benchmarks.reliability.exits", ["docs/bench/reliability/gpu_exits_h200x4_a.json",
                                       "docs/bench/reliability/gpu_exits_h200x4_b.json"], 29),
-    ("benchmarks.multi_gpu.rllib_vs_warpgym", ["docs/bench/rllib/h200_rllib_vs_warpgym_1gpu.json",
+    ("benchmarks.learning.learners", ["docs/bench/rllib/h200_rllib_vs_warpgym_1gpu.json",
                                                "docs/bench/rllib/h200_rllib_8runners_1gpu.json",
                                                "docs/bench/rllib/h200_rllib_vs_warpgym_2gpu_warpgym.json",
                                                "docs/bench/rllib/h200_rllib_vs_warpgym_2gpu_rllib.json",
@@ -990,6 +990,20 @@ def test_the_comparison_gives_warpgym_as_many_robots_per_gpu_as_rllibs_runners_i
     ours = cmp.command("warpgym", "Ant", 2, args, "/x/w")
     assert (flag(ours, "--num-envs"), flag(ours, "--multi-gpu")) == ("8192", "split")
     assert "--multi-gpu" not in cmp.command("warpgym", "Ant", 1, args, "/x/w")
+    # an adapter's learner keeps its own settings: train-with takes the hyperparameters for rllib only
+    skrl = cmp.command("skrl", "Ant", 1, args, "/x/s")
+    assert skrl[3:5] == ["train-with", "skrl"] and flag(skrl, "--num-envs") == "4096" and "--batch-size=32768" not in skrl
+
+
+def test_the_learners_report_reads_the_kept_adapter_runs_beside_rllibs():
+    """The kept learners.json of the adapters (one GPU, their defaults) reads as comparison rows: one per learner,
+    each named by its adapter, the first iteration's time kept."""
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    doc = cmp.merged_reports([os.path.join(root, "docs", "bench", "learners", "h100_learners_ant.json")])
+    text = cmp.table(doc)
+    rows = [line for line in text.splitlines() if line.startswith("| Ant |")]
+    assert len(rows) == 5 and any("skrl (`SkrlVecEnv`), 1 GPU" in r for r in rows)
+    assert all(r.split("|")[4].strip().endswith(" s") for r in rows)  # the first iteration's time
 
 
 def test_suite_sweep_called_again_sweeps_only_the_settings_not_done(monkeypatch, tmp_path):

@@ -1,4 +1,4 @@
-"""RLlib's PPO on warpgym, for ``warpgym train-with rllib`` (and benchmarks/multi_gpu/rllib_vs_warpgym.py).
+"""RLlib's PPO on warpgym, for ``warpgym train-with rllib`` (and benchmarks/learning/learners.py).
 
 One GPU: one env runner in this process (``num_env_runners=0``) steps the adapter built here, and one
 learner on the same GPU; warpgym's ``EpisodeLog`` reads the episodes as for the other learners.

@@ -21,7 +21,7 @@ step of zero torque). warpgym's own episode statistics (``EpisodeLog``) count th
 **Copies.** RLlib keeps episodes as numpy arrays on the host and its connectors take numpy in, so
 every step copies the observations, rewards and flags to the host and the actions back (a device sync
 per step on a GPU), and RLlib's runner loops over the envs in Python. That is the cost of RLlib's
-design, measured in ``benchmarks/multi_gpu/rllib_vs_warpgym.py`` (and the runner's own loop, with an env that does
+design, measured in ``benchmarks/learning/learners.py`` (and the runner's own loop, with an env that does
 nothing, in ``benchmarks/multi_gpu/rllib_overhead.py``); the torch adapters (rsl_rl, skrl, rl_games) keep
 the data on the device.
 """

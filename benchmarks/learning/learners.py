@@ -1,33 +1,37 @@
-"""warpgym's PPO beside RLlib's PPO, the same robots, GPUs and wall-clock budget: the experiment of ElegantRL's
-Isaac Gym tutorial.
+"""Learners side by side on one machine, the same task, robots, GPUs and wall-clock budget, one run after another in
+one script run: warpgym's PPO, RLlib's PPO (the experiment of ElegantRL's Isaac Gym tutorial: RLlib's successor of
+DD-PPO on several GPUs) and the learners of the other adapters (rsl_rl, skrl, rl_games, Stable-Baselines3).
 
-    python -m benchmarks.multi_gpu.rllib_vs_warpgym --out OUT                                   # Ant, Humanoid x 1, 2 GPUs
-    python -m benchmarks.multi_gpu.rllib_vs_warpgym --out OUT --tasks Ant --gpus 1 --seconds 60
-    python -m benchmarks.multi_gpu.rllib_vs_warpgym --report OUT --figures docs/figures         # table and figures again
-    python -m benchmarks.multi_gpu.rllib_vs_warpgym --report OUT OUT2                           # two runs' rows together
-    python -m benchmarks.multi_gpu.rllib_vs_warpgym --report docs/bench/rllib/h200_rllib_vs_warpgym_1gpu.json  # a kept JSON
+    python -m benchmarks.learning.learners --out OUT                                  # warpgym, RLlib; Ant, Humanoid x 1, 2 GPUs
+    python -m benchmarks.learning.learners --out OUT --tasks Ant --gpus 1 --learners warpgym rsl_rl skrl rl_games sb3 \
+        --seconds 120                                                                 # every adapter, one GPU
+    python -m benchmarks.learning.learners --report OUT --figures docs/figures        # table and figures again
+    python -m benchmarks.learning.learners --report OUT OUT2                          # two runs' rows together
+    python -m benchmarks.learning.learners --report docs/bench/rllib/h200_rllib_vs_warpgym_1gpu.json  # a kept JSON
 
-For each task and GPU count G, one run of each learner, one after another:
+For each task and GPU count G, one run of each learner:
 - warpgym: ``warpgym train`` (G = 1) or ``torchrun --nproc_per_node=G -m warpgym train``: G processes, each
   stepping --num-envs robots and all-reducing every minibatch's gradients (``--multi-gpu grow-batch``, as RLlib's
   DDP learners divide the work: each its own mini-batch; ``--warpgym-multi-gpu split``, ``grow-steps`` or ``grow-kl``
   runs warpgym's other ways with the same robots per GPU);
-- RLlib: ``warpgym train-with rllib --gpus G``: PPO on RLlib's new API stack, G env runners each stepping
-  --num-envs robots in one warpgym vector env, and G learners training one policy with torch DDP. That is
-  RLlib's successor of DD-PPO (see warpgym/cli/rllib_run.py for how they map). ``--rllib-env-runners R``
-  splits the same robots over R runner processes instead, so that RLlib samples on R CPU cores.
+- rllib: ``warpgym train-with rllib --gpus G``: PPO on RLlib's new API stack, G env runners each stepping
+  --num-envs robots in one warpgym vector env, and G learners training one policy with torch DDP (see
+  warpgym/cli/rllib_run.py for how they map). ``--rllib-env-runners R`` splits the same robots over R runner
+  processes instead, so that RLlib samples on R CPU cores;
+- rsl_rl, skrl, rl_games, sb3: ``warpgym train-with NAME`` on one GPU, with the adapter's own defaults.
 
-Both take the same settings as far as each exposes them: the network (the task's), steps per env
-between updates, minibatch size, epochs and learning rate. ``--hparams preset`` uses warpgym's task
-preset for both (Ant: 16 steps, 32768-sample minibatches, 4 epochs, 3e-4; Humanoid: 32, 32768, 5, 5e-4);
-``--hparams seed`` the ElegantRL tutorial's stated numbers, a minibatch of 1024 samples and a learning rate of 0.001,
-with the preset's steps and epochs (the tutorial's "replay buffer of 4096" is read as 4096 envs per GPU).
+warpgym and RLlib take the same settings as far as each exposes them: the network (the task's), steps per env
+between updates, minibatch size, epochs and learning rate. ``--hparams preset`` uses warpgym's task preset for both
+(Ant: 16 steps, 32768-sample minibatches, 4 epochs, 3e-4; Humanoid: 32, 32768, 5, 5e-4); ``--hparams seed`` the
+ElegantRL tutorial's stated numbers, a minibatch of 1024 samples and a learning rate of 0.001, with the preset's
+steps and epochs (the tutorial's "replay buffer of 4096" is read as 4096 envs per GPU).
 
-During each run the GPUs' utilisation (nvidia-smi) and the machine's CPU use (/proc/stat) are sampled
-every 2 s. Writes OUT/comparison.json (after every run) and OUT/<task>_rllib_vs_warpgym_reward_vs_*.png
-(all of a task's runs on one pair of axes), and prints a table: steady samples/s, when the training
-episodes first reached the target speed (Ant 3 m/s, Humanoid 2 m/s), the last return and speed, and
-median GPU and CPU use.
+During each run the GPUs' utilisation (nvidia-smi) and the machine's CPU use (/proc/stat) are sampled every 2 s.
+Writes OUT/comparison.json (after every run) and OUT/<task>_learners_reward_vs_*.png (all of a task's runs on one
+pair of axes), and prints a table: steady samples/s (``agents.logger.steady_median``: the first fifth of the
+iterations left out), the first iteration's time, when the training episodes first reached the target speed (Ant
+3 m/s, Humanoid 2 m/s; benchmarks/targets.py), the last return and speed, and median GPU and CPU use. ``--report``
+also reads the learners.json files an earlier version of this script kept (docs/bench/learners/).
 """
 
 from __future__ import annotations
@@ -45,6 +49,9 @@ from agents.data_parallel import MODES  # noqa: E402
 from benchmarks.harness import ROOT, child_env, visible_gpus  # noqa: E402
 
 from benchmarks.targets import WALKING, walking_row  # noqa: E402
+ADAPTERS = {"rsl_rl": "rsl_rl (`RslRlVecEnv`)", "skrl": "skrl (`SkrlVecEnv`)", "rl_games": "rl_games (`RlGamesVecEnv`)",
+            "sb3": "Stable-Baselines3 (`Sb3VecEnv`, numpy)"}
+LEARNERS = ("warpgym", "rllib", *ADAPTERS)
 PRESET = {"Ant": {"horizon_len": 16, "batch_size": 32768, "repeat_times": 4, "learning_rate": 3e-4},
           "Humanoid": {"horizon_len": 32, "batch_size": 32768, "repeat_times": 5, "learning_rate": 5e-4}}
 SEED = {"batch_size": 1024, "learning_rate": 1e-3}
@@ -57,11 +64,12 @@ def settings(task: str, hparams: str, num_envs: int) -> dict:
 
 
 def command(learner: str, task: str, gpus: int, args, run_dir: str) -> list[str]:
-    flags = [f"--{k.replace('_', '-')}={v}" for k, v in settings(task, args.hparams, args.num_envs).items()]
     common = ["--task", task, "--time-limit", str(args.seconds), "--seed", str(args.seed), "--run-dir", run_dir,
-              "--no-plots", *flags]
-    if args.device:
-        common += ["--device", args.device]
+              "--no-plots", *(["--device", args.device] if args.device else [])]
+    if learner in ADAPTERS:  # the adapter's own settings: train-with takes the hyperparameters for rllib only
+        return [sys.executable, "-m", "warpgym", "train-with", learner, "--num-envs", str(args.num_envs),
+                "--iterations", "1000000", *common]
+    common += [f"--{k.replace('_', '-')}={v}" for k, v in settings(task, args.hparams, args.num_envs).items()]
     if learner == "rllib":
         runners = args.rllib_env_runners
         spread = ["--env-runners", str(runners), "--num-envs", str(args.num_envs * gpus // runners)] if runners else \
@@ -126,9 +134,10 @@ def row_of(task: str, learner: str, gpus: int, run_dir: str, wall_s: float, rc: 
 
 
 def label(r: dict) -> str:
-    """"warpgym PPO, 1 GPU", "RLlib PPO, 2 GPUs", "RLlib PPO, 1 GPU, 8 env runners"."""
+    """"warpgym PPO, 1 GPU", "RLlib PPO, 2 GPUs", "RLlib PPO, 1 GPU, 8 env runners", "skrl (`SkrlVecEnv`), 1 GPU"."""
     runners = f", {r['env_runners']} env runners" if r.get("env_runners") else ""
-    return f"{'warpgym' if r['learner'] == 'warpgym' else 'RLlib'} PPO, {r['gpus']} GPU{'s' if r['gpus'] > 1 else ''}{runners}"
+    name = ADAPTERS.get(r["learner"]) or f"{'warpgym' if r['learner'] == 'warpgym' else 'RLlib'} PPO"
+    return f"{name}, {r['gpus']} GPU{'s' if r['gpus'] > 1 else ''}{runners}"
 
 
 def of_cores(r: dict) -> str:
@@ -142,14 +151,15 @@ def table(doc: dict) -> str:
 
     runs = f", rows of {doc['script_runs']} script runs ({', '.join(doc['dates'])})" if doc.get("script_runs") else ""
     lines = [f"{doc['device']}, {doc['num_envs']} envs per GPU, {doc['seconds']:g} s per run, hparams {doc['hparams']}{runs}",
-             "", "| task | learner | samples/s | training episodes at target speed | last return | last speed "
-             "| GPU use | CPU use |", "|---|---|---:|---:|---:|---:|---:|---:|"]
+             "", "| task | learner | samples/s | first iteration | training episodes at target speed | last return "
+             "| last speed | GPU use | CPU use |", "|---|---|---:|---:|---:|---:|---:|---:|---:|"]
     for r in doc["rows"]:
         hit = ("not within the run" if r.get("time_to_target_s") is None else
                f"{WALKING[r['task']]:g} m/s at {r['time_to_target_s']:.0f} s ({r['samples_to_target'] / 1e6:.1f} M)")
         sps = r.get("samples_per_s")
+        first = r.get("first_row_s", r.get("first_iteration_s"))  # the kept files of 2026-11-24 name it so
         lines.append(f"| {r['task']} | {label(r)} | "
-                     f"{fmt(None if sps is None else sps / 1e6, '.3f', ' M')} | {hit} | {fmt(r.get('final_return'), '.0f')} | "
+                     f"{fmt(None if sps is None else sps / 1e6, '.3f', ' M')} | {fmt(first, '.0f', ' s')} | {hit} | {fmt(r.get('final_return'), '.0f')} | "
                      f"{fmt(r.get('final_speed'), '.2f', ' m/s')} | {fmt(r.get('gpu_util_pct'), '.0f', ' %')} | "
                      f"{fmt(r.get('cpu_use_pct'), '.0f', ' %')}{of_cores(r)} |")
     return "\n".join(lines)
@@ -165,15 +175,25 @@ def figures(doc: dict, out_dir: str) -> list[str]:
         if not runs:
             continue
         paths = plot_runs([r["run_dir"] for r in runs], out_dir, labels=[label(r) for r in runs],
-                          title=f"warpgym {task}: warpgym's PPO and RLlib's ({doc['device']})")
+                          title=f"warpgym {task}: learners side by side ({doc['device']})")
         for p in paths:
-            dest = os.path.join(out_dir, f"{task.lower()}_rllib_vs_warpgym_{os.path.basename(p)}")
+            dest = os.path.join(out_dir, f"{task.lower()}_learners_{os.path.basename(p)}")
             os.replace(p, dest)
             written.append(dest)
     return written
 
 
 ALIKE = ("device", "num_envs", "seconds", "hparams")  # what makes rows of two runs comparable, with each task's settings
+
+
+def as_comparison(part: dict) -> dict:
+    """A learners.json of this script's earlier version (one task, one GPU, the adapters' defaults) in
+    comparison.json's form."""
+    if "settings" in part:
+        return part
+    rows = [{"task": part["task"], "gpus": 1, **r} for r in part["rows"]]
+    return {"device": part["device"], "date": part["date"], "num_envs": part["num_envs"], "seconds": part["seconds"],
+            "hparams": "the adapters' defaults (warpgym: its preset)", "settings": {}, "rows": rows}
 
 
 def merged_reports(outs: list[str]) -> dict:
@@ -187,7 +207,7 @@ def merged_reports(outs: list[str]) -> dict:
             raise ValueError(f"--report {out}: no comparison.json there; pass an --out directory of an earlier run "
                              "or its comparison JSON")
         with open(path) as f:
-            part = json.load(f)
+            part = as_comparison(json.load(f))
         for r in part["rows"]:
             r["run_dir"] = os.path.join(os.path.dirname(path), os.path.basename(r["run_dir"]))
         if doc is None:
@@ -250,7 +270,8 @@ def main(argv=None) -> int:
     ap.add_argument("--out", help="directory for the runs, comparison.json and the figures")
     ap.add_argument("--tasks", nargs="+", default=["Ant", "Humanoid"], choices=["Ant", "Humanoid"])
     ap.add_argument("--gpus", type=int, nargs="+", default=[1, 2], help="GPU counts to run (default 1 2)")
-    ap.add_argument("--learners", nargs="+", default=["warpgym", "rllib"], choices=["warpgym", "rllib"])
+    ap.add_argument("--learners", nargs="+", default=["warpgym", "rllib"], choices=LEARNERS,
+                    help="warpgym, rllib, or an adapter's learner (rsl_rl, skrl, rl_games, sb3: one GPU)")
     ap.add_argument("--num-envs", type=int, default=4096, help="robots per GPU (per env runner for RLlib)")
     ap.add_argument("--warpgym-multi-gpu", choices=MODES, default="grow-batch",
                     help="warpgym's --multi-gpu on several GPUs, each GPU stepping --num-envs robots (default "
@@ -282,6 +303,10 @@ def main(argv=None) -> int:
         ap.error(f"--gpus {' '.join(map(str, args.gpus))}: each is a number of GPUs, 1 or more")
     if args.num_envs < 1 or not args.seconds > 0:
         ap.error(f"--num-envs {args.num_envs} and --seconds {args.seconds:g}: both must be positive")
+    alone = [x for x in args.learners if x in ADAPTERS]
+    if alone and any(g > 1 for g in args.gpus):
+        ap.error(f"--learners {' '.join(alone)} with --gpus {' '.join(map(str, args.gpus))}: these adapters train on "
+                 "one GPU; run them with --gpus 1")
     runners = args.rllib_env_runners
     if runners is not None and any(g > 1 for g in args.gpus):
         ap.error(f"--rllib-env-runners {runners} with --gpus {' '.join(map(str, args.gpus))}: on several GPUs RLlib "
