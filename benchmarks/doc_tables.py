@@ -84,6 +84,9 @@ BLOCKS = {
                     first(1)),
     "legged": ("docs/benchmarks.md", "benchmarks.learning.mjlab_side_by_side", ["--report", *LEGGED], first(3)),
     "before-after": ("docs/benchmarks.md", "benchmarks.speed.before_after", ["--report", *BEFORE_AFTER], first(1)),
+    "before-after-events": ("docs/history.md", "benchmarks.speed.before_after",
+                            ["--report", *(f"docs/bench/speed/before_after_events_{r}_2026-12-03.json"
+                                           for r in ("flat", "rough"))], first(1)),
     "legged-terms": ("docs/tasks.md", "warpgym.tasks.term_tables", [], first(4)),
     "legged-7min": ("docs/history.md", "benchmarks.learning.mjlab_side_by_side",
                     ["--report", "docs/bench/legged/side_by_side_2026-11-28.json"], first(3)),
