@@ -155,3 +155,28 @@ def test_an_observation_with_history_holds_its_last_frames_oldest_first():
     with pytest.raises(ValueError, match=r"history=0 must be a number of observations, 1 or more"):
         LeggedVecEnv("Go1VelocityFlat-v0", num_envs=1, device="cpu",
                      policy_obs={"bad": Observation(terms.joint_vel, 12, history=0)})
+
+
+def test_an_event_from_a_module_with_postponed_annotations_is_taken(tmp_path, monkeypatch):
+    """A user's module under ``from __future__ import annotations`` (its annotations strings): its event's
+    function is checked by the types Warp resolves, not refused for a string return annotation."""
+    import importlib
+
+    from warpgym.tasks.terms import Event, signature
+
+    (tmp_path / "late_events.py").write_text(
+        "from __future__ import annotations\n"
+        "import warp as wp\n"
+        "from kernels.legged.params import LeggedEnv\n\n"
+        "@wp.func\n"
+        "def nudge(env: LeggedEnv, w: int, rng: wp.uint32) -> wp.uint32:\n"
+        "    env.d.qvel[w, env.r.root_dof] = wp.randf(rng, 0.0, 0.1)\n"
+        "    return rng\n\n"
+        "@wp.func\n"
+        "def no_state(env: LeggedEnv, w: int, rng: wp.uint32) -> float:\n"
+        "    return 0.0\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    late = importlib.import_module("late_events")
+    assert signature(Event(late.nudge, "reset"), "event", "events['nudge']") is None
+    with pytest.raises(TypeError, match="no_state must take and return the random state"):
+        signature(Event(late.no_state, "reset"), "event", "events['no_state']")

@@ -4,8 +4,8 @@ stays on the device.
 A step, as mjlab's ``ManagerBasedRlEnv.step`` orders it: the actions into position targets, ``decimation``
 physics steps (each followed by the feet's contact bookkeeping), terminations, reward terms and interval events
 (pushes) from the data the physics left, the finished worlds reset (with their reset events), MuJoCo's forward
-pass of every world, the commands' timers and steering, and both observations; all one graph launch. ``obs`` is the policy's observation (with noise);
-``info["critic_obs"]`` is the critic's (privileged: no noise or encoder bias, the feet's heights, air times,
+pass of every world, the commands' timers and steering, and both observations; all one graph launch. ``obs`` is
+the policy's observation (with noise); ``info["critic_obs"]`` is the critic's (privileged: no noise or encoder bias, the feet's heights, air times,
 contacts and forces), ``info["final_critic_obs"]`` the one an episode ended on.
 """
 

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import math
 import re
+import typing
 from collections.abc import Mapping
 from dataclasses import dataclass, fields, replace
 from typing import Any, Callable
@@ -244,8 +245,9 @@ def signature(term, kind: str, where: str):
     lead = 3 if kind in ("observation", "event") else 2
     form = {"observation": "(env, w, i[, params])", "event": "(env, w, rng[, params]) -> rng"}.get(
         kind, "(env, w[, params])")
+    # the return type as Warp resolves it: a module with ``from __future__ import annotations`` holds strings
     if kind == "event" and (len(args) < 3 or args[2][1] is not wp.uint32
-                            or func.func.__annotations__.get("return") is not wp.uint32):
+                            or typing.get_type_hints(func.func).get("return") is not wp.uint32):
         raise TypeError(f"{where}: {func.key} must take and return the random state: an event's function is "
                         f"{form}, rng a wp.uint32")
     if len(args) not in (lead, lead + 1):
