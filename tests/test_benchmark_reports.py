@@ -677,20 +677,40 @@ def test_suite_sweep_times_each_seed_to_the_tasks_figure_from_its_runs_metrics(t
         sw.main(["--times", str(path)])
 
 
-def test_rollout_capture_reports_medians_of_the_rounds_against_the_whole_rollouts_graph():
-    from benchmarks.speed import rollout_capture as rc
+def test_train_modes_reads_rollout_captures_kept_json_medians_of_the_rounds_against_the_first_mode():
+    """benchmarks/speed/rollout_capture.py's JSON ("step", "rollout", "off" per task) reads in train_modes' table under
+    its mode names, with medians over the rounds (a failed run left out) and ratios to the whole rollout's graph."""
+    from benchmarks.speed import train_modes as tm
 
     def run(ready, sps):
         return {"ready_s": ready, "samples_per_s": sps, "iterations": 100}
 
-    doc = {"runs": {"Ant-v5": {"step": [run(20.0, 2.6e5), run(22.0, 2.7e5), run(100.0, 2.5e5)],
-                               "rollout": [run(40.0, 2.7e5), run(44.0, 2.8e5), {"error": "exit 1: x"}],
-                               "off": [run(21.0, 2.0e5)]}}}
-    lines = rc.table(doc).splitlines()
-    # medians: step 22 s and 0.26 M; rollout (its failed run left out) 42 s and 0.275 M
-    assert lines[2] == "| Ant-v5 | step (3 runs) | 22.0 | 0.260 M | 0.52 | 0.945 |"
-    assert lines[3] == "| Ant-v5 | rollout (2 runs) | 42.0 | 0.275 M | 1.00 | 1.000 |"
-    assert lines[4] == "| Ant-v5 | off (1 runs) | 21.0 | 0.200 M | 0.50 | 0.727 |"
+    doc = {"meta": {"gpu": "GPU"}, "runs": {"Ant-v5": {
+        "step": [run(20.0, 2.6e5), run(22.0, 2.7e5), run(100.0, 2.5e5)],
+        "rollout": [run(40.0, 2.7e5), run(44.0, 2.8e5), {"error": "exit 1: x"}], "off": [run(21.0, 2.0e5)]}}}
+    (only,) = tm.from_capture_report(doc)
+    lines = tm.tables(only).splitlines()
+    # medians: rollout (its failed run left out) 42 s and 0.275 M; step 22 s and 0.26 M
+    assert lines[4] == "| sequential | 2 of 3 | 42.0 s | 0.28 M | - | 1.00 | 1.000 | - | - | - | - |"
+    assert lines[5] == "| step-graph | 3 of 3 | 22.0 s | 0.26 M | - | 0.52 | 0.945 | - | - | - | - |"
+    assert lines[6] == "| no-graph | 1 of 1 | 21.0 s | 0.20 M | - | 0.50 | 0.727 | - | - | - | - |"
+
+
+def test_train_modes_turns_the_first_mode_each_round_and_refuses_seeds_for_a_task_without_targets(capsys):
+    from benchmarks.speed import train_modes as tm
+
+    order = list(tm.rounds(["a", "b", "c"], 3))
+    assert order == [(0, "a"), (0, "b"), (0, "c"), (1, "b"), (1, "c"), (1, "a"), (2, "c"), (2, "a"), (2, "b")]
+    _, args = tm.parse(["--out", "x", "--task", "Hopper-v5"])
+    assert args.seeds == [] and args.seconds == 0.0  # throughput only: Hopper has no target speeds
+    _, args = tm.parse(["--out", "x", "--task", "Humanoid"])
+    assert args.seeds == [0, 1, 2] and args.seconds == 240.0
+    with pytest.raises(SystemExit):
+        tm.parse(["--out", "x", "--task", "Hopper-v5", "--seeds", "0"])
+    assert "--seeds 0: Hopper-v5 has no target speeds" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        tm.parse(["--out", "x", "--task", "Hopper-v5", "--throughput-seconds", "0"])
+    assert "nothing to time" in capsys.readouterr().err
 
 
 def test_suite_versions_plays_each_runs_last_policy_in_v4_and_names_the_term_that_moved(monkeypatch, tmp_path):

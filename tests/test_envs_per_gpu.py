@@ -62,8 +62,10 @@ def test_the_mini_batch_keeps_its_size_unless_scaled_with_the_envs(envs, scale, 
     assert epg.batch_size("Ant", envs, scale) == expected
 
 
-def test_the_overlap_benchmark_reads_ratios_phases_and_time_to_target_per_mode():
-    from benchmarks.speed import overlap
+def test_the_train_modes_benchmark_reads_an_overlap_report_ratios_phases_and_time_to_target_per_mode():
+    """A JSON that benchmarks/speed/overlap.py kept (one throughput run per mode, no rounds, no ready time) reads in
+    train_modes' tables as it read in its own."""
+    from benchmarks.speed import train_modes as tm
 
     def run(mode, seed, three, eight):
         hit = {"3.0": three and {"time_s": three, "samples": 1}, "8.0": eight and {"time_s": eight, "samples": 1}}
@@ -75,9 +77,9 @@ def test_the_overlap_benchmark_reads_ratios_phases_and_time_to_target_per_mode()
                           {"mode": "overlap", "samples_per_s": 1.44e6, "phase_s": None}],
            "learning": [run("sequential", 0, 40.0, 120.0), run("sequential", 1, 60.0, None),
                         run("sequential", 2, 50.0, None), run("overlap", 0, 30.0, 100.0)]}
-    table = overlap.tables(doc)
-    assert "| sequential | 1.20 M | 0.75 | 50.0 ms | 40.0 ms | 10.0 ms | - |" in table
-    assert "| overlap | 1.44 M | 0.90 | - | - | - | - |" in table
+    table = tm.tables(doc)
+    assert "| sequential | 1 of 1 | - | 1.20 M | 0.75 | - | 1.000 | 50.0 ms | 40.0 ms | 10.0 ms | - |" in table
+    assert "| overlap | 1 of 1 | - | 1.44 M | 0.90 | - | 1.200 | - | - | - | - |" in table
     assert "| sequential | 3 | 50 s (3/3) | not reached (1/3) | 1.20 M |" in table
     assert "| overlap | 1 | 30 s (1/1) | 100 s (1/1) | 1.20 M |" in table
 
@@ -123,23 +125,25 @@ def test_a_throughput_run_cut_too_short_to_time_gives_no_samples_per_s_and_says_
     assert "| 32768 | 2.90 M | - | - |" in epg.tables(doc)
 
 
-def test_the_overlap_benchmark_times_no_mode_from_a_run_too_short_to_time_it():
+def test_the_train_modes_benchmark_times_no_mode_from_a_run_too_short_to_time_it():
     """A compiled run's first update compiles for seconds: a short throughput run is all warm-up
     (on an H100, 3 iterations in 40 s read 0.08 M samples/s), and must not enter the table as a rate."""
     import argparse
 
-    from benchmarks.speed import overlap
+    from benchmarks.speed import train_modes as tm
 
     def run(iterations):
         return {"summary": {"iterations": iterations, "steady_samples_per_s_median": 8e4,
                             "steady_phase_s_median": {"iteration_s": 1.6}}, "peak_mib": 100}
 
     args = argparse.Namespace(throughput_seconds=40.0)
-    short = overlap.throughput_row("compiled", run(3), args)
+    short = tm.throughput_row("compiled", 0, run(3), args)
     assert short["samples_per_s"] is None and short["phase_s"] is None
     assert "3 iterations in 40 s" in short["too_short"] and "--throughput-seconds" in short["too_short"]
-    timed = overlap.throughput_row("compiled", run(epg.MIN_ITERATIONS), args)
+    timed = tm.throughput_row("compiled", 1, run(epg.MIN_ITERATIONS), args)
     assert timed["samples_per_s"] == 8e4 and "too_short" not in timed
     doc = {"task": "Ant", "device": "GPU", "num_envs": 4096, "targets": [3.0, 8.0], "env_steps_per_s": 1e6,
            "throughput": [short], "learning": []}
-    assert "| compiled | not timed: 3 iterations" in overlap.tables(doc)
+    assert "| compiled | 0 of 1 | not timed: 3 iterations" in tm.tables(doc)
+    doc["throughput"].append(timed)  # a second round timed it: the median is of that round alone
+    assert "| compiled | 1 of 2 | - | 0.08 M |" in tm.tables(doc)

@@ -146,16 +146,18 @@ def train(task: str, num_envs: int, seconds: float, seed: int, run_dir: str, arg
 
 
 def env_steps(task: str, num_envs: int, args) -> float | None:
-    """The task env's env-steps/s from `warpgym bench` (median of 3 timings of 100 steps)."""
-    out = os.path.join(args.out, "runs", f"bench-{task}-{num_envs}.json")
-    cmd = [sys.executable, "-m", "warpgym", "bench", "--robots", task.lower(), "--num-envs", str(num_envs),
+    """The task env's env-steps/s from `warpgym bench --tasks` (median of 3 timings of --bench-steps steps), any
+    family's task."""
+    out = os.path.join(args.out, "runs", f"bench-{task.replace(':', '_')}-{num_envs}.json")
+    cmd = [sys.executable, "-m", "warpgym", "bench", "--tasks", task, "--num-envs", str(num_envs),
            "--steps", str(args.bench_steps), "--repeats", "3", "--out", out,
            *(["--device", args.device] if args.device else [])]
     done = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
     if done.returncode != 0:
         raise SystemExit(f"{' '.join(cmd)} failed ({done.returncode}):\n{(done.stdout + done.stderr)[-3000:]}")
     with open(out) as f:
-        return json.load(f)["results"][0]["env_steps_per_s"]
+        rate = json.load(f)["results"][0]["env_steps_per_s"]
+    return statistics.median(rate) if isinstance(rate, list) else rate  # the suite's and legged rows keep each timing
 
 
 def save(path: str, doc: dict) -> None:
@@ -298,7 +300,7 @@ def throughput_row(n: int, steps: float | None, run: dict, args) -> dict:
 
 def learning_row(run: dict, task: str, seed: int, seconds: float, **key) -> dict:
     """A learning run's row: when its training episodes first reached each target speed, and its rate.
-    ``key``: what tells the run apart (num_envs here, mode in overlap.py)."""
+    ``key``: what tells the run apart (num_envs here, mode in train_modes.py)."""
     from agents.logger import first_reaching  # noqa: PLC0415
 
     return {**key, "seed": seed, "seconds": seconds,
