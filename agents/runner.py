@@ -464,7 +464,7 @@ class OnPolicyRunner:
             self.iteration, self.samples = ckpt["iteration"], ckpt["samples"]
             self.elapsed_before = ckpt["elapsed_s"]
             self._marks_after = self.elapsed_before
-            self.kept = list(ckpt.get("kept", []))  # checkpoints written before 2026-11-27 lack both
+            self.kept = list(ckpt.get("kept", []))  # older checkpoints lack both
             self.resumes = [*ckpt.get("resumes", []), {"iteration": self.iteration, "time_s": round(self.elapsed_before, 3)}]
             if self.pipeline is not None:  # its rollout was not saved: the next iteration collects one first
                 self.pipeline.pending = False

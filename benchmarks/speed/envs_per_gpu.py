@@ -291,9 +291,15 @@ def throughput_row(n: int, steps: float | None, run: dict, args) -> dict:
     row = {"num_envs": n, "env_steps_per_s": steps, "samples_per_s": s.get("steady_samples_per_s_median"),
            "peak_mib": run["peak_mib"], "batch_size": batch_size(args.task, n, args.scale_batch),
            "iterations": iterations, "phase_s": s.get("steady_phase_s_median")}
-    if iterations < MIN_ITERATIONS:
+    return untimed(row, args.throughput_seconds)
+
+
+def untimed(row: dict, seconds: float) -> dict:
+    """A throughput row without a rate where its run made too few iterations to time, saying why (train_modes.py's
+    rows too)."""
+    if row["iterations"] < MIN_ITERATIONS:
         row.update(samples_per_s=None, phase_s=None,
-                   too_short=f"{iterations} iterations in {args.throughput_seconds:g} s: too few to time; "
+                   too_short=f"{row['iterations']} iterations in {seconds:g} s: too few to time; "
                              "raise --throughput-seconds")
     return row
 

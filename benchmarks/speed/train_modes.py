@@ -69,17 +69,16 @@ def from_capture_report(doc: dict) -> list[dict]:
 def medians(doc: dict) -> dict:
     """Per mode, in the document's order: the medians over its timed rounds of the ready time, samples/s and each
     phase, and how many rounds were timed (runs that failed or were too short to time are left out)."""
+    def med(values):
+        values = [v for v in values if v is not None]
+        return statistics.median(values) if values else None
+
     out = {}
     for mode in dict.fromkeys([*doc.get("modes", []), *(r["mode"] for r in doc["throughput"])]):
         rows = [r for r in doc["throughput"] if r["mode"] == mode]
         timed = [r for r in rows if "error" not in r and not r.get("too_short") and r.get("samples_per_s")]
         if not rows:
             continue
-
-        def med(values):
-            values = [v for v in values if v is not None]
-            return statistics.median(values) if values else None
-
         out[mode] = {"runs": len(timed), "of": len(rows), "ready_s": med(r.get("ready_s") for r in timed),
                      "samples_per_s": med(r["samples_per_s"] for r in timed),
                      "phase_s": {k: med((r.get("phase_s") or {}).get(k) for r in timed) for k in PHASES},
@@ -134,15 +133,9 @@ def throughput_row(mode: str, round_: int, run: dict, args) -> dict:
     """A mode's run of one round: its ready time, steady rate and phases; no rate from a run too short to time (a
     compiled run's first update compiles for seconds, so it needs a longer --throughput-seconds than the others)."""
     s = run["summary"]
-    iterations = s.get("iterations") or 0
-    row = {"mode": mode, "round": round_, "ready_s": s.get("first_iteration_time_s"),
-           "samples_per_s": s.get("steady_samples_per_s_median"), "phase_s": s.get("steady_phase_s_median"),
-           "peak_mib": run["peak_mib"], "iterations": iterations}
-    if iterations < epg.MIN_ITERATIONS:
-        row.update(samples_per_s=None, phase_s=None,
-                   too_short=f"{iterations} iterations in {args.throughput_seconds:g} s: too few to time; "
-                             "raise --throughput-seconds")
-    return row
+    return epg.untimed({"mode": mode, "round": round_, "ready_s": s.get("first_iteration_time_s"),
+                        "samples_per_s": s.get("steady_samples_per_s_median"), "phase_s": s.get("steady_phase_s_median"),
+                        "peak_mib": run["peak_mib"], "iterations": s.get("iterations") or 0}, args.throughput_seconds)
 
 
 def rounds(modes: list[str], repeats: int):
