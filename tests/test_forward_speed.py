@@ -113,7 +113,8 @@ def test_evaluation_reports_the_conveyor_speed(conveyor, steps):
 
 def test_a_clip_spanning_a_reset_reports_the_conveyor_speed(conveyor):
     from agents.evaluate import evaluate
-    from warpgym.media.clips import StateRecorder, clip_forward_speed
+    from warpgym.media.clips import StateRecorder
+    from warpgym.media.robots import clip_forward_speed
 
     steps = EPISODE + 30
     recorder = StateRecorder(steps + 1, copies=2)

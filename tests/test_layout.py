@@ -161,22 +161,44 @@ def test_benchmarks_are_a_package_in_folders_by_what_they_measure_and_edit_no_im
 
 def test_each_family_has_a_module_named_for_it_in_every_layer():
     """A family's own code sits where its name says, layer by layer (CONTRIBUTING.md, "Where things go"): its task
-    definitions in tasks/F/, its kernels in kernels/F/, its vector env in envs/F.py, its judge outside warpgym in
-    native/F.py, its `warpgym bench` and `warpgym eval` in cli/bench/F.py and cli/eval/F.py; and its registry
-    entry's commands call into those modules."""
+    definitions in tasks/F/, its kernels in kernels/F/, its vector and single envs in envs/F.py, its frames and clips
+    in media/F.py, its judge outside warpgym in native/F.py, its `warpgym bench` and `warpgym eval` in
+    cli/bench/F.py and cli/eval/F.py; and its registry entry's commands call into those modules."""
     from warpgym.tasks.registry import REGISTRY
 
     families = {e.family for e in REGISTRY.values()}
     assert families == {"robots", "suite", "legged"}, families
     for f in sorted(families):
         for path in (f"warpgym/tasks/{f}/__init__.py", f"kernels/{f}/__init__.py", f"warpgym/envs/{f}.py",
-                     f"warpgym/native/{f}.py", f"warpgym/cli/bench/{f}.py", f"warpgym/cli/eval/{f}.py"):
+                     f"warpgym/media/{f}.py", f"warpgym/native/{f}.py", f"warpgym/cli/bench/{f}.py", f"warpgym/cli/eval/{f}.py"):
             assert os.path.isfile(os.path.join(ROOT, path)), path
     for name, e in REGISTRY.items():
         f = e.family
         assert e.vector_entry_point.startswith(f"warpgym.envs.{f}:"), (name, e.vector_entry_point)
+        assert e.single_entry_point.startswith(f"warpgym.envs.{f}:"), (name, e.single_entry_point)
+        assert e.draw_clip.__name__.startswith(f"warpgym.media.{f}."), (name, e.draw_clip.__name__)
         assert e.evaluate.__name__.startswith(f"warpgym.cli.eval.{f}."), (name, e.evaluate.__name__)
         assert e.bench.__name__.startswith(f"warpgym.cli.bench.{f}."), (name, e.bench.__name__)
+
+
+def test_what_the_families_share_imports_no_family():
+    """The modules every family builds on (the single env, the GL context and frame checks, the video writer, the
+    vector env's graph) name no family: a family's code there would be a second place for it."""
+    from warpgym.tasks.registry import REGISTRY
+
+    families = {e.family for e in REGISTRY.values()}
+    shared = ("warpgym/envs/single.py", "warpgym/envs/graph_env.py", "warpgym/media/render.py", "warpgym/media/video.py")
+    found = []
+    for rel in shared:
+        for node in ast.walk(ast.parse(open(os.path.join(ROOT, rel)).read())):
+            if isinstance(node, ast.ImportFrom) and node.module:
+                mods = [node.module]
+            elif isinstance(node, ast.Import):
+                mods = [a.name for a in node.names]
+            else:
+                continue
+            found += [f"{rel} imports {m}" for m in mods if families & set(m.split(".")[1:])]
+    assert not found, found
 
 
 def test_kernels_are_laid_out_by_family():

@@ -167,7 +167,7 @@ def test_a_clip_draws_the_robot_where_it_stands():
     meshes): the robot fills part of the frame, and a crouched pose draws another picture."""
     import numpy as np
 
-    from warpgym.media.render import LeggedView
+    from warpgym.media.legged import LeggedView
     from warpgym.tasks.legged.model import resolve
 
     task = LEGGED["Go1VelocityFlat-v0"]

@@ -115,7 +115,7 @@ def test_the_picture_colours_each_patch_by_its_kind_and_draws():
 
 
 def test_a_clip_of_a_rough_task_colours_only_the_ground_and_refuses_a_model_of_other_ground():
-    """warpgym play's view of a rough task (warpgym.media.render.LeggedView) colours the task scene's ground by kind:
+    """warpgym play's view of a rough task (warpgym.media.legged.LeggedView) colours the task scene's ground by kind:
     the robot's geoms keep theirs; a model compiled from other ground is refused, not coloured wrongly."""
     import mujoco
 

@@ -34,7 +34,7 @@ def _clip(state: dict, steps: int) -> dict:
 
 @pytest.mark.parametrize("task", ["Ant", "Humanoid"])
 def test_frames_have_the_stated_size_and_show_the_robot(task):
-    from warpgym.media.render import RobotRenderer
+    from warpgym.media.robots import RobotRenderer
 
     robot, empty = _fixed_state(task), _fixed_state(task, below_floor=True)
     with RobotRenderer(task, width=160, height=120) as r:
@@ -49,7 +49,7 @@ def test_frames_have_the_stated_size_and_show_the_robot(task):
 
 
 def test_a_grid_draws_every_robot():
-    from warpgym.media.render import RobotRenderer, grid_offsets
+    from warpgym.media.robots import RobotRenderer, grid_offsets
 
     offsets = grid_offsets(4, 2.5)
     assert len({tuple(o) for o in offsets}) == 4 and np.ptp(offsets[:, 1]) == 2.5
@@ -65,7 +65,7 @@ def test_mp4_and_gif_decode_to_the_frames_written(tmp_path):
     import av
     from PIL import Image
 
-    from warpgym.media.video import render_clip
+    from warpgym.media.robots import render_clip
 
     mp4, gif = str(tmp_path / "a.mp4"), str(tmp_path / "a.gif")
     frames = render_clip("Ant", _clip(_fixed_state("Ant"), 10), {mp4: {"fps": 60}, gif: {"fps": 20, "width": 80}},
@@ -81,7 +81,7 @@ def test_mp4_and_gif_decode_to_the_frames_written(tmp_path):
 
 
 def test_bad_video_settings_are_refused(tmp_path):
-    from warpgym.media.render import RobotRenderer
+    from warpgym.media.render import check_size
     from warpgym.media.video import VideoWriter, frame_stride
 
     with pytest.raises(ValueError, match="must end in .mp4 or .gif"):
@@ -91,7 +91,7 @@ def test_bad_video_settings_are_refused(tmp_path):
     with pytest.raises(ValueError, match="must divide 100"):
         VideoWriter(str(tmp_path / "a.gif"), 30)
     with pytest.raises(ValueError, match="must be even"):
-        RobotRenderer.check_size(641, 480)
+        check_size(641, 480)
     with pytest.raises(ValueError, match="no frames"):
         VideoWriter(str(tmp_path / "a.mp4"), 30).close()
 
@@ -107,6 +107,34 @@ def test_a_missing_encoder_or_renderer_names_what_to_install(tmp_path, monkeypat
     monkeypatch.setitem(sys.modules, "mujoco.osmesa", None)
     with pytest.raises(render.RendererUnavailable, match="tried egl.*osmesa.*MUJOCO_GL=egl"):
         render.probe_renderer()
+
+
+def test_a_view_closes_what_it_opened_once_and_leaves_no_exit_hook(monkeypatch):
+    """ClosedAtExit: what a view opened is closed by its close() or at exit, once, and a closed view leaves no hook
+    behind (a hook left holding a freed renderer would close it twice at exit)."""
+    import atexit
+
+    from warpgym.media.render import ClosedAtExit
+
+    hooks = []
+    monkeypatch.setattr(atexit, "register", hooks.append)
+    monkeypatch.setattr(atexit, "unregister", hooks.remove)
+
+    class Opened:
+        closes = 0
+
+        def close(self):
+            self.closes += 1
+
+    first, second = Opened(), Opened()
+    view = ClosedAtExit()
+    view.hold(first)
+    view.hold(second)
+    assert len(hooks) == 1  # one hook for all it holds
+    hooks[0]()  # the exit hook alone closes both
+    assert (first.closes, second.closes) == (1, 1)
+    view.close()
+    assert (first.closes, second.closes) == (1, 1) and hooks == []
 
 
 def test_train_video_flag_fails_before_building_anything(monkeypatch, capsys):
@@ -219,12 +247,12 @@ def test_a_suite_clip_plays_in_real_time_and_follows_the_runner(tmp_path):
     frames keep the task's time (Hopper's 8 ms control step: every 6th step, 50 ms a frame)."""
     from PIL import Image
 
-    from warpgym.media.render import SuiteView
-    from warpgym.media.video import render_suite_clip, suite_strides
+    from warpgym.media.suite import SuiteView, render_suite_clip
+    from warpgym.media.video import real_time_strides
     from warpgym.tasks.suite import SUITE
 
-    assert suite_strides(0.008, 20, gif=True) == (6, 20, 50)
-    assert suite_strides(0.05, 20, gif=True) == (1, 20, 50) and suite_strides(0.05, 60, gif=False) == (1, 20, None)
+    assert real_time_strides(0.008, 20, gif=True) == (6, 20, 50)
+    assert real_time_strides(0.05, 20, gif=True) == (1, 20, 50) and real_time_strides(0.05, 60, gif=False) == (1, 20, None)
     hopper = SUITE["Hopper-v5"]
     steps = 60
     qpos = np.tile(np.array([0.0, 1.25, 0.0, 0.0, 0.0, 0.0]), (steps, 1, 1))
@@ -256,7 +284,7 @@ def test_a_clip_of_humanoid_standup_follows_it_as_it_walks_off(tmp_path):
     import gymnasium as gym
     from PIL import Image
 
-    from warpgym.media.video import render_suite_clip
+    from warpgym.media.suite import render_suite_clip
     from warpgym.tasks.suite import SUITE
 
     task = SUITE["HumanoidStandup-v5"]

@@ -75,9 +75,9 @@ def parse_args(argv=None):
             frame_stride(args.gif_fps)
             if 100 % args.gif_fps:
                 raise ValueError(f"--gif-fps {args.gif_fps}: a GIF's rate must divide 100 and 60 (10 or 20)")
-            from warpgym.media.render import RobotRenderer  # noqa: PLC0415,F401
+            from warpgym.media.render import check_size  # noqa: PLC0415
 
-            RobotRenderer.check_size(args.width, args.height)
+            check_size(args.width, args.height)
         except ValueError as e:
             ap.error(str(e))
     return args

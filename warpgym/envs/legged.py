@@ -20,13 +20,14 @@ from gymnasium.vector.utils import batch_space
 
 from kernels.legged.commands import update_commands
 from kernels.legged.control import apply_legged_actions, track_feet
-from kernels.legged.params import (NUM_GROUPS, LeggedEnv, LeggedEpisodes, LeggedState, MjLegged, MjLeggedModel,
-                                   TerrainLevels)
+import kernels.legged.params as terms_state  # its LeggedEnv, the struct every term reads, beside this module's own
+from kernels.legged.params import NUM_GROUPS, LeggedEpisodes, LeggedState, MjLegged, MjLeggedModel, TerrainLevels
 from kernels.legged.resets import reset_kernels
 from kernels.legged.scan import fit_ground_normal
 from kernels.legged.step import count_step, step_kernels
 from kernels.legged.terrain_levels import move_levels
 from warpgym.envs.graph_env import GraphVecEnv
+from warpgym.envs.single import SingleEnv
 from warpgym.sim.mjw_sim import MjwSim
 from warpgym.sim.rays import RayCaster, Scan, ScanFrames
 from warpgym.tasks.legged import LeggedTask, get_legged_task
@@ -150,24 +151,25 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
     # ------------------------------------------------------------------ the task's tables of terms
     def _tables(self, dev: str) -> None:
         """The task's tables as its kernels take them (``warpgym.tasks.terms``), the state every term reads
-        (``LeggedEnv``), and the kernels made from the tables: the step's, the observation's, the reset's and the
-        startup's."""
+        (``kernels.legged.params.LeggedEnv``), and the kernels made from the tables: the step's, the
+        observation's, the reset's and the startup's."""
         task, joints, sim = self.task, self.index.joint_names, self.sim
         sim.per_world(*RANDOMISED_FIELDS, *DERIVED_FIELDS)
         self._model = m = MjLeggedModel()
         m.geom_friction, m.body_ipos = sim.m.geom_friction, sim.m.body_ipos
         m.body_ipos0 = wp.array(sim.mjm.body_ipos.astype(np.float32), dtype=wp.vec3, device=dev)
-        self._env = env = LeggedEnv()
+        Env = terms_state.LeggedEnv
+        self._env = env = Env()
         env.p, env.r, env.d, env.m, env.st, env.t = self.params, self.robot, self._mj, m, self._state, self._levels
-        self._rewards = compile_rewards(task.rewards, LeggedEnv, joints, dev, f"{task.name}: rewards")
-        self._terminations = compile_terminations(task.terminations, LeggedEnv, joints, dev,
+        self._rewards = compile_rewards(task.rewards, Env, joints, dev, f"{task.name}: rewards")
+        self._terminations = compile_terminations(task.terminations, Env, joints, dev,
                                                   f"{task.name}: terminations")
         n = self.num_envs
-        self._policy = compile_observations(task.policy_obs, "policy", LeggedEnv, self.dims, joints, dev,
+        self._policy = compile_observations(task.policy_obs, "policy", Env, self.dims, joints, dev,
                                             task.observation_noise, f"{task.name}: policy_obs", n)
-        self._critic_obs = compile_observations(task.critic_obs, "critic", LeggedEnv, self.dims, joints, dev,
+        self._critic_obs = compile_observations(task.critic_obs, "critic", Env, self.dims, joints, dev,
                                                 task.observation_noise, f"{task.name}: critic_obs", n)
-        self._events = compile_events(task.events, LeggedEnv, joints, dev, n, f"{task.name}: events")
+        self._events = compile_events(task.events, Env, joints, dev, n, f"{task.name}: events")
         self._timers = self._events["interval"].arrays
         self._timer_names = list(of_mode(task.events, "interval"))
         tables = self._rewards, self._terminations, self._policy, self._critic_obs, self._events["interval"]
@@ -377,6 +379,22 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
 
     def __repr__(self) -> str:
         return f"LeggedVecEnv({self.task.name}, num_envs={self.num_envs}, device={self.sim.device!r})"
+
+
+class LeggedEnv(SingleEnv):
+    """One world of a legged velocity task (``gym.make("warpgym/Go1VelocityFlat-v0")``): numpy in and out, the
+    reward terms in ``info``, the critic's observation in ``info["critic_obs"]`` and the command in
+    ``info["command"]``."""
+
+    vec_class = LeggedVecEnv
+    metadata = LeggedVecEnv.metadata
+
+    def __init__(self, task="Go1VelocityFlat-v0", device: str = "cpu", seed: int = 0, render_mode=None, **kwargs):
+        super().__init__(task, device, seed, render_mode, **kwargs)
+
+    def _extra(self, info: dict, done: bool) -> dict:
+        critic = info["final_critic_obs" if done else "critic_obs"]
+        return {"critic_obs": critic[0].cpu().numpy().copy(), "command": info["command"][0].cpu().numpy().copy()}
 
 
 @wp.kernel

@@ -18,6 +18,7 @@ from kernels.robots.buffers import EpisodeBuffers, RobotView
 from kernels.robots.step import locomotion_step
 from kernels.robots.resets import reset_finished_envs
 from warpgym.envs.graph_env import GraphVecEnv
+from warpgym.envs.single import SingleEnv
 from warpgym.sim.simulator import Sim
 from warpgym.tasks.robots import LocomotionTask, get_task
 
@@ -73,7 +74,7 @@ class LocomotionVecEnv(GraphVecEnv, VectorEnv):
         self.render_mode = render_mode
         self._view = None
         if render_mode is not None:
-            from warpgym.media.render import EnvView  # noqa: PLC0415  (MuJoCo's renderer: only when asked for)
+            from warpgym.media.robots import EnvView  # noqa: PLC0415  (MuJoCo's renderer: only when asked for)
 
             self._view = EnvView(task, render_mode, render_robots, *render_size)
             if round(1.0 / task.dt) != self.metadata["render_fps"]:
@@ -158,3 +159,14 @@ class LocomotionVecEnv(GraphVecEnv, VectorEnv):
     def _draw(self, k: int):
         states = {key: getattr(self.sim, key)[:k].cpu().numpy() for key in ("root_pose", "root_vel", "dof_pos", "dof_vel")}
         return self._view.render(states)
+
+
+class LocomotionEnv(SingleEnv):
+    """One world of warpgym's Ant or Humanoid (``gym.make("warpgym/Ant-v0")``): numpy in and out, the reward terms
+    in ``info``."""
+
+    vec_class = LocomotionVecEnv
+    metadata = LocomotionVecEnv.metadata
+
+    def __init__(self, task="Ant", device: str = "cpu", seed: int = 0, render_mode=None, **kwargs):
+        super().__init__(task, device, seed, render_mode, **kwargs)

@@ -1,4 +1,8 @@
-"""One world as a plain ``gymnasium.Env`` with numpy in and out, for evaluation and inspection."""
+"""One world of a vector env as a plain ``gymnasium.Env`` with numpy in and out, for evaluation and inspection.
+
+A family's single env is a subclass in the family's own module (``LocomotionEnv`` in envs/robots.py, ``SuiteEnv``
+in envs/suite.py, ``LeggedEnv`` in envs/legged.py) that names its vector env and, where it has more to say per
+step, adds it to ``info`` (``_extra``)."""
 
 from __future__ import annotations
 
@@ -6,19 +10,14 @@ import gymnasium as gym
 import numpy as np
 import torch
 
-from warpgym.envs.legged import LeggedVecEnv
-from warpgym.envs.robots import LocomotionVecEnv
-from warpgym.envs.suite import SuiteVecEnv
 
+class SingleEnv(gym.Env):
+    """``num_envs=1`` of ``vec_class``. ``render_mode="rgb_array"``: ``render()`` returns one frame;
+    ``"human"``: a viewer window (needs a display)."""
 
-class LocomotionEnv(gym.Env):
-    """``render_mode="rgb_array"``: ``render()`` returns one frame of the robot; ``"human"``: MuJoCo's
-    viewer (needs a display)."""
+    vec_class: type  # the family's vector env, set by each subclass
 
-    metadata = LocomotionVecEnv.metadata
-    vec_class = LocomotionVecEnv
-
-    def __init__(self, task="Ant", device: str = "cpu", seed: int = 0, render_mode=None, **kwargs):
+    def __init__(self, task, device: str = "cpu", seed: int = 0, render_mode=None, **kwargs):
         self._vec = self.vec_class(task, num_envs=1, device=device, seed=seed, render_mode=render_mode, **kwargs)
         self.render_mode = render_mode
         self.metadata = self._vec.metadata
@@ -43,7 +42,12 @@ class LocomotionEnv(gym.Env):
         if done:
             extra["episode"] = {key: float(v[0]) for key, v in info["episode"].items() if not key.startswith("_")}
             extra["episode"]["l"] = int(extra["episode"]["l"])
+        extra.update(self._extra(info, done))
         return out.cpu().numpy().copy(), float(reward[0]), bool(terminated[0]), bool(truncated[0]), extra
+
+    def _extra(self, info: dict, done: bool) -> dict:
+        """What a family adds to a step's ``info`` beyond the reward terms and the episode (numpy, world 0)."""
+        return {}
 
     def render(self):
         frames = self._vec.render()
@@ -51,33 +55,3 @@ class LocomotionEnv(gym.Env):
 
     def close(self):
         self._vec.close()
-
-
-class SuiteEnv(LocomotionEnv):
-    """One world of Gymnasium's MuJoCo task (``gym.make("warpgym/Hopper-v5")``): numpy float32 in and out,
-    Gymnasium's reward terms in ``info``."""
-
-    vec_class = SuiteVecEnv
-    metadata = SuiteVecEnv.metadata
-
-    def __init__(self, task="Hopper-v5", device: str = "cpu", seed: int = 0, render_mode=None, **kwargs):
-        super().__init__(task, device, seed, render_mode, **kwargs)
-
-
-class LeggedEnv(LocomotionEnv):
-    """One world of a legged velocity task (``gym.make("warpgym/Go1VelocityFlat-v0")``): numpy in and out, the
-    reward terms in ``info``, the critic's observation in ``info["critic_obs"]``."""
-
-    vec_class = LeggedVecEnv
-    metadata = LeggedVecEnv.metadata
-
-    def __init__(self, task="Go1VelocityFlat-v0", device: str = "cpu", seed: int = 0, render_mode=None, **kwargs):
-        super().__init__(task, device, seed, render_mode, **kwargs)
-
-    def step(self, action):
-        obs, reward, terminated, truncated, extra = super().step(action)
-        info = self._vec.info
-        key = "final_critic_obs" if terminated or truncated else "critic_obs"
-        extra["critic_obs"] = info[key][0].cpu().numpy().copy()
-        extra["command"] = info["command"][0].cpu().numpy().copy()
-        return obs, reward, terminated, truncated, extra

@@ -18,6 +18,7 @@ from kernels.suite.params import GymEpisodes, MjView
 from kernels.suite.resets import reset_gym_worlds
 from kernels.suite.step import apply_gym_actions, gym_step, write_reset_observation
 from warpgym.envs.graph_env import GraphVecEnv
+from warpgym.envs.single import SingleEnv
 from warpgym.sim.mjw_sim import MjwSim
 from warpgym.tasks.suite import GymTask, get_suite_task
 from warpgym.tasks.suite.base import MAX_TERMS
@@ -63,7 +64,7 @@ class SuiteVecEnv(GraphVecEnv, VectorEnv):
         self.render_mode = render_mode
         self._view = None
         if render_mode is not None:
-            from warpgym.media.render import SuiteView  # noqa: PLC0415  (Gymnasium's renderer: only when asked for)
+            from warpgym.media.suite import SuiteView  # noqa: PLC0415  (Gymnasium's renderer: only when asked for)
 
             self._view = SuiteView(task, render_mode, render_robots, *render_size)
         self.sim = sim = MjwSim(task.xml_file, num_envs, device, frame_skip=task.frame_skip, nconmax=task.nconmax,
@@ -142,3 +143,14 @@ class SuiteVecEnv(GraphVecEnv, VectorEnv):
     # ------------------------------------------------------------------ rendering and fault texts (GraphVecEnv: the Gymnasium API)
     def _draw(self, k: int):
         return self._view.render(self.sim.dof_pos[:k].cpu().numpy(), self.sim.dof_vel[:k].cpu().numpy())
+
+
+class SuiteEnv(SingleEnv):
+    """One world of Gymnasium's MuJoCo task (``gym.make("warpgym/Hopper-v5")``): numpy float32 in and out,
+    Gymnasium's reward terms in ``info``."""
+
+    vec_class = SuiteVecEnv
+    metadata = SuiteVecEnv.metadata
+
+    def __init__(self, task="Hopper-v5", device: str = "cpu", seed: int = 0, render_mode=None, **kwargs):
+        super().__init__(task, device, seed, render_mode, **kwargs)

@@ -22,7 +22,8 @@ import sys
 import numpy as np
 import torch
 
-from warpgym.media.video import STATE_KEYS, frame_stride, render_clip
+from warpgym.media.robots import STATE_KEYS, render_clip
+from warpgym.media.video import frame_stride
 
 
 class StateRecorder:
@@ -66,18 +67,6 @@ class StateRecorder:
 
     def clear(self) -> None:
         self.count = 0
-
-
-def clip_forward_speed(task, states: dict) -> np.ndarray:
-    """(K,) forward speed of each robot over a clip (``StateRecorder.states()``): its travel between
-    consecutive frames of one episode over their time (``LocomotionTask.forward_speed``). A reset inside
-    the clip is not travel: the stride into a reset pose is left out, travel and time alike."""
-    pos = states["root_pose"][..., :3]  # (T, K, 3)
-    steps = states["episode_steps"]  # (T, K)
-    same_episode = steps[1:] == steps[:-1] + 1
-    travel = ((pos[1:] - pos[:-1]) * same_episode[..., None]).sum(axis=0)
-    counted = same_episode.sum(axis=0)
-    return np.where(counted > 0, task.forward_speed(travel, np.maximum(counted, 1)), 0.0)
 
 
 class EvalVideoRecorder(StateRecorder):

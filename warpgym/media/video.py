@@ -1,8 +1,8 @@
-"""Videos of warpgym robots: MP4 through PyAV (its wheels carry their own FFmpeg and x264, so no
+"""Video files of any family's frames: MP4 through PyAV (its wheels carry their own FFmpeg and x264, so no
 system ffmpeg), GIF through Pillow. Both come with ``pip install "warpgym[video]"``.
 
-``render_clip`` turns a stored sequence of states (warpgym's layout) into either file; the frames
-come from ``warpgym.media.render``.
+``write_clip`` hands a clip's frames, drawn one control step at a time by a family's view
+(``warpgym.media.robots``, ``.suite``, ``.legged``), to one writer a file, each at its own stride.
 """
 
 from __future__ import annotations
@@ -13,7 +13,6 @@ import numpy as np
 
 INSTALL = 'pip install "warpgym[video]"'
 CONTROL_FPS = 60  # one frame per 1/60 s control step
-STATE_KEYS = ("root_pose", "root_vel", "dof_pos", "dof_vel")
 
 
 def _import(module: str, what: str):
@@ -156,35 +155,7 @@ class VideoWriter:
             self.abort()
 
 
-def render_clip(task, states: dict, outputs: dict[str, dict], width: int = 640, height: int = 480,
-                copies: int | None = None) -> dict[str, int]:
-    """Draw a stored state sequence into one or more files.
-
-    Args:
-        task: the task the states belong to ("Ant", "Humanoid" or a ``LocomotionTask``).
-        states: ``STATE_KEYS`` -> arrays (T, K, n), one row per control step and robot.
-        outputs: path -> ``{"fps": ..., "width": ...}`` (``width`` optional), e.g.
-            ``{"ant.mp4": {"fps": 60}, "ant.gif": {"fps": 20, "width": 320}}``.
-        copies: draw the first ``copies`` robots (default: all K, as a grid).
-    Returns: path -> frames written.
-    """
-    from warpgym.media.render import RobotRenderer  # noqa: PLC0415
-
-    missing = [k for k in STATE_KEYS if k not in states]
-    if missing:
-        raise ValueError(f"states lack {missing}: a clip needs {list(STATE_KEYS)}, each (steps, robots, n)")
-    steps, have = np.asarray(states["root_pose"]).shape[:2]
-    copies = copies or have
-    if not 1 <= copies <= have:
-        raise ValueError(f"copies={copies!r}: the states hold {have} robots")
-    strides = {path: frame_stride(int(opt["fps"])) for path, opt in outputs.items()}
-    writers = [VideoWriter(path, int(opt["fps"]), opt.get("width")) for path, opt in outputs.items()]
-    with RobotRenderer(task, copies=copies, width=width, height=height) as renderer:
-        return _write_clip(writers, strides, steps,
-                           lambda t: renderer.render(*(np.asarray(states[k][t, :copies]) for k in STATE_KEYS)))
-
-
-def _write_clip(writers: list[VideoWriter], strides: dict[str, int], steps: int, draw) -> dict[str, int]:
+def write_clip(writers: list[VideoWriter], strides: dict[str, int], steps: int, draw) -> dict[str, int]:
     """Each writer gets ``draw(t)`` of every ``strides[path]``-th step; all files are finished, or none
     is left behind. Returns path -> frames written."""
     try:
@@ -203,10 +174,10 @@ def _write_clip(writers: list[VideoWriter], strides: dict[str, int], steps: int,
     return {w.path: w.frames for w in writers}
 
 
-def suite_strides(dt: float, fps: int, gif: bool) -> tuple[int, int, int | None]:
-    """For a clip of one of Gymnasium's tasks, whose control step lasts ``dt`` seconds (0.008 s for Hopper,
-    0.05 s for Ant): every how many steps a frame is kept, the file's frame rate and a GIF's frame time
-    (ms), so that the clip plays in real time at about ``fps``."""
+def real_time_strides(dt: float, fps: int, gif: bool) -> tuple[int, int, int | None]:
+    """For a clip whose control step lasts ``dt`` seconds (0.008 s for Gymnasium's Hopper, 0.05 s for its Ant):
+    every how many steps a frame is kept, the file's frame rate and a GIF's frame time (ms), so that the clip
+    plays in real time at about ``fps``."""
     stride = max(1, round(1.0 / (fps * dt)))
     if gif:  # GIFs count time in hundredths of a second
         frame_ms = max(10, round(stride * dt * 100) * 10)
@@ -214,59 +185,9 @@ def suite_strides(dt: float, fps: int, gif: bool) -> tuple[int, int, int | None]
     return stride, max(1, round(1.0 / (stride * dt))), None
 
 
-def render_suite_clip(task, states: dict, outputs: dict[str, dict], dt: float, width: int = 640,
-                      height: int = 480) -> dict[str, int]:
-    """Draw the first world of a stored clip of one of Gymnasium's tasks (``dof_pos``, ``dof_vel``: MuJoCo's
-    qpos and qvel, (steps, worlds, n)) with Gymnasium's own renderer of the task, into each output
-    (path -> ``{"fps": ..., "width": ...}``), in real time, the camera following the root body where the task says so
-    (``camera_follows``: the runners). Returns path -> frames written."""
-    from warpgym.media.render import SuiteView  # noqa: PLC0415
-
-    missing = [k for k in ("dof_pos", "dof_vel") if k not in states]
-    if missing:
-        raise ValueError(f"states lack {missing}: a clip of a suite task needs MuJoCo's qpos and qvel")
-    plans = {path: suite_strides(dt, int(opt["fps"]), path.lower().endswith(".gif")) for path, opt in outputs.items()}
+def real_time_writers(outputs: dict[str, dict], dt: float) -> tuple[list[VideoWriter], dict[str, int]]:
+    """A writer for each output (path -> ``{"fps": ..., "width": ...}``) of a clip of ``dt``-second steps, and the
+    stride of each (``real_time_strides``), for ``write_clip``."""
+    plans = {path: real_time_strides(dt, int(opt["fps"]), path.lower().endswith(".gif")) for path, opt in outputs.items()}
     writers = [VideoWriter(path, plans[path][1], opt.get("width"), plans[path][2]) for path, opt in outputs.items()]
-    view = SuiteView(task, "rgb_array", 1, width, height, follow=task.camera_follows)
-    try:
-        return _write_clip(writers, {p: plan[0] for p, plan in plans.items()}, np.asarray(states["dof_pos"]).shape[0],
-                           lambda t: view.render(np.asarray(states["dof_pos"][t], dtype=np.float64),
-                                                 np.asarray(states["dof_vel"][t], dtype=np.float64))[0])
-    finally:
-        view.close()
-
-
-def draw_robot_clip(env, states: dict, outputs: dict[str, dict], width: int, height: int) -> tuple[dict, dict]:
-    """A clip of warpgym's robots (every recorded robot, a grid): (path -> frames written, what it measured)."""
-    from warpgym.media.clips import clip_forward_speed  # noqa: PLC0415
-
-    shown = states["root_pose"].shape[0] - 1  # steps after the first frame
-    measured = {"clip/forward_speed": float(clip_forward_speed(env.task, states).mean())}
-    print(f"clip: {shown} steps ({shown * env.task.dt:.1f} s) of {states['root_pose'].shape[1]} robot(s): forward "
-          f"speed {measured['clip/forward_speed']:.2f} m/s")
-    return render_clip(env.task, states, outputs, width, height), measured
-
-
-def draw_suite_clip(env, states: dict, outputs: dict[str, dict], width: int, height: int) -> tuple[dict, dict]:
-    """A clip of one of Gymnasium's tasks (its first world, Gymnasium's renderer): (path -> frames, {})."""
-    shown = states["dof_pos"].shape[0] - 1
-    print(f"clip: {shown} steps ({shown * env.sim.dt:.1f} s) of one world")
-    return render_suite_clip(env.task, states, outputs, env.sim.dt, width, height), {}
-
-
-def draw_legged_clip(env, states: dict, outputs: dict[str, dict], width: int, height: int) -> tuple[dict, dict]:
-    """A clip of a legged task (its first world, MuJoCo's renderer of the scene), in real time: (path -> frames,
-    {})."""
-    from warpgym.media.render import LeggedView  # noqa: PLC0415
-
-    qpos = np.asarray(states["dof_pos"])
-    shown = qpos.shape[0] - 1
-    print(f"clip: {shown} steps ({shown * env.sim.dt:.1f} s) of one world")
-    plans = {path: suite_strides(env.sim.dt, int(opt["fps"]), path.lower().endswith(".gif")) for path, opt in outputs.items()}
-    writers = [VideoWriter(path, plans[path][1], opt.get("width"), plans[path][2]) for path, opt in outputs.items()]
-    view = LeggedView(env.task, width, height)
-    try:
-        return _write_clip(writers, {p: plan[0] for p, plan in plans.items()}, qpos.shape[0],
-                           lambda t: view.render(np.asarray(qpos[t][0], dtype=np.float64))), {}
-    finally:
-        view.close()
+    return writers, {path: plan[0] for path, plan in plans.items()}

@@ -65,7 +65,7 @@ def load_native_model(robot: str, timestep: float, physics: Physics | None = Non
     """The robot's MJCF compiled by MuJoCo itself, with warpgym's ground and physics settings.
 
     ``visual`` adds what only a camera sees (a checker floor, a sky, a light that follows no body):
-    the same physics, dressed for ``warpgym.media.render``."""
+    the same physics, dressed for ``warpgym.media.robots``."""
     physics = physics or Physics()
     if not (timestep > 0):
         raise ValueError(f"timestep={timestep!r} must be a positive number of seconds")

@@ -45,7 +45,7 @@ class TaskEntry:
     # and whether it draws every world or the first (the suite's clips use Gymnasium's renderer, one world)
     clip_keys: tuple[str, ...]
     clip_all_worlds: bool
-    draw_clip: Callable  # draws a recorded clip (warpgym.media.video): (env, states, outputs, width, height)
+    draw_clip: Callable  # draws a recorded clip (warpgym.media.<family>): (env, states, outputs, width, height)
     training_clips: bool  # `warpgym train --video` can film its evaluations (media.clips draws the robots only)
     scored_in: str  # "native MuJoCo" or "Gymnasium's env": where `warpgym eval` plays a trained policy
     reports_speed: bool  # the env's forward speed is the task's measure (eval/speed beside eval/return)
@@ -81,9 +81,9 @@ def _command(module: str, name: str) -> Callable:
 
 def _robot(name: str, episode_length: int, envs: tuple[int, int], iterations: tuple[int, int]) -> TaskEntry:
     return TaskEntry(name, "robots", f"warpgym/{name}-v0", episode_length,
-                     "warpgym.envs.robots:LocomotionVecEnv", "warpgym.envs.single:LocomotionEnv", (),
+                     "warpgym.envs.robots:LocomotionVecEnv", "warpgym.envs.robots:LocomotionEnv", (),
                      physics_flags=True, clip_keys=(), clip_all_worlds=True,
-                     draw_clip=_command("warpgym.media.video", "draw_robot_clip"), training_clips=True,
+                     draw_clip=_command("warpgym.media.robots", "draw_robot_clip"), training_clips=True,
                      scored_in="native MuJoCo",
                      reports_speed=True, default_envs=envs, default_iterations=iterations, preset=PRESETS[name],
                      evaluate=_command("warpgym.cli.eval.robots", "evaluate"),
@@ -92,9 +92,9 @@ def _robot(name: str, episode_length: int, envs: tuple[int, int], iterations: tu
 
 def _suite(name: str, episode_length: int) -> TaskEntry:
     return TaskEntry(name, "suite", f"warpgym/{name}", episode_length,
-                     "warpgym.envs.suite:SuiteVecEnv", "warpgym.envs.single:SuiteEnv", (("unit_actions", True),),
+                     "warpgym.envs.suite:SuiteVecEnv", "warpgym.envs.suite:SuiteEnv", (("unit_actions", True),),
                      physics_flags=False, clip_keys=("dof_pos", "dof_vel"), clip_all_worlds=False,
-                     draw_clip=_command("warpgym.media.video", "draw_suite_clip"), training_clips=False,
+                     draw_clip=_command("warpgym.media.suite", "draw_suite_clip"), training_clips=False,
                      scored_in="Gymnasium's env", reports_speed=False, default_envs=(4096, 64),
                      default_iterations=(500, 100), preset=PRESETS[name],
                      evaluate=_command("warpgym.cli.eval.suite", "evaluate"),
@@ -104,9 +104,9 @@ def _suite(name: str, episode_length: int) -> TaskEntry:
 def _legged(name: str, episode_length: int) -> TaskEntry:
     # mjlab trains its velocity tasks with 4096 envs; a legged task a user registers trains with mjlab's settings
     return TaskEntry(name, "legged", f"warpgym/{name}", episode_length,
-                     "warpgym.envs.legged:LeggedVecEnv", "warpgym.envs.single:LeggedEnv", (),
+                     "warpgym.envs.legged:LeggedVecEnv", "warpgym.envs.legged:LeggedEnv", (),
                      physics_flags=False, clip_keys=("dof_pos", "dof_vel"), clip_all_worlds=False,
-                     draw_clip=_command("warpgym.media.video", "draw_legged_clip"), training_clips=False,
+                     draw_clip=_command("warpgym.media.legged", "draw_legged_clip"), training_clips=False,
                      scored_in="native MuJoCo", reports_speed=False, default_envs=(4096, 32),
                      default_iterations=(1000, 30), preset=PRESETS.get(name, LEGGED_PRESET),
                      evaluate=_command("warpgym.cli.eval.legged", "evaluate"),
