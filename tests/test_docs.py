@@ -127,6 +127,16 @@ def test_the_guides_own_terms_example_runs_and_reads_the_robots_feet(tmp_path):
                    " atol=0.05)\n", tmp_path)
 
 
+def test_the_guides_suite_terms_example_adds_its_term_to_gymnasiums_reward(tmp_path):
+    """docs/guide.md's reward and termination of one's own on Hopper-v5: the reward is Gymnasium's terms plus the
+    user's, which is the torso's angle squared at its weight."""
+    block = next(b for b in python_blocks("docs/guide.md") if "torso_tilt" in b)
+    run_on_the_cpu(block + "\nangle = envs.sim.dof_pos[:, 2]\n"
+                   "assert torch.allclose(info['reward_tilt'], -0.5 * angle * angle, atol=1e-7)\n"
+                   "own = info['reward_forward'] + info['reward_ctrl'] + info['reward_survive'] + info['reward_tilt']\n"
+                   "assert torch.allclose(reward, own, atol=1e-6) and float(angle.abs().max()) > 0\n", tmp_path)
+
+
 def test_the_tensor_api_pages_first_example_runs_with_the_tasks_physics(tmp_path):
     block = python_blocks("docs/tensor_api.md")[0]
     assert "substeps=ANT.substeps" in block

@@ -120,6 +120,118 @@ def test_warpgym_train_trains_a_users_task_from_its_module(tmp_path):
     assert replay.returncode == 2 and "pass --import user_task" in replay.stderr, replay.stderr[-2000:]
 
 
+def test_a_suite_tasks_own_terms_run_in_its_step_beside_gymnasiums():
+    """Hopper-v5 with a user's reward (the control cost at twice Gymnasium's weight) and termination: the reward is
+    Gymnasium's plus the user's term, reported under its name; the observation and Gymnasium's terms are those of the
+    task without them; the termination ends every world once its threshold is above the start's height."""
+    import gymnasium as gym
+
+    import warpgym  # noqa: F401  (the ids)
+    from tests import user_terms
+    from warpgym.tasks.terms import Termination
+
+    def make(below):
+        return gym.make_vec("warpgym/Hopper-v5", num_envs=3, device="cpu", rewards=user_terms.SUITE_REWARDS,
+                            terminations={"torso_below": Termination(user_terms.torso_below, params={"below": below})})
+
+    plain = gym.make_vec("warpgym/Hopper-v5", num_envs=3, device="cpu")
+    envs = make(0.0)  # never below the floor: Gymnasium's terminations alone end episodes
+    assert list(envs.task.rewards) == ["user_energy"] and list(plain.task.rewards) == []
+    envs.reset(seed=4)
+    plain.reset(seed=4)
+    torch.manual_seed(0)
+    for _ in range(3):
+        action = torch.rand(3, 3) * 2 - 1
+        obs, reward, terminated, _, info = envs.step(action)
+        obs0, reward0, terminated0, _, info0 = plain.step(action)
+        assert torch.equal(obs, obs0) and torch.equal(terminated, terminated0)
+        assert torch.allclose(info["reward_user_energy"], 2.0 * info0["reward_ctrl"], rtol=1e-5, atol=1e-9)
+        assert float(info["reward_user_energy"].abs().min()) > 0
+        assert torch.allclose(reward, reward0 + info["reward_user_energy"], atol=1e-6)
+    envs.close()
+    high = make(1.3)  # above the Hopper's start at 1.25 m: the first step ends every world
+    high.reset(seed=4)
+    _, _, terminated, truncated, _ = high.step(torch.zeros(3, 3))
+    assert terminated.all() and not truncated.any()
+    high.close()
+    plain.close()
+
+
+def test_a_robots_own_terms_run_in_its_step_after_isaac_gyms_reward():
+    """The Ant with a user's reward (its up projection, read from the step's observation) and termination: the
+    reward is Isaac Gym's plus the term, the observation unchanged; a termination that always holds ends every world
+    at its first step without the death cost, which only a fall pays."""
+    import gymnasium as gym
+
+    import warpgym  # noqa: F401  (the ids)
+    from tests import user_terms
+    from warpgym.tasks.terms import Termination
+
+    def make(height):
+        return gym.make_vec("warpgym/Ant-v0", num_envs=3, device="cpu", rewards=user_terms.ROBOT_REWARDS,
+                            terminations={"torso_above": Termination(user_terms.torso_above,
+                                                                     params={"height": height})})
+
+    envs, plain = make(5.0), gym.make_vec("warpgym/Ant-v0", num_envs=3, device="cpu")
+    envs.reset(seed=2)
+    plain.reset(seed=2)
+    torch.manual_seed(0)
+    for _ in range(3):
+        action = torch.rand(3, 8) * 2 - 1
+        obs, reward, terminated, _, info = envs.step(action)
+        obs0, reward0, terminated0, _, _ = plain.step(action)
+        assert torch.equal(obs, obs0) and not terminated.any() and not terminated0.any()
+        assert torch.allclose(info["reward_user_upright"], 0.25 * obs[:, 10], atol=1e-7)
+        assert torch.allclose(reward, reward0 + info["reward_user_upright"], atol=1e-5)
+    envs.close()
+    low = make(0.0)  # the torso is always above the floor
+    low.reset(seed=2)
+    _, reward, terminated, _, _ = low.step(torch.zeros(3, 8))
+    assert terminated.all() and (reward != low.task.death_cost).all()
+    low.close()
+    plain.close()
+
+
+def train_user_task(task: str, tmp_path) -> tuple[str, list[dict], dict]:
+    """`warpgym train --task user_task:TASK`, two iterations on the CPU: the run, its rows, its environment."""
+    run = str(tmp_path / task)
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([HERE, ROOT, os.environ.get("PYTHONPATH", "")])}
+    done = subprocess.run([sys.executable, "-m", "warpgym", "train", "--task", f"user_task:{task}", "--device", "cpu",
+                           "--num-envs", "4", "--max-iterations", "2", "--horizon-len", "8", "--eval-gap", "0",
+                           "--eval-envs", "2", "--episode-length", "20", "--no-plots", "--run-dir", run],
+                          capture_output=True, text=True, env=env, cwd=str(tmp_path), timeout=900)
+    assert done.returncode == 0, done.stderr[-3000:]
+    rows = [json.loads(line) for line in open(os.path.join(run, "metrics.jsonl"))]
+    assert [r["iteration"] for r in rows] == [1, 2]
+    assert json.load(open(os.path.join(run, "config.json")))["env_args"]["task"] == f"user_task:{task}"
+    return run, rows, env
+
+
+def test_warpgym_train_trains_a_users_robot_task_from_its_module(tmp_path):
+    """`warpgym train --task user_task:UserAnt` trains with the user's term in its log and the Ant's preset."""
+    run, rows, _ = train_user_task("UserAnt", tmp_path)
+    assert rows[-1]["eval/reward_user_upright"] > 0
+    config = json.load(open(os.path.join(run, "config.json")))
+    assert config["reward_scale"] == 0.01  # the Ant's preset (the suite's is 0.1)
+
+
+def test_warpgym_train_and_eval_take_a_users_suite_task_from_its_module(tmp_path):
+    """`warpgym train --task user_task:UserHopper-v5` trains two iterations with the user's term in its log;
+    `warpgym eval` scores the policy in Gymnasium's own Hopper-v5, both envs without the task's own terms."""
+    run, rows, env = train_user_task("UserHopper-v5", tmp_path)
+    assert rows[-1]["eval/reward_user_energy"] < 0
+    out = str(tmp_path / "eval.json")
+    scored = subprocess.run([sys.executable, "-m", "warpgym", "eval", run, "--import", "user_task", "--episodes", "2",
+                             "--seeds", "0", "--json", out], capture_output=True, text=True, env=env,
+                            cwd=str(tmp_path), timeout=900)
+    assert scored.returncode == 0, scored.stderr[-3000:]
+    assert "the task's own terms ['user_energy', 'torso_below'] shaped its training only" in scored.stdout
+    result = json.load(open(out))
+    assert "reward_user_energy" not in result["warpgym_terms"] and "reward_ctrl" in result["warpgym_terms"]
+    # the same starts, the same task in both envs: the returns agree as the suite's judge tests require
+    assert result["gymnasium_over_warpgym"] == pytest.approx(1.0, abs=0.05)
+
+
 def test_an_observation_with_history_holds_its_last_frames_oldest_first():
     """A term with ``history=3``: its three frames after a reset are the first observation, then each step shifts
     them (oldest first), against the same term without history in the same observation; a world reset in a step

@@ -7,6 +7,8 @@ B bodies per env, F feet, O observation entries, V MuJoCo dofs per world.
 
 import warp as wp
 
+from kernels.robots.params import LocomotionParams
+
 
 @wp.struct
 class RobotView:
@@ -37,3 +39,17 @@ class EpisodeBuffers:
     ended_return: wp.array[float]  # (N,) written when an episode ends
     ended_length: wp.array[wp.int32]  # (N,)
     ended_speed: wp.array[float]  # (N,) its forward speed [m/s]
+    extra: wp.array2d[float]  # (N, E) this step's value of each of the task's own reward terms (a user's)
+
+
+@wp.struct
+class RobotState:
+    """What a term of the robots' tasks reads (``(env: RobotState, w: int[, params]) -> float``): the task's numbers
+    (``kernels.robots.params.LocomotionParams``), the robot, the episode's accumulators, and this step's observation
+    (``obs[w, 0]``: the torso's height; 10, 11: its up and heading projections; Isaac Gym's layout,
+    docs/tensor_api.md)."""
+
+    p: LocomotionParams
+    r: RobotView
+    ep: EpisodeBuffers
+    obs: wp.array2d[float]  # (N, O)

@@ -4,7 +4,7 @@ terminations and truncations, and per-env episode accumulators."""
 import warp as wp
 
 from kernels.common import StepOutputs
-from kernels.robots.buffers import EpisodeBuffers, RobotView
+from kernels.robots.buffers import EpisodeBuffers, RobotState, RobotView
 from kernels.robots.observations import forward_speed, potential, root_position, write_observation
 from kernels.robots.params import LocomotionParams
 from kernels.robots.rewards import locomotion_reward
@@ -38,41 +38,66 @@ def record_ended_episode(env: int, episodes: EpisodeBuffers, out: StepOutputs):
     episodes.ended_speed[env] = episodes.speed[env]
 
 
-@wp.kernel
-def locomotion_step(p: LocomotionParams, robot: RobotView, episodes: EpisodeBuffers, out: StepOutputs):
-    env = wp.tid()
-    sane = is_sane(p, robot, env)
-    write_observation(env, p, robot, 0, out.obs)
+def step_kernel(rewards, Rewards, terminations, Terminations):
+    """The step's kernel of a task whose own terms (beside Isaac Gym's reward) are the generated ``rewards`` and
+    ``terminations`` (``warpgym.tasks.dispatch``) with their parameter structs; made once per pair of tables, so the
+    tasks without terms of their own share one."""
+    key = rewards, terminations
+    if key in _KERNELS:
+        return _KERNELS[key]
 
-    pos = root_position(robot.joint_q, env)
-    new_potential = potential(p, pos)
-    progress = new_potential - episodes.potential[env]
-    if wp.abs(progress) > p.max_speed:
-        sane = False  # the root jumped farther in one step than max_speed allows
-    r = locomotion_reward(env, p, out.obs, robot.actions, robot.effort_ratio, progress)
-    episodes.potential[env] = new_potential
-    fell = out.obs[env, 0] < p.termination_height
-    if fell:
-        r = p.death_cost
-    if not sane:
-        # nothing about this step is meaningful: end the episode without reward or bootstrap
-        r = 0.0
-        fell = True
+    @wp.kernel(enable_backward=False, module="unique")
+    def locomotion_step(state: RobotState, reward_params: Rewards, weights: wp.array[float],
+                        termination_params: Terminations, out: StepOutputs):
+        env = wp.tid()
+        p = state.p
+        robot = state.r
+        episodes = state.ep
+        sane = is_sane(p, robot, env)
+        write_observation(env, p, robot, 0, out.obs)
 
-    length = episodes.length[env] + 1
-    episodes.length[env] = length
-    episodes.total_return[env] = episodes.total_return[env] + r
-    if sane:  # a blown-up state travelled nowhere: the speed keeps its last sane value
-        episodes.speed[env] = forward_speed(p, pos, length)
-    # Gymnasium's TimeLimit: the time limit truncates whether or not the step also terminated (a learner
-    # bootstraps only a truncation without a termination); the suite's step does the same
-    trunc = length >= p.episode_length
+        pos = root_position(robot.joint_q, env)
+        new_potential = potential(p, pos)
+        progress = new_potential - episodes.potential[env]
+        if wp.abs(progress) > p.max_speed:
+            sane = False  # the root jumped farther in one step than max_speed allows
+        r = locomotion_reward(env, p, out.obs, robot.actions, robot.effort_ratio, progress)
+        # the task's own terms, after Isaac Gym's reward: a weight times the value a step, as its terms are weighed
+        r += rewards(state, env, reward_params, weights, 1.0, episodes.extra)
+        episodes.potential[env] = new_potential
+        fell = out.obs[env, 0] < p.termination_height
+        ended = terminations(state, env, termination_params)
+        if fell or not sane:  # the death cost, or nothing, in place of every term
+            for k in range(weights.shape[0]):
+                episodes.extra[env, k] = 0.0
+        if fell:
+            r = p.death_cost
+        fell = fell or ended[0] != 0
+        if not sane:
+            # nothing about this step is meaningful: end the episode without reward or bootstrap
+            r = 0.0
+            fell = True
 
-    out.reward[env] = r
-    out.terminated[env] = fell
-    out.truncated[env] = trunc
-    out.time_outs[env] = trunc and not fell
-    out.done[env] = fell or trunc
-    out.diverged[env] = not sane
-    if fell or trunc:
-        record_ended_episode(env, episodes, out)
+        length = episodes.length[env] + 1
+        episodes.length[env] = length
+        episodes.total_return[env] = episodes.total_return[env] + r
+        if sane:  # a blown-up state travelled nowhere: the speed keeps its last sane value
+            episodes.speed[env] = forward_speed(p, pos, length)
+        # Gymnasium's TimeLimit: the time limit truncates whether or not the step also terminated (a learner
+        # bootstraps only a truncation without a termination); the suite's step does the same
+        trunc = length >= p.episode_length or ended[1] != 0
+
+        out.reward[env] = r
+        out.terminated[env] = fell
+        out.truncated[env] = trunc
+        out.time_outs[env] = trunc and not fell
+        out.done[env] = fell or trunc
+        out.diverged[env] = not sane
+        if fell or trunc:
+            record_ended_episode(env, episodes, out)
+
+    _KERNELS[key] = locomotion_step
+    return locomotion_step
+
+
+_KERNELS: dict = {}

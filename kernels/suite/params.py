@@ -1,7 +1,8 @@
 """What the kernels of Gymnasium's MuJoCo tasks read: the task's numbers (``GymParams``, filled by
 ``warpgym.tasks.suite``), MuJoCo Warp's arrays they take them from (``MjView``) and what a step
 writes (``GymEpisodes``; ``kernels.common.StepOutputs`` for the returned tensors), and each kind's reward
-terms, named once (``TERMS``: the step kernel writes each at its column by name, Gymnasium's info keys read them).
+terms, named once (``TERMS``: the step kernel writes each at its column by name, Gymnasium's info keys read them);
+``SuiteState``, what a task's own terms beside Gymnasium's read.
 
 Shapes: N worlds, Q = nq, V = nv, U = nu, B bodies (the world body 0 included), S sites, K reward
 terms of the task, O observation entries.
@@ -167,3 +168,15 @@ class GymEpisodes:
     ended_speed: wp.array[float]  # (N,)
     terms: wp.array2d[float]  # (N, K) this step's reward terms and info, Gymnasium's keys in task order
     actions: wp.array2d[float]  # (N, U) this step's actions as given (NaN entries as 0)
+    extra: wp.array2d[float]  # (N, E) this step's value of each of the task's own reward terms (a user's)
+
+
+@wp.struct
+class SuiteState:
+    """What a term of a suite task reads (``(env: SuiteState, w: int[, params]) -> float``): the task's numbers,
+    MuJoCo Warp's data as Gymnasium's step reads it, the episode's accumulators (``env.ep.actions``: the actions
+    the control cost is charged on)."""
+
+    p: GymParams
+    d: MjView
+    ep: GymEpisodes

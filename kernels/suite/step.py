@@ -34,6 +34,7 @@ from kernels.suite.params import (
     PusherTerm,
     ReacherTerm,
     StandupTerm,
+    SuiteState,
 )
 
 wp.set_module_options({"enable_backward": False})
@@ -204,109 +205,135 @@ def sum_squares(a: wp.array2d[float], w: int):
     return total
 
 
-@wp.kernel
-def gym_step(p: GymParams, d: MjView, ep: GymEpisodes, out: StepOutputs):
-    """Observation, reward, reward terms (``ep.terms``, each at its column of the kind's ``TERMS``),
-    termination and episode statistics after a step's physics."""
-    w = wp.tid()
-    write_observation(p, d, w, 0, out.obs)
-    ctrl_cost = p.ctrl_cost_weight * sum_squares(ep.actions, w)
-    reward = float(0.0)
-    terminated = False
-    forward = float(0.0)
-    if p.kind == FORWARD:
-        after = position(p, d, w)
-        velocity = (after - wp.vec2(ep.before[w, 0], ep.before[w, 1])) / p.dt
-        ep.before[w, 0] = after[0]
-        ep.before[w, 1] = after[1]
-        healthy = is_healthy(p, d, w)
-        survive = float(0.0)
-        if healthy:
-            survive = p.healthy_reward
-        contact = contact_cost(p, d, w)
-        forward = velocity[0]
-        reward_forward = p.forward_reward_weight * velocity[0]
-        reward = reward_forward + survive - ctrl_cost - contact
-        terminated = (not healthy) and p.terminate_when_unhealthy != 0
-        ep.terms[w, ForwardTerm.reward_forward] = reward_forward
-        ep.terms[w, ForwardTerm.reward_ctrl] = -ctrl_cost
-        ep.terms[w, ForwardTerm.reward_survive] = survive
-        ep.terms[w, ForwardTerm.reward_contact] = -contact
-        ep.terms[w, ForwardTerm.x_velocity] = velocity[0]
-        ep.terms[w, ForwardTerm.y_velocity] = velocity[1]
-        ep.terms[w, ForwardTerm.x_position] = d.qpos[w, 0]
-    elif p.kind == STANDUP:
-        linup = d.qpos[w, 2] / p.timestep  # Gymnasium divides by MuJoCo's timestep, not the env's dt
-        impact = contact_cost(p, d, w)
-        reward = linup - ctrl_cost - impact + 1.0
-        ep.terms[w, StandupTerm.reward_linup] = linup
-        ep.terms[w, StandupTerm.reward_quadctrl] = -ctrl_cost
-        ep.terms[w, StandupTerm.reward_impact] = -impact
-        ep.terms[w, StandupTerm.x_position] = d.qpos[w, 0]
-        ep.terms[w, StandupTerm.y_position] = d.qpos[w, 1]
-    elif p.kind == PENDULUM:
-        terminated = not (wp.abs(d.qpos[w, 1]) <= 0.2)
-        if terminated:
+def step_kernel(rewards, Rewards, terminations, Terminations):
+    """The step's kernel of a task whose own terms (beside Gymnasium's) are the generated ``rewards`` and
+    ``terminations`` (``warpgym.tasks.dispatch``) with their parameter structs; made once per pair of tables, so
+    every task without terms of its own shares one."""
+    key = rewards, terminations
+    if key in _KERNELS:
+        return _KERNELS[key]
+
+    @wp.kernel(enable_backward=False, module="unique")
+    def gym_step(env: SuiteState, reward_params: Rewards, weights: wp.array[float], termination_params: Terminations,
+                 out: StepOutputs):
+        """Observation, reward, reward terms (``ep.terms``, each at its column of the kind's ``TERMS``; the task's
+        own in ``ep.extra``), termination and episode statistics after a step's physics."""
+        w = wp.tid()
+        p = env.p
+        d = env.d
+        ep = env.ep
+        write_observation(p, d, w, 0, out.obs)
+        ctrl_cost = p.ctrl_cost_weight * sum_squares(ep.actions, w)
+        reward = float(0.0)
+        terminated = False
+        forward = float(0.0)
+        if p.kind == FORWARD:
+            after = position(p, d, w)
+            velocity = (after - wp.vec2(ep.before[w, 0], ep.before[w, 1])) / p.dt
+            ep.before[w, 0] = after[0]
+            ep.before[w, 1] = after[1]
+            healthy = is_healthy(p, d, w)
+            survive = float(0.0)
+            if healthy:
+                survive = p.healthy_reward
+            contact = contact_cost(p, d, w)
+            forward = velocity[0]
+            reward_forward = p.forward_reward_weight * velocity[0]
+            reward = reward_forward + survive - ctrl_cost - contact
+            terminated = (not healthy) and p.terminate_when_unhealthy != 0
+            ep.terms[w, ForwardTerm.reward_forward] = reward_forward
+            ep.terms[w, ForwardTerm.reward_ctrl] = -ctrl_cost
+            ep.terms[w, ForwardTerm.reward_survive] = survive
+            ep.terms[w, ForwardTerm.reward_contact] = -contact
+            ep.terms[w, ForwardTerm.x_velocity] = velocity[0]
+            ep.terms[w, ForwardTerm.y_velocity] = velocity[1]
+            ep.terms[w, ForwardTerm.x_position] = d.qpos[w, 0]
+        elif p.kind == STANDUP:
+            linup = d.qpos[w, 2] / p.timestep  # Gymnasium divides by MuJoCo's timestep, not the env's dt
+            impact = contact_cost(p, d, w)
+            reward = linup - ctrl_cost - impact + 1.0
+            ep.terms[w, StandupTerm.reward_linup] = linup
+            ep.terms[w, StandupTerm.reward_quadctrl] = -ctrl_cost
+            ep.terms[w, StandupTerm.reward_impact] = -impact
+            ep.terms[w, StandupTerm.x_position] = d.qpos[w, 0]
+            ep.terms[w, StandupTerm.y_position] = d.qpos[w, 1]
+        elif p.kind == PENDULUM:
+            terminated = not (wp.abs(d.qpos[w, 1]) <= 0.2)
+            if terminated:
+                reward = 0.0
+            else:
+                reward = 1.0
+            ep.terms[w, PendulumTerm.reward_survive] = reward
+        elif p.kind == DOUBLE_PENDULUM:
+            tip = d.site_xpos[w, 0]
+            terminated = tip[2] <= 1.0
+            distance = 0.01 * tip[0] * tip[0] + (tip[2] - 2.0) * (tip[2] - 2.0)
+            v1 = d.qvel[w, 1]
+            v2 = d.qvel[w, 2]
+            velocity_penalty = 0.001 * v1 * v1 + 0.005 * v2 * v2
+            alive = float(0.0)
+            if not terminated:
+                alive = p.healthy_reward
+            reward = alive - distance - velocity_penalty
+            ep.terms[w, DoublePendulumTerm.reward_survive] = alive
+            ep.terms[w, DoublePendulumTerm.distance_penalty] = -distance
+            ep.terms[w, DoublePendulumTerm.velocity_penalty] = -velocity_penalty
+        elif p.kind == REACHER:
+            dist = -wp.length(d.xpos[w, p.body_a] - d.xpos[w, p.body_b]) * p.dist_weight
+            reward = dist - ctrl_cost
+            ep.terms[w, ReacherTerm.reward_dist] = dist
+            ep.terms[w, ReacherTerm.reward_ctrl] = -ctrl_cost
+        elif p.kind == PUSHER:
+            near = -wp.length(d.xpos[w, p.body_b] - d.xpos[w, p.body_a]) * p.near_weight
+            dist = -wp.length(d.xpos[w, p.body_b] - d.xpos[w, p.body_c]) * p.dist_weight
+            reward = dist - ctrl_cost + near
+            ep.terms[w, PusherTerm.reward_dist] = dist
+            ep.terms[w, PusherTerm.reward_ctrl] = -ctrl_cost
+            ep.terms[w, PusherTerm.reward_near] = near
+
+        # the task's own terms, after Gymnasium's: a weight times the value a step, as Gymnasium weighs its terms
+        # (mjlab's tasks also multiply by dt)
+        reward += rewards(env, w, reward_params, weights, 1.0, ep.extra)
+        ended = terminations(env, w, termination_params)
+        terminated = terminated or ended[0] != 0
+
+        # A state that is no longer finite ends the episode with reward 0 (Gymnasium would go on
+        # returning NaN); info["diverged"] flags it and the observation it ended on reads 0.
+        diverged = not state_is_finite(d.qpos, d.qvel, w)
+        if diverged:
             reward = 0.0
-        else:
-            reward = 1.0
-        ep.terms[w, PendulumTerm.reward_survive] = reward
-    elif p.kind == DOUBLE_PENDULUM:
-        tip = d.site_xpos[w, 0]
-        terminated = tip[2] <= 1.0
-        distance = 0.01 * tip[0] * tip[0] + (tip[2] - 2.0) * (tip[2] - 2.0)
-        v1 = d.qvel[w, 1]
-        v2 = d.qvel[w, 2]
-        velocity_penalty = 0.001 * v1 * v1 + 0.005 * v2 * v2
-        alive = float(0.0)
-        if not terminated:
-            alive = p.healthy_reward
-        reward = alive - distance - velocity_penalty
-        ep.terms[w, DoublePendulumTerm.reward_survive] = alive
-        ep.terms[w, DoublePendulumTerm.distance_penalty] = -distance
-        ep.terms[w, DoublePendulumTerm.velocity_penalty] = -velocity_penalty
-    elif p.kind == REACHER:
-        dist = -wp.length(d.xpos[w, p.body_a] - d.xpos[w, p.body_b]) * p.dist_weight
-        reward = dist - ctrl_cost
-        ep.terms[w, ReacherTerm.reward_dist] = dist
-        ep.terms[w, ReacherTerm.reward_ctrl] = -ctrl_cost
-    elif p.kind == PUSHER:
-        near = -wp.length(d.xpos[w, p.body_b] - d.xpos[w, p.body_a]) * p.near_weight
-        dist = -wp.length(d.xpos[w, p.body_b] - d.xpos[w, p.body_c]) * p.dist_weight
-        reward = dist - ctrl_cost + near
-        ep.terms[w, PusherTerm.reward_dist] = dist
-        ep.terms[w, PusherTerm.reward_ctrl] = -ctrl_cost
-        ep.terms[w, PusherTerm.reward_near] = near
+            terminated = True
+            forward = 0.0
+            for k in range(weights.shape[0]):
+                ep.extra[w, k] = 0.0
+            for i in range(out.obs.shape[1]):
+                out.obs[w, i] = 0.0
+        out.diverged[w] = diverged
 
-    # A state that is no longer finite ends the episode with reward 0 (Gymnasium would go on
-    # returning NaN); info["diverged"] flags it and the observation it ended on reads 0.
-    diverged = not state_is_finite(d.qpos, d.qvel, w)
-    if diverged:
-        reward = 0.0
-        terminated = True
-        forward = 0.0
-        for i in range(out.obs.shape[1]):
-            out.obs[w, i] = 0.0
-    out.diverged[w] = diverged
+        length = ep.length[w] + 1
+        ep.length[w] = length
+        ep.total_return[w] = ep.total_return[w] + reward
+        ep.travel[w] = ep.travel[w] + forward * p.dt
+        ep.speed[w] = ep.travel[w] / (float(length) * p.dt)
+        truncated = length >= p.episode_length or ended[1] != 0
+        out.reward[w] = reward
+        out.terminated[w] = terminated
+        out.truncated[w] = truncated
+        out.time_outs[w] = truncated and not terminated
+        done = terminated or truncated
+        out.done[w] = done
+        if done:
+            for i in range(out.obs.shape[1]):
+                out.final_obs[w, i] = out.obs[w, i]
+            ep.ended_return[w] = ep.total_return[w]
+            ep.ended_length[w] = length
+            ep.ended_speed[w] = ep.speed[w]
 
-    length = ep.length[w] + 1
-    ep.length[w] = length
-    ep.total_return[w] = ep.total_return[w] + reward
-    ep.travel[w] = ep.travel[w] + forward * p.dt
-    ep.speed[w] = ep.travel[w] / (float(length) * p.dt)
-    truncated = length >= p.episode_length
-    out.reward[w] = reward
-    out.terminated[w] = terminated
-    out.truncated[w] = truncated
-    out.time_outs[w] = truncated and not terminated
-    done = terminated or truncated
-    out.done[w] = done
-    if done:
-        for i in range(out.obs.shape[1]):
-            out.final_obs[w, i] = out.obs[w, i]
-        ep.ended_return[w] = ep.total_return[w]
-        ep.ended_length[w] = length
-        ep.ended_speed[w] = ep.speed[w]
+    _KERNELS[key] = gym_step
+    return gym_step
+
+
+_KERNELS: dict = {}
 
 
 @wp.kernel

@@ -14,13 +14,14 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from kernels.robots.actions import apply_actions
-from kernels.robots.buffers import EpisodeBuffers, RobotView
-from kernels.robots.step import locomotion_step
+from kernels.robots.buffers import EpisodeBuffers, RobotState, RobotView
+from kernels.robots.step import step_kernel
 from kernels.robots.resets import reset_finished_envs
 from warpgym.envs.graph_env import GraphVecEnv
 from warpgym.envs.single import SingleEnv
 from warpgym.sim.simulator import Sim
 from warpgym.tasks.robots import LocomotionTask, get_task
+from warpgym.tasks.terms import compile_rewards, compile_terminations
 
 
 # VectorEnv is named again beside GraphVecEnv (which is one): skrl's wrap_env(env) and other learners tell a
@@ -115,6 +116,8 @@ class LocomotionVecEnv(GraphVecEnv, VectorEnv):
         self._episodes = ep = EpisodeBuffers()
         ep.potential, ep.length, ep.total_return, ep.speed = buf(n), buf(n, wp.int32), buf(n), buf(n)
         ep.ended_return, ep.ended_length, ep.ended_speed = buf(n), buf(n, wp.int32), buf(n)
+        ep.extra = buf((n, max(1, len(task.rewards))))
+        self._own_terms(task, sim.dof_names, dev)
 
         t = sim.to_torch
         self.actions = t(robot.actions)
@@ -128,7 +131,19 @@ class LocomotionVecEnv(GraphVecEnv, VectorEnv):
             # the episode in progress after this step (a fresh one where the step reset the env):
             # what an evaluation cut short reports (agents.evaluate)
             "episode_so_far": {"r": t(ep.total_return), "l": t(ep.length), "s": t(ep.speed)},
+            **{key: t(ep.extra)[:, k] for k, key in enumerate(task.own_terms())},
         })
+
+    def _own_terms(self, task: LocomotionTask, joints: list[str], dev: str) -> None:
+        """The task's own reward and termination terms compiled into its step kernel (tasks without any share one
+        kernel), over the state they read (``RobotState``)."""
+        self._rewards = compile_rewards(task.rewards, RobotState, joints, dev, f"{task.name}: rewards")
+        self._terminations = compile_terminations(task.terminations, RobotState, joints, dev,
+                                                  f"{task.name}: terminations")
+        self._step_kernel = step_kernel(self._rewards.func, self._rewards.params_type, self._terminations.func,
+                                        self._terminations.params_type)
+        self._state = state = RobotState()
+        state.p, state.r, state.ep, state.obs = self.params, self._robot, self._episodes, self._out.obs
 
     # ------------------------------------------------------------------ device work
     def _launch_step(self) -> None:
@@ -140,7 +155,8 @@ class LocomotionVecEnv(GraphVecEnv, VectorEnv):
             sim.compute_contact_wrenches()
         if self.task.observe_dof_forces:
             sim.compute_dof_forces()
-        wp.launch(locomotion_step, dim=n, inputs=[self.params, self._robot, self._episodes, self._out], device=dev)
+        r, t = self._rewards, self._terminations
+        wp.launch(self._step_kernel, dim=n, inputs=[self._state, r.params, r.arrays, t.params, self._out], device=dev)
         self._finish_step()
 
     def _launch_reset(self, force_all: int) -> None:

@@ -14,14 +14,15 @@ from gymnasium import spaces
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from kernels.suite.params import GymEpisodes, MjView
+from kernels.suite.params import GymEpisodes, MjView, SuiteState
 from kernels.suite.resets import reset_gym_worlds
-from kernels.suite.step import apply_gym_actions, gym_step, write_reset_observation
+from kernels.suite.step import apply_gym_actions, step_kernel, write_reset_observation
 from warpgym.envs.graph_env import GraphVecEnv
 from warpgym.envs.single import SingleEnv
 from warpgym.sim.mjw_sim import MjwSim
 from warpgym.tasks.suite import GymTask, get_suite_task
 from warpgym.tasks.suite.base import MAX_TERMS
+from warpgym.tasks.terms import compile_rewards, compile_terminations
 
 
 # VectorEnv is named again beside GraphVecEnv (which is one): skrl's wrap_env(env) and other learners tell a
@@ -45,7 +46,9 @@ class SuiteVecEnv(GraphVecEnv, VectorEnv):
             ``unscale_action``) does; the control cost is charged on the mapped controls. The action
             space is then [-1, 1]. Default False: Gymnasium's own action space and actions as given.
         **kwargs: Gymnasium's constructor arguments of the task (e.g. ``ctrl_cost_weight=0.5``,
-            ``frame_skip=2``, ``xml_file=PATH``), and ``nconmax`` / ``njmax`` for MuJoCo Warp's buffers.
+            ``frame_skip=2``, ``xml_file=PATH``), ``nconmax`` / ``njmax`` for MuJoCo Warp's buffers, and the task's
+            own terms beside Gymnasium's: ``rewards={"upright": Reward(func, weight=0.1)}``, ``terminations``
+            (``warpgym.tasks.terms``; a term's function reads ``kernels.suite.params.SuiteState``).
     """
 
     metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": ["rgb_array", "human"]}
@@ -103,6 +106,8 @@ class SuiteVecEnv(GraphVecEnv, VectorEnv):
         ep.travel, ep.speed = buf(n), buf(n)
         ep.ended_return, ep.ended_length, ep.ended_speed = buf(n), buf(n, wp.int32), buf(n)
         ep.terms, ep.actions = buf((n, MAX_TERMS)), buf((n, a))
+        ep.extra = buf((n, max(1, len(task.rewards))))
+        self._own_terms(task, sim, dev)
 
         out = self._alloc_common(n, o, a, seed)
         self._ctrl_low = wp.array(low, dtype=float, device=dev)
@@ -118,8 +123,26 @@ class SuiteVecEnv(GraphVecEnv, VectorEnv):
         if task.has_speed:
             episode.update(s=t(ep.ended_speed), _s=done)
             so_far["s"] = t(ep.speed)
+        extra = t(ep.extra)
         self._expose({**{key: terms[:, col] for key, col in task.term_columns().items()},
+                      **{key: extra[:, k] for k, key in enumerate(task.own_terms())},
                       "episode": episode, "_episode": done, "episode_so_far": so_far})
+
+    def _own_terms(self, task: GymTask, sim, dev: str) -> None:
+        """The task's own reward and termination terms compiled into its step kernel (tasks without any share
+        one kernel), over the state they read (``SuiteState``)."""
+        import mujoco  # noqa: PLC0415
+
+        mjm = sim.mjm
+        joints = [mujoco.mj_id2name(mjm, mujoco.mjtObj.mjOBJ_JOINT, int(mjm.actuator_trnid[i, 0])) or f"joint{i}"
+                  for i in range(mjm.nu)]  # a PerJoint parameter: a value per actuator's joint
+        self._rewards = compile_rewards(task.rewards, SuiteState, joints, dev, f"{task.name}: rewards")
+        self._terminations = compile_terminations(task.terminations, SuiteState, joints, dev,
+                                                  f"{task.name}: terminations")
+        self._step_kernel = step_kernel(self._rewards.func, self._rewards.params_type, self._terminations.func,
+                                        self._terminations.params_type)
+        self._state = state = SuiteState()
+        state.p, state.d, state.ep = self.params, self._mj, self._episodes
 
     # ------------------------------------------------------------------ device work
     def _launch_step(self) -> None:
@@ -128,7 +151,8 @@ class SuiteVecEnv(GraphVecEnv, VectorEnv):
                   inputs=[self._actions_in, int(self.unit_actions), self._ctrl_low, self._ctrl_high],
                   outputs=[sim.d.ctrl, self._episodes.actions, self._nan_count], device=dev)
         sim.simulate()
-        wp.launch(gym_step, dim=n, inputs=[self.params, self._mj, self._episodes, self._out], device=dev)
+        r, t = self._rewards, self._terminations
+        wp.launch(self._step_kernel, dim=n, inputs=[self._state, r.params, r.arrays, t.params, self._out], device=dev)
         self._finish_step()
 
     def _launch_reset(self, force_all: int) -> None:

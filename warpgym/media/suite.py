@@ -35,7 +35,7 @@ class SuiteView:
 
         args = {name: getattr(task, name) for name in task.argument_names()}
         self.robots, self.mode, self.follow = robots, mode, follow
-        self._env = gymnasium.make(task.name, render_mode=mode, width=width, height=height, **args).unwrapped
+        self._env = gymnasium.make(task.gymnasium_id, render_mode=mode, width=width, height=height, **args).unwrapped
         self._open = ClosedAtExit()
         self._open.hold(self._env)
 

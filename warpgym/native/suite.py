@@ -33,7 +33,7 @@ def gymnasium_env(task: str | GymTask, version: int = 5, **kwargs):
     task = get_suite_task(task)
     if version == 5:
         args = {name: getattr(task, name) for name in task.argument_names()}
-        return gymnasium.make(task.name, max_episode_steps=task.episode_length, **args, **kwargs)
+        return gymnasium.make(task.gymnasium_id, max_episode_steps=task.episode_length, **args, **kwargs)
     if version != 4 or task.v4_observation is None:
         raise ValueError(f"{task.name} in Gymnasium's v{version}: warpgym plays v5 policies in v5, and in v4 "
                          f"for {v4_tasks()} (whose v4 observation holds v5's)")

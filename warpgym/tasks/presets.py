@@ -1,5 +1,6 @@
 """PPO's starting point for each task (``agents.Config`` fields), kept beside the tasks: each registry entry
-(``warpgym.tasks.registry``) carries its task's, and a task a user registers carries its family's. Why each setting,
+(``warpgym.tasks.registry``) carries its task's, and a task a user registers carries the preset of the task it
+changes (a legged one, the legged tasks'). Why each setting,
 and what it scored: docs/benchmarks.md, "Presets"."""
 
 from __future__ import annotations

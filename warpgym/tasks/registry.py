@@ -21,12 +21,13 @@ from dataclasses import dataclass
 from typing import Callable
 
 from warpgym.tasks.robots import TASKS as ROBOTS
+from warpgym.tasks.robots import LocomotionTask
 from warpgym.tasks.legged import LEGGED, LeggedTask
 from warpgym.tasks.legged.contract import deployment_contract
 from warpgym.tasks.names import imported
 from warpgym.tasks.presets import LEGGED as LEGGED_PRESET
 from warpgym.tasks.presets import PRESETS
-from warpgym.tasks.suite import SUITE
+from warpgym.tasks.suite import SUITE, GymTask
 
 
 @dataclass(frozen=True)
@@ -79,24 +80,26 @@ def _command(module: str, name: str) -> Callable:
     return call
 
 
-def _robot(name: str, episode_length: int, envs: tuple[int, int], iterations: tuple[int, int]) -> TaskEntry:
+def _robot(name: str, episode_length: int, envs: tuple[int, int], iterations: tuple[int, int],
+           preset: str | None = None) -> TaskEntry:
     return TaskEntry(name, "robots", f"warpgym/{name}-v0", episode_length,
                      "warpgym.envs.robots:LocomotionVecEnv", "warpgym.envs.robots:LocomotionEnv", (),
                      physics_flags=True, clip_keys=(), clip_all_worlds=True,
                      draw_clip=_command("warpgym.media.robots", "draw_robot_clip"), training_clips=True,
                      scored_in="native MuJoCo",
-                     reports_speed=True, default_envs=envs, default_iterations=iterations, preset=PRESETS[name],
+                     reports_speed=True, default_envs=envs, default_iterations=iterations,
+                     preset=PRESETS[preset or name],
                      evaluate=_command("warpgym.cli.eval.robots", "evaluate"),
                      bench=_command("warpgym.cli.bench.robots", "bench_robot_task"))
 
 
-def _suite(name: str, episode_length: int) -> TaskEntry:
+def _suite(name: str, episode_length: int, preset: str | None = None) -> TaskEntry:
     return TaskEntry(name, "suite", f"warpgym/{name}", episode_length,
                      "warpgym.envs.suite:SuiteVecEnv", "warpgym.envs.suite:SuiteEnv", (("unit_actions", True),),
                      physics_flags=False, clip_keys=("dof_pos", "dof_vel"), clip_all_worlds=False,
                      draw_clip=_command("warpgym.media.suite", "draw_suite_clip"), training_clips=False,
                      scored_in="Gymnasium's env", reports_speed=False, default_envs=(4096, 64),
-                     default_iterations=(500, 100), preset=PRESETS[name],
+                     default_iterations=(500, 100), preset=PRESETS[preset or name],
                      evaluate=_command("warpgym.cli.eval.suite", "evaluate"),
                      bench=_command("warpgym.cli.bench.suite", "bench_suite_task"))
 
@@ -155,22 +158,33 @@ def task_names(family: str | None = None) -> list[str]:
 
 
 def register(task) -> object:
-    """A task of the user's own (a legged task's ``replace`` with a new ``name``, say, its own terms in its tables)
-    entered as warpgym's own: in the registry under its family's contract, as the Gymnasium id ``warpgym/<name>``,
-    and by name for ``warpgym train --task module:<name>``, play, eval and export. Returns the task. Call it from
-    the module that defines the task; naming a task warpgym has is refused."""
+    """A task of the user's own (a task's ``replace`` with a new ``name``, say, its own terms in its tables) entered
+    as warpgym's own: in the registry under its family's contract, as the Gymnasium id ``warpgym/<name>``, and by
+    name for ``warpgym train --task module:<name>``, play, eval and export (a suite task is judged in Gymnasium's env
+    of the task it changes; a robot's, with the preset and defaults of the built-in task of its robot). Returns the
+    task. Call it from the module that defines the task; naming a task warpgym has is refused."""
     import gymnasium as gym  # noqa: PLC0415
 
-    if not isinstance(task, LeggedTask):
-        raise TypeError(f"register({task!r}): a legged velocity task (a LeggedTask) registers so far; the suite's "
-                        "and the robots' tasks take their changes as keywords of gym.make_vec")
+    if not isinstance(task, (LeggedTask, GymTask, LocomotionTask)):
+        raise TypeError(f"register({task!r}): a task of one of the families (a LeggedTask, a GymTask or a "
+                        "LocomotionTask), made by a built-in task's replace(name=..., ...)")
     name = task.name
-    if name in BUILT_IN:
+    if name in BUILT_IN or name.lower() in {n.lower() for n in BUILT_IN}:
         raise ValueError(f"register: {name!r} is warpgym's own task: give yours a name of its own "
-                         "(task.replace(name='MyGo1-v0', ...))")
+                         f"(task.replace(name='My{name}', ...))")
     task.validate()
-    LEGGED[name] = task
-    entry = REGISTRY[name] = _legged(name, task.episode_length)
+    if isinstance(task, LocomotionTask):
+        like = next(REGISTRY[n] for n in BUILT_IN if REGISTRY[n].family == "robots"
+                    and ROBOTS[n.lower()].robot == task.robot)
+        ROBOTS[name.lower()] = task
+        entry = REGISTRY[name] = _robot(name, task.episode_length, like.default_envs, like.default_iterations,
+                                        preset=like.name)
+    elif isinstance(task, GymTask):
+        SUITE[name] = task
+        entry = REGISTRY[name] = _suite(name, task.episode_length, preset=task.gymnasium_id)
+    else:
+        LEGGED[name] = task
+        entry = REGISTRY[name] = _legged(name, task.episode_length)
     gym.registry.pop(entry.gym_id, None)
     gym.register(id=entry.gym_id, entry_point=entry.single_entry_point, vector_entry_point=entry.vector_entry_point,
                  max_episode_steps=entry.episode_length, kwargs={"task": name})

@@ -34,18 +34,21 @@ def evaluate(args, ckpt: dict, name: str, device: str, env_args: dict, entry) ->
     from warpgym.cli import write_json  # noqa: PLC0415
     from warpgym.envs import make_vec_env  # noqa: PLC0415
     from warpgym.native.suite import v4_tasks, warpgym_policy_episodes  # noqa: PLC0415
-    from warpgym.tasks.suite import SUITE  # noqa: PLC0415
+    from warpgym.tasks.suite import get_suite_task  # noqa: PLC0415
 
     path = args.checkpoint_path
-    if args.env_version == 4 and SUITE[name].v4_observation is None:
+    trained = get_suite_task(name)
+    if args.env_version == 4 and trained.v4_observation is None:
         parser().error(f"--env-version 4: {name}'s v4 observation is not v5's plus entries after it (or v4 needs "
                        f"MuJoCo < 3), so a v5 policy cannot play it; v4 is scored for {v4_tasks()}")
     unit = bool(env_args.get("unit_actions", False))
-    task = SUITE[name]
+    # Gymnasium's env knows Gymnasium's terms only: a task's own rewards and terminations shaped its training, and
+    # both envs score it without them
+    task = trained.gymnasiums_terms_only()
     if env_args.get("max_episode_steps"):
         task = task.replace(episode_length=int(env_args["max_episode_steps"]))
     episodes = args.episodes * len(args.seeds)
-    env = make_vec_env(name, num_envs=episodes, device=device, seed=args.seeds[0], unit_actions=unit,
+    env = make_vec_env(task, num_envs=episodes, device=device, seed=args.seeds[0], unit_actions=unit,
                        max_episode_steps=task.episode_length)
     policy, normalize = policy_from_checkpoint(ckpt, env.num_obs, env.num_actions, torch.device(device))
 
@@ -92,6 +95,10 @@ def evaluate(args, ckpt: dict, name: str, device: str, env_args: dict, entry) ->
     print(f"  Gymnasium's env (gymnasium.make, float64): return {gym_return:.1f} ± {gym['std']:.1f}, "
           f"length {gym['length']:.0f}   per seed: "
           + ", ".join(f"{s['seed']}: {s['return']:.1f}" for s in gym["per_seed"]))
+    own = [*trained.rewards, *trained.terminations]
+    if own:
+        print(f"  both envs score Gymnasium's reward and terminations alone: the task's own terms {own} shaped "
+              "its training only")
     print(f"  warpgym's env (float32, {device}), the same starts: return {ours['eval/return']:.1f} "
           f"± {np.std(ours_r):.1f}, length {ours['eval/length']:.0f}")
     print("  reward terms, mean per episode (Gymnasium | warpgym): " + terms_line(

@@ -4,14 +4,17 @@ files, each a frozen dataclass of every number its kernels read (``base.Locomoti
 from warpgym.tasks.robots.ant import ANT
 from warpgym.tasks.robots.base import LocomotionTask
 from warpgym.tasks.robots.humanoid import HUMANOID
+from warpgym.tasks.names import imported
 
 TASKS: dict[str, LocomotionTask] = {"ant": ANT, "humanoid": HUMANOID}
 
 
 def get_task(name) -> LocomotionTask:
+    """A robots' task by name (any letter case), or ``"module:Name"`` (the module imported first: it registers the
+    task)."""
     if isinstance(name, LocomotionTask):
         return name
-    key = str(name).lower()
+    key = str(imported(name)).lower()
     if key not in TASKS:
         raise ValueError(f"unknown task {name!r}: choose one of {[t.name for t in TASKS.values()]}")
     return TASKS[key]

@@ -1,14 +1,20 @@
-"""The numbers of a locomotion task, in one place. Kernels receive them as a ``LocomotionParams``."""
+"""The numbers of a locomotion task, in one place. Kernels receive them as a ``LocomotionParams``; a task's own
+terms beside Isaac Gym's reward (``rewards``, ``terminations``: tables of ``warpgym.tasks.terms``, empty in the Ant
+and the Humanoid) run in the same step."""
 
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 
 import warp as wp
 
 from kernels.robots.params import LocomotionParams
 from warpgym.sim.physics import Physics
+from warpgym.tasks.terms import Terms
+from warpgym.tasks.terms import validate as validate_terms
+
+TABLES = ("rewards", "terminations")  # the task's own terms, added to Isaac Gym's
 
 
 @dataclass(frozen=True)
@@ -40,6 +46,11 @@ class LocomotionTask:
     # Any root or joint speed above this [m/s or rad/s] is a solver blow-up, not locomotion: the env
     # ends the episode with zero reward and flags it in info["diverged"].
     max_speed: float = 200.0
+    # the task's own reward terms (each ``weight * value`` a step, added to Isaac Gym's reward, replaced by the death
+    # cost as it is, and reported as ``info["reward_<name>"]``) and terminations (beside the fall, without the death
+    # cost), over ``kernels.robots.buffers.RobotState``
+    rewards: Terms = Terms("reward")
+    terminations: Terms = Terms("termination")
 
     @property
     def observe_dof_forces(self) -> bool:
@@ -69,11 +80,15 @@ class LocomotionTask:
         return 12 + per_dof * num_dofs + 6 * num_feet
 
     def replace(self, **changes) -> LocomotionTask:
-        """A copy with these fields changed; ``physics`` may be a dict of the settings to change."""
+        """A copy with these fields changed; ``physics`` may be a dict of the settings to change; ``rewards`` and
+        ``terminations`` take the changes of the terms they name (``warpgym.tasks.terms.Terms.changed``)."""
         values = {name: getattr(self, name) for name in self.__dataclass_fields__}
         unknown = sorted(set(changes) - set(values))
         if unknown:
             raise ValueError(f"unknown task setting(s) {unknown}: choose from {sorted(values)}")
+        for name in TABLES:
+            if name in changes:
+                changes[name] = getattr(self, name).changed(changes[name], f"{self.name}: {name}")
         physics = changes.pop("physics", None)
         if isinstance(physics, dict):
             physics = self.physics.replace(**physics)
@@ -83,7 +98,9 @@ class LocomotionTask:
         return LocomotionTask(**values)
 
     def to_dict(self) -> dict:
-        return asdict(self)
+        """The fields, the physics as a dict; the tables of terms as they are (their functions are code)."""
+        plain = asdict(replace(self, rewards=Terms("reward"), terminations=Terms("termination")))
+        return {**plain, "rewards": self.rewards, "terminations": self.terminations}
 
     def validate(self) -> None:
         if not isinstance(self.episode_length, int) or self.episode_length < 1:
@@ -94,6 +111,16 @@ class LocomotionTask:
             raise ValueError(f"substeps={self.substeps!r} must be a positive integer, e.g. 2")
         if not (0.0 < self.joint_limit_threshold < 1.0):
             raise ValueError(f"joint_limit_threshold={self.joint_limit_threshold!r} must lie in (0, 1)")
+        for name, kind in zip(TABLES, ("reward", "termination")):
+            table = getattr(self, name)
+            if not isinstance(table, Terms) or table.kind != kind:
+                raise ValueError(f"{self.name}: {name}={table!r} must be a table of {kind} terms "
+                                 "(warpgym.tasks.terms.Terms), e.g. {'upright': Reward(func, weight=0.1)}")
+            validate_terms(table, f"{self.name}: {name}")
+
+    def own_terms(self) -> tuple[str, ...]:
+        """The info keys of the task's own reward terms, in its table's order."""
+        return tuple(f"reward_{name}" for name in self.rewards)
 
     def to_warp(self, start_height: float) -> LocomotionParams:
         """The kernels' view of this task: every field the struct shares with it, plus the start pose."""

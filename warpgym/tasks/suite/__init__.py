@@ -12,6 +12,7 @@ from warpgym.tasks.suite.pusher import Pusher
 from warpgym.tasks.suite.reacher import Reacher
 from warpgym.tasks.suite.swimmer import Swimmer
 from warpgym.tasks.suite.walker2d import Walker2d
+from warpgym.tasks.names import imported
 
 SUITE: dict[str, GymTask] = {t.name: t for t in (
     InvertedPendulum(), InvertedDoublePendulum(), Reacher(), Pusher(), Swimmer(), HalfCheetah(), Hopper(),
@@ -19,8 +20,10 @@ SUITE: dict[str, GymTask] = {t.name: t for t in (
 
 
 def get_suite_task(name) -> GymTask:
+    """A suite task by name, or ``"module:Name"`` (the module imported first: it registers the task)."""
     if isinstance(name, GymTask):
         return name
+    name = imported(name)
     if name not in SUITE:
         raise ValueError(f"unknown task {name!r}: Gymnasium's MuJoCo suite here is {list(SUITE)}")
     return SUITE[name]

@@ -3,16 +3,20 @@ Gymnasium's constructor arguments as fields (their defaults are Gymnasium v5's),
 become the kernels' ``GymParams``.
 
 One file per task beside this one holds its fields and ``fill_params``; the kernels
-(``kernels/suite/step.py``, ``kernels/suite/resets.py``) hold the step itself.
+(``kernels/suite/step.py``, ``kernels/suite/resets.py``) hold the step itself. A task's own terms beside
+Gymnasium's (``rewards``, ``terminations``: tables of ``warpgym.tasks.terms``, empty in Gymnasium's tasks) run in
+the same step; Gymnasium's own env, which judges the suite, knows nothing of them.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, fields
+from dataclasses import dataclass, fields, replace
 from typing import ClassVar
 
 from kernels.suite import params as G
+from warpgym.tasks.terms import Terms
+from warpgym.tasks.terms import validate as validate_terms
 
 INF = math.inf
 
@@ -21,7 +25,8 @@ TERM_COLUMNS = {kind: tuple(term.name for term in terms) for kind, terms in G.TE
 MAX_TERMS = G.MAX_TERMS
 
 # Fields of a task that are not Gymnasium constructor arguments
-OWN_FIELDS = ("name", "episode_length", "nconmax", "njmax")
+OWN_FIELDS = ("name", "episode_length", "nconmax", "njmax", "rewards", "terminations")
+TABLES = ("rewards", "terminations")  # the task's own terms, added to Gymnasium's
 
 
 @dataclass(frozen=True)
@@ -32,6 +37,10 @@ class GymTask:
     episode_length: int = 1000  # Gymnasium's TimeLimit (max_episode_steps)
     nconmax: int = 32  # contacts and constraint rows per world MuJoCo Warp makes room for
     njmax: int = 128
+    # the task's own reward terms (each ``weight * value`` a step, added to Gymnasium's reward and reported as
+    # ``info["reward_<name>"]``) and terminations (beside Gymnasium's), over ``kernels.suite.params.SuiteState``
+    rewards: Terms = Terms("reward")
+    terminations: Terms = Terms("termination")
 
     kind: ClassVar[int] = G.FORWARD
     info_keys: ClassVar[tuple[str, ...]] = ()  # the reward terms and info entries Gymnasium's step returns
@@ -57,8 +66,13 @@ class GymTask:
         within seconds. A task whose robot moves off without a forward speed sets it as a class attribute."""
         return self.has_speed
 
+    @property
+    def gymnasium_id(self) -> str:
+        """The Gymnasium task this one is (and is judged in): its class's name, whatever a user's task is called."""
+        return type(self).__dataclass_fields__["name"].default
+
     def version_name(self, version: int) -> str:
-        return self.name.rsplit("-v", 1)[0] + f"-v{version}"
+        return self.gymnasium_id.rsplit("-v", 1)[0] + f"-v{version}"
 
     # ------------------------------------------------------------------ Gymnasium's arguments
     @classmethod
@@ -66,12 +80,17 @@ class GymTask:
         return [f.name for f in fields(cls) if f.name not in OWN_FIELDS]
 
     def replace(self, **changes) -> GymTask:
-        """A copy with Gymnasium constructor arguments (or episode_length, nconmax, njmax) changed."""
+        """A copy with Gymnasium constructor arguments (or episode_length, nconmax, njmax) changed; ``rewards`` and
+        ``terminations`` take the changes of the terms they name (``warpgym.tasks.terms.Terms.changed``)."""
         names = [f.name for f in fields(self)]
         unknown = sorted(set(changes) - set(names) - {"name"})
         if unknown:
             raise ValueError(f"{self.name} has no argument(s) {unknown}: Gymnasium's {self.name} takes "
-                             f"{self.argument_names()} (and warpgym episode_length, nconmax, njmax)")
+                             f"{self.argument_names()} (and warpgym episode_length, nconmax, njmax, and its own "
+                             "terms: rewards, terminations)")
+        for name in TABLES:
+            if name in changes:
+                changes[name] = getattr(self, name).changed(changes[name], f"{self.name}: {name}")
         values = {**{n: getattr(self, n) for n in names}, **changes}
         for name, value in values.items():
             default = getattr(type(self), name, None)
@@ -96,9 +115,23 @@ class GymTask:
                     raise ValueError(f"{self.name}: {f.name}={v!r} holds NaN")
             if isinstance(v, tuple) and (len(v) != 2 or not v[0] <= v[1]):
                 raise ValueError(f"{self.name}: {f.name}={v!r} must be a (low, high) range with low <= high")
+        for name, kind in zip(TABLES, ("reward", "termination")):
+            table = getattr(self, name)
+            if not isinstance(table, Terms) or table.kind != kind:
+                raise ValueError(f"{self.name}: {name}={table!r} must be a table of {kind} terms "
+                                 "(warpgym.tasks.terms.Terms), e.g. {'upright': Reward(func, weight=0.1)}")
+            validate_terms(table, f"{self.name}: {name}")
 
     def to_dict(self) -> dict:
-        return asdict(self)
+        return {f.name: getattr(self, f.name) for f in fields(self)}
+
+    def gymnasiums_terms_only(self) -> GymTask:
+        """This task without its own terms: Gymnasium's reward and terminations alone, as Gymnasium's env scores it."""
+        return replace(self, rewards=Terms("reward"), terminations=Terms("termination"))
+
+    def own_terms(self) -> tuple[str, ...]:
+        """The info keys of the task's own reward terms, in its table's order."""
+        return tuple(f"reward_{name}" for name in self.rewards)
 
     # ------------------------------------------------------------------ the kernels' view
     def params(self, sim) -> G.GymParams:
