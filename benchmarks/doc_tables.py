@@ -90,6 +90,8 @@ BLOCKS = {
     "before-after-events-rest": ("docs/history.md", "benchmarks.speed.before_after",
                                  ["--report", *(f"docs/bench/speed/before_after_events_{r}_2026-12-03.json"
                                                 for r in ("g1_rough", "suite_robots"))], first(1)),
+    "before-after-own-terms": ("docs/history.md", "benchmarks.speed.before_after",
+                               ["--report", "docs/bench/speed/before_after_own_terms_2026-12-03.json"], first(1)),
     "train-modes-hopper": ("docs/history.md", "benchmarks.speed.train_modes",
                            ["--report", "docs/bench/speed/train_modes_hopper_h200_2026-12-03.json"], first(2)),
     "legged-terms": ("docs/tasks.md", "warpgym.tasks.term_tables", [], first(4)),
