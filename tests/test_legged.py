@@ -128,7 +128,7 @@ def test_a_push_changes_the_base_velocity_within_its_ranges():
     the step differs from an unpushed copy's by at most the range's bound."""
     calm = LeggedVecEnv("Go1VelocityFlat-v0", num_envs=8, device="cpu", seed=4, events={"push_robot": None})
     pushed = LeggedVecEnv("Go1VelocityFlat-v0", num_envs=8, device="cpu", seed=4)
-    assert "push_robot_time_left" not in calm.STATE_KEYS  # no push, no timer
+    assert "push_robot_time_left" not in calm.state_keys  # no push, no timer
     calm.reset(seed=4)
     pushed.reset(seed=4)
     state = calm.state()

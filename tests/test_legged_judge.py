@@ -95,7 +95,7 @@ def as_ours(env, recorded: dict) -> dict:
     event (push_robot) push_time_left."""
     renamed = {("push_robot_time_left" if key == "push_time_left" else key): v for key, v in recorded.items()}
     assert "push_robot_time_left" in renamed, "the recording lacks mjlab's push timer"
-    return {key: value for key, value in renamed.items() if key in env.STATE_KEYS}
+    return {key: value for key, value in renamed.items() if key in env.state_keys}
 
 
 def test_one_step_from_mjlabs_state_matches_mjlabs_step(judged):

@@ -286,9 +286,17 @@ def test_an_event_from_a_module_with_postponed_annotations_is_taken(tmp_path, mo
         "    return rng\n\n"
         "@wp.func\n"
         "def no_state(env: LeggedEnv, w: int, rng: wp.uint32) -> float:\n"
-        "    return 0.0\n")
+        "    return 0.0\n\n"
+        "def made(speed):\n"  # a term made by a function: its return type a name of the closure, as Warp reads it
+        "    State = wp.uint32\n"
+        "    @wp.func\n"
+        "    def kick(env: LeggedEnv, w: int, rng: State) -> State:\n"
+        "        env.d.qvel[w, env.r.root_dof] = speed\n"
+        "        return State(rng)\n"
+        "    return kick\n")
     monkeypatch.syspath_prepend(str(tmp_path))
     late = importlib.import_module("late_events")
     assert signature(Event(late.nudge, "reset"), "event", "events['nudge']") is None
     with pytest.raises(TypeError, match="no_state must take and return the random state"):
         signature(Event(late.no_state, "reset"), "event", "events['no_state']")
+    assert signature(Event(late.made(0.1), "reset"), "event", "events['kick']") is None

@@ -177,7 +177,7 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
         reset, startup = self._events["reset"], self._events["startup"]
         self._reset_kernel, self._startup_kernel = reset_kernels(reset.func, reset.params_type, startup.func,
                                                                  startup.params_type)
-        self.STATE_KEYS = self.BASE_STATE_KEYS + tuple(f"{name}_time_left" for name in self._timer_names)
+        self.state_keys = self.BASE_STATE_KEYS + tuple(f"{name}_time_left" for name in self._timer_names)
 
     def _observe_inputs(self) -> list:
         return [self._policy.params, self._policy.arrays, self._critic_obs.params, self._critic_obs.arrays]
@@ -312,8 +312,8 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
                 "env_origin": t(lv.origin), "terrain_normal": t(st.terrain_normal)}
 
     def state(self) -> dict[str, torch.Tensor]:
-        """A copy of every world's state (``STATE_KEYS``; ``foot_friction`` is the foot geoms' (N, G, 3)), and the
-        env's step count."""
+        """A copy of every world's state (``state_keys``: ``BASE_STATE_KEYS`` and a timer per interval event;
+        ``foot_friction`` is the foot geoms' (N, G, 3)), and the env's step count."""
         views = self._state_views()
         out = {k: v.clone() for k, v in views.items() if k != "geom_friction"}
         out["foot_friction"] = views["geom_friction"][:, torch.as_tensor(self.index.foot_geoms).long()].clone()
@@ -321,12 +321,12 @@ class LeggedVecEnv(GraphVecEnv, VectorEnv):
         return out
 
     def write_state(self, state: dict) -> None:
-        """Write worlds' state (any of ``STATE_KEYS``, each for every world, and ``step_count``), as ``state()``
+        """Write worlds' state (any of ``state_keys``, each for every world, and ``step_count``), as ``state()``
         returns it, or as mjlab's env holds it (tests/test_legged_judge.py starts both from one state). A new
         ``body_ipos`` recomputes the model constants derived from it; the next step starts from this state."""
-        unknown = sorted(set(state) - set(self.STATE_KEYS) - {"step_count"})
+        unknown = sorted(set(state) - set(self.state_keys) - {"step_count"})
         if unknown:
-            raise ValueError(f"write_state: no state {unknown}: the keys are {list(self.STATE_KEYS)} and step_count")
+            raise ValueError(f"write_state: no state {unknown}: the keys are {list(self.state_keys)} and step_count")
         views = self._state_views()
         for key, value in state.items():
             if key == "step_count":

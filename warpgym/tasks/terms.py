@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import math
 import re
-import typing
+import inspect
 from collections.abc import Mapping
 from dataclasses import dataclass, fields, replace
 from typing import Any, Callable
@@ -234,6 +234,13 @@ class PerJoint:
         return out.astype(np.float32)
 
 
+def _return_type(func, where: str):
+    """A term's declared return type, string annotations resolved as Warp resolves them when it makes the function
+    (its module's names, then the function's closure's), so a term Warp took is never refused here."""
+    closure = inspect.getclosurevars(func.func).nonlocals
+    return inspect.get_annotations(func.func, eval_str=True, locals=closure).get("return")
+
+
 def signature(term, kind: str, where: str):
     """The parameter struct a term's function takes (None: none), its arguments checked against the kind's form."""
     import warp as wp  # noqa: PLC0415
@@ -246,8 +253,7 @@ def signature(term, kind: str, where: str):
     form = {"observation": "(env, w, i[, params])", "event": "(env, w, rng[, params]) -> rng"}.get(
         kind, "(env, w[, params])")
     # the return type as Warp resolves it: a module with ``from __future__ import annotations`` holds strings
-    if kind == "event" and (len(args) < 3 or args[2][1] is not wp.uint32
-                            or typing.get_type_hints(func.func).get("return") is not wp.uint32):
+    if kind == "event" and (len(args) < 3 or args[2][1] is not wp.uint32 or _return_type(func, where) is not wp.uint32):
         raise TypeError(f"{where}: {func.key} must take and return the random state: an event's function is "
                         f"{form}, rng a wp.uint32")
     if len(args) not in (lead, lead + 1):
