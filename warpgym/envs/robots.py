@@ -21,7 +21,7 @@ from warpgym.envs.graph_env import GraphVecEnv
 from warpgym.envs.single import SingleEnv
 from warpgym.sim.simulator import Sim
 from warpgym.tasks.robots import LocomotionTask, get_task
-from warpgym.tasks.terms import compile_rewards, compile_terminations
+from warpgym.tasks.terms import compile_own_tables
 
 
 # VectorEnv is named again beside GraphVecEnv (which is one): skrl's wrap_env(env) and other learners tell a
@@ -137,9 +137,7 @@ class LocomotionVecEnv(GraphVecEnv, VectorEnv):
     def _own_terms(self, task: LocomotionTask, joints: list[str], dev: str) -> None:
         """The task's own reward and termination terms compiled into its step kernel (tasks without any share one
         kernel), over the state they read (``RobotState``)."""
-        self._rewards = compile_rewards(task.rewards, RobotState, joints, dev, f"{task.name}: rewards")
-        self._terminations = compile_terminations(task.terminations, RobotState, joints, dev,
-                                                  f"{task.name}: terminations")
+        self._rewards, self._terminations = compile_own_tables(task, RobotState, joints, dev)
         self._step_kernel = step_kernel(self._rewards.func, self._rewards.params_type, self._terminations.func,
                                         self._terminations.params_type)
         self._state = state = RobotState()

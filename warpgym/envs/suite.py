@@ -22,7 +22,7 @@ from warpgym.envs.single import SingleEnv
 from warpgym.sim.mjw_sim import MjwSim
 from warpgym.tasks.suite import GymTask, get_suite_task
 from warpgym.tasks.suite.base import MAX_TERMS
-from warpgym.tasks.terms import compile_rewards, compile_terminations
+from warpgym.tasks.terms import compile_own_tables
 
 
 # VectorEnv is named again beside GraphVecEnv (which is one): skrl's wrap_env(env) and other learners tell a
@@ -136,9 +136,7 @@ class SuiteVecEnv(GraphVecEnv, VectorEnv):
         mjm = sim.mjm
         joints = [mujoco.mj_id2name(mjm, mujoco.mjtObj.mjOBJ_JOINT, int(mjm.actuator_trnid[i, 0])) or f"joint{i}"
                   for i in range(mjm.nu)]  # a PerJoint parameter: a value per actuator's joint
-        self._rewards = compile_rewards(task.rewards, SuiteState, joints, dev, f"{task.name}: rewards")
-        self._terminations = compile_terminations(task.terminations, SuiteState, joints, dev,
-                                                  f"{task.name}: terminations")
+        self._rewards, self._terminations = compile_own_tables(task, SuiteState, joints, dev)
         self._step_kernel = step_kernel(self._rewards.func, self._rewards.params_type, self._terminations.func,
                                         self._terminations.params_type)
         self._state = state = SuiteState()

@@ -478,3 +478,30 @@ def compile_events(table: Terms, env_type, joints: list[str], device: str, num_e
             params_type, func, source = event_calls(env_type, mode, terms)
         out[mode] = Compiled(func, params_type, _filled(params_type, sub, where, joints, device), timers, source)
     return out
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# a task's own terms beside its defining project's (the suite's and the robots' tasks)
+
+OWN_TABLES = {"rewards": "reward", "terminations": "termination"}
+
+
+def changed_own_tables(task, changes: dict) -> dict:
+    """``changes`` with each own table it names made from the task's (``Terms.changed``)."""
+    return {k: getattr(task, k).changed(v, f"{task.name}: {k}") if k in OWN_TABLES else v for k, v in changes.items()}
+
+
+def validate_own_tables(task) -> None:
+    """The task's ``rewards`` and ``terminations``: tables of their kind, each term's fields checked."""
+    for name, kind in OWN_TABLES.items():
+        table = getattr(task, name)
+        if not isinstance(table, Terms) or table.kind != kind:
+            raise ValueError(f"{task.name}: {name}={table!r} must be a table of {kind} terms "
+                             "(warpgym.tasks.terms.Terms), e.g. {'upright': Reward(func, weight=0.1)}")
+        validate(table, f"{task.name}: {name}")
+
+
+def compile_own_tables(task, env_type, joints: list[str], device: str) -> tuple[Compiled, Compiled]:
+    """The task's own rewards and terminations as its step kernel takes them, over ``env_type``."""
+    return (compile_rewards(task.rewards, env_type, joints, device, f"{task.name}: rewards"),
+            compile_terminations(task.terminations, env_type, joints, device, f"{task.name}: terminations"))

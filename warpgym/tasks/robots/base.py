@@ -11,10 +11,7 @@ import warp as wp
 
 from kernels.robots.params import LocomotionParams
 from warpgym.sim.physics import Physics
-from warpgym.tasks.terms import Terms
-from warpgym.tasks.terms import validate as validate_terms
-
-TABLES = ("rewards", "terminations")  # the task's own terms, added to Isaac Gym's
+from warpgym.tasks.terms import Terms, changed_own_tables, validate_own_tables
 
 
 @dataclass(frozen=True)
@@ -86,9 +83,7 @@ class LocomotionTask:
         unknown = sorted(set(changes) - set(values))
         if unknown:
             raise ValueError(f"unknown task setting(s) {unknown}: choose from {sorted(values)}")
-        for name in TABLES:
-            if name in changes:
-                changes[name] = getattr(self, name).changed(changes[name], f"{self.name}: {name}")
+        changes = changed_own_tables(self, changes)
         physics = changes.pop("physics", None)
         if isinstance(physics, dict):
             physics = self.physics.replace(**physics)
@@ -111,12 +106,7 @@ class LocomotionTask:
             raise ValueError(f"substeps={self.substeps!r} must be a positive integer, e.g. 2")
         if not (0.0 < self.joint_limit_threshold < 1.0):
             raise ValueError(f"joint_limit_threshold={self.joint_limit_threshold!r} must lie in (0, 1)")
-        for name, kind in zip(TABLES, ("reward", "termination")):
-            table = getattr(self, name)
-            if not isinstance(table, Terms) or table.kind != kind:
-                raise ValueError(f"{self.name}: {name}={table!r} must be a table of {kind} terms "
-                                 "(warpgym.tasks.terms.Terms), e.g. {'upright': Reward(func, weight=0.1)}")
-            validate_terms(table, f"{self.name}: {name}")
+        validate_own_tables(self)
 
     def own_terms(self) -> tuple[str, ...]:
         """The info keys of the task's own reward terms, in its table's order."""

@@ -15,8 +15,7 @@ from dataclasses import dataclass, fields, replace
 from typing import ClassVar
 
 from kernels.suite import params as G
-from warpgym.tasks.terms import Terms
-from warpgym.tasks.terms import validate as validate_terms
+from warpgym.tasks.terms import Terms, changed_own_tables, validate_own_tables
 
 INF = math.inf
 
@@ -26,7 +25,6 @@ MAX_TERMS = G.MAX_TERMS
 
 # Fields of a task that are not Gymnasium constructor arguments
 OWN_FIELDS = ("name", "episode_length", "nconmax", "njmax", "rewards", "terminations")
-TABLES = ("rewards", "terminations")  # the task's own terms, added to Gymnasium's
 
 
 @dataclass(frozen=True)
@@ -88,9 +86,7 @@ class GymTask:
             raise ValueError(f"{self.name} has no argument(s) {unknown}: Gymnasium's {self.name} takes "
                              f"{self.argument_names()} (and warpgym episode_length, nconmax, njmax, and its own "
                              "terms: rewards, terminations)")
-        for name in TABLES:
-            if name in changes:
-                changes[name] = getattr(self, name).changed(changes[name], f"{self.name}: {name}")
+        changes = changed_own_tables(self, changes)
         values = {**{n: getattr(self, n) for n in names}, **changes}
         for name, value in values.items():
             default = getattr(type(self), name, None)
@@ -115,12 +111,7 @@ class GymTask:
                     raise ValueError(f"{self.name}: {f.name}={v!r} holds NaN")
             if isinstance(v, tuple) and (len(v) != 2 or not v[0] <= v[1]):
                 raise ValueError(f"{self.name}: {f.name}={v!r} must be a (low, high) range with low <= high")
-        for name, kind in zip(TABLES, ("reward", "termination")):
-            table = getattr(self, name)
-            if not isinstance(table, Terms) or table.kind != kind:
-                raise ValueError(f"{self.name}: {name}={table!r} must be a table of {kind} terms "
-                                 "(warpgym.tasks.terms.Terms), e.g. {'upright': Reward(func, weight=0.1)}")
-            validate_terms(table, f"{self.name}: {name}")
+        validate_own_tables(self)
 
     def to_dict(self) -> dict:
         return {f.name: getattr(self, f.name) for f in fields(self)}
