@@ -6,11 +6,13 @@ included, seven capsules a foot with condim 3), its knees-bent keyframe, the tor
 penalty on the torso's roll and pitch rates, on the whole body's angular momentum and on self-collisions.
 """
 
+import os
 from dataclasses import dataclass
 
 from kernels.legged import terminations as ends
 from warpgym.tasks.legged.base import CRITIC_OBS, POLICY_OBS, REWARDS, TERMINATIONS, LeggedTask, with_height_scan
 from warpgym.tasks.legged.go1 import ROUGH_CURRICULUM
+from warpgym.tasks.legged.robot_file import Actuator, Collision, RobotFile
 from warpgym.tasks.legged.scan import G1_FOOT_SCAN, TERRAIN_SCAN
 from warpgym.tasks.terms import PerJoint, Termination
 
@@ -69,3 +71,49 @@ class G1VelocityRough(G1VelocityFlat):
     terminations: object = TERMINATIONS.changed({
         "out_of_terrain_bounds": Termination(ends.out_of_terrain_bounds, time_out=True)},
         "G1VelocityRough-v0: terminations")
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# the G1 from its own MJCF file (mjlab's asset zoo: unitree_g1/xmls/g1.xml) and the numbers of mjlab's
+# g1_constants.py: tests/test_robot_file.py builds the flat scene from them and compares it with g1_velocity_flat.xml
+
+
+def two_stage_planetary(rotor: tuple[float, float, float], gears: tuple[float, float, float]) -> float:
+    """The reflected inertia [kg m^2] of a motor behind a two-stage planetary gearbox: each stage's rotor inertia times
+    the square of the reduction after it (``gears[0]`` is the motor's own, 1)."""
+    return rotor[0] * (gears[1] * gears[2]) ** 2 + rotor[1] * gears[2] ** 2 + rotor[2]
+
+
+# Unitree's motors: (rotor inertias, stage reductions, effort limit [N m])
+G1_MOTORS = {
+    "5020": ((0.139e-4, 0.017e-4, 0.169e-4), (1.0, 1 + 46 / 18, 1 + 56 / 16), 25.0),
+    "7520_14": ((0.489e-4, 0.098e-4, 0.533e-4), (1.0, 4.5, 1 + 48 / 22), 88.0),
+    "7520_22": ((0.489e-4, 0.109e-4, 0.738e-4), (1.0, 4.5, 5.0), 139.0),
+    "4010": ((0.068e-4, 0.0, 0.0), (1.0, 5.0, 5.0), 5.0),
+}
+G1_FOOT = r"^(left|right)_foot[1-7]_collision$"
+
+
+def g1_robot_file(zoo: str) -> RobotFile:
+    """The G1's definition, its file under ``zoo`` (mjlab's ``asset_zoo/robots`` folder)."""
+    def motor(joints, kind, pair=1):  # the waist's pitch and roll and each ankle: two motors on one joint
+        rotor, gears, effort = G1_MOTORS[kind]
+        return Actuator(joints, pair * effort, pair * two_stage_planetary(rotor, gears), natural_frequency=10.0,
+                        damping_ratio=2.0)
+
+    return RobotFile(
+        os.path.join(zoo, "unitree_g1", "xmls", "g1.xml"), root="pelvis",
+        feet=("left_ankle_roll_link", "right_ankle_roll_link"), feet_are="subtree", self_collision_sensor=True,
+        base_height=0.76,
+        joint_pos={".*_hip_pitch_joint": -0.312, ".*_knee_joint": 0.669, ".*_ankle_pitch_joint": -0.363,
+                   ".*_elbow_joint": 0.6, "left_shoulder_roll_joint": 0.2, "left_shoulder_pitch_joint": 0.2,
+                   "right_shoulder_roll_joint": -0.2, "right_shoulder_pitch_joint": 0.2},
+        actuators=(motor((".*_elbow_joint", ".*_shoulder_pitch_joint", ".*_shoulder_roll_joint",
+                          ".*_shoulder_yaw_joint", ".*_wrist_roll_joint"), "5020"),
+                   motor((".*_hip_pitch_joint", ".*_hip_yaw_joint", "waist_yaw_joint"), "7520_14"),
+                   motor((".*_hip_roll_joint", ".*_knee_joint"), "7520_22"),
+                   motor((".*_wrist_pitch_joint", ".*_wrist_yaw_joint"), "4010"),
+                   motor(("waist_pitch_joint", "waist_roll_joint"), "5020", pair=2),
+                   motor((".*_ankle_pitch_joint", ".*_ankle_roll_joint"), "5020", pair=2)),
+        collision=Collision((".*_collision",), contype=1, conaffinity=1, condim={G1_FOOT: 3, ".*_collision": 1},
+                            priority={G1_FOOT: 1, ".*": 0}, friction={G1_FOOT: (0.6,)}))

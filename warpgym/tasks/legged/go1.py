@@ -6,11 +6,13 @@ and their own friction, position actuators of 10 Hz and damping ratio 2, ellipti
 friction randomised per axis, the trunk's centre of mass offset.
 """
 
+import os
 from dataclasses import dataclass, replace
 
 from kernels.legged import events as ev
 from kernels.legged import terminations as ends
 from warpgym.tasks.legged.base import CRITIC_OBS, EVENTS, POLICY_OBS, REWARDS, TERMINATIONS, LeggedTask, with_height_scan
+from warpgym.tasks.legged.robot_file import Actuator, Collision, RobotFile
 from warpgym.tasks.legged.scan import GO1_FOOT_SCAN, TERRAIN_SCAN
 from warpgym.tasks.legged.terrain import ROUGH
 from warpgym.tasks.terms import Event, PerJoint, Termination, Terms
@@ -89,3 +91,27 @@ class Go1VelocityRough(Go1VelocityFlat):
     terrain: object = ROUGH_CURRICULUM
     height_scan: object = TERRAIN_SCAN
     foot_scan: object = GO1_FOOT_SCAN
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# the Go1 from its own MJCF file (mjlab's asset zoo: unitree_go1/xmls/go1.xml) and the numbers of mjlab's
+# go1_constants.py: tests/test_robot_file.py builds the flat scene from them and compares it with go1_velocity_flat.xml
+
+GO1_ROTOR_INERTIA = 0.000111842  # [kg m^2], Unitree's URDF
+GO1_FOOT = "^[FR][LR]_foot_collision$"
+GO1_PHYSICS = {"cone": "elliptic", "impratio": 10.0}  # the Go1's tasks' changes to mjlab's options
+
+
+def go1_robot_file(zoo: str) -> RobotFile:
+    """The Go1's definition, its file under ``zoo`` (mjlab's ``asset_zoo/robots`` folder)."""
+    def motor(joints, gear, effort):
+        return Actuator(joints, effort, GO1_ROTOR_INERTIA * gear * gear, natural_frequency=10.0, damping_ratio=2.0)
+
+    return RobotFile(
+        os.path.join(zoo, "unitree_go1", "xmls", "go1.xml"), root="trunk",
+        feet=tuple(f"{f}_foot_collision" for f in FEET), base_height=0.278,
+        joint_pos={".*thigh_joint": 0.9, ".*calf_joint": -1.8, ".*R_hip_joint": 0.1, ".*L_hip_joint": -0.1},
+        actuators=(motor((".*_hip_joint", ".*_thigh_joint"), 6.0, 23.7), motor(".*_calf_joint", 9.0, 35.55)),
+        collision=Collision((r".*_collision\d*",), contype=1, conaffinity=1,
+                            condim={GO1_FOOT: 6, r".*_collision\d*": 1}, priority={GO1_FOOT: 1, ".*": 0},
+                            friction={GO1_FOOT: (1.0, 5e-3, 5e-4)}, solref=(0.01, 1.0)))

@@ -1,0 +1,153 @@
+"""A legged robot's scene built from its own MJCF file (warpgym.tasks.legged.robot_file): the Go1's and the G1's,
+from the raw files of mjlab's asset zoo and the numbers of its configs, are MuJoCo's compile of the committed scenes
+field by field; a small robot of the test's own checks the derived gains, the standing keyframe and the refusals."""
+
+import importlib.util
+import os
+
+import numpy as np
+import pytest
+
+mujoco = pytest.importorskip("mujoco")
+
+from warpgym.tasks.legged.robot_file import Actuator, Collision, RobotFile, build_scene  # noqa: E402
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+ASSETS = os.path.join(ROOT, "warpgym", "tasks", "legged", "assets")
+
+
+def mjlab_zoo() -> str | None:
+    """mjlab's ``asset_zoo/robots`` folder: ``WARPGYM_MJLAB_ROBOTS`` (CI points it into mjlab's own environment), or
+    an installed mjlab's (found without importing it)."""
+    if os.environ.get("WARPGYM_MJLAB_ROBOTS"):
+        return os.environ["WARPGYM_MJLAB_ROBOTS"]
+    spec = importlib.util.find_spec("mjlab")
+    return os.path.join(os.path.dirname(spec.origin), "asset_zoo", "robots") if spec and spec.origin else None
+
+
+def differences(ref, built) -> list[str]:
+    """Every array of MuJoCo's model, its options, view and statistics, and the names, that differ."""
+    out = []
+    for name in dir(ref):
+        a = getattr(ref, name, None)
+        if name.startswith("_") or not isinstance(a, np.ndarray):
+            continue
+        b = getattr(built, name)
+        if a.shape != b.shape:
+            out.append(f"{name}: shape {a.shape} against {b.shape}")
+        elif name.startswith(("name_", "names")):
+            continue
+        elif a.size and not np.allclose(a, b, rtol=1e-5, atol=1e-6):  # the committed file rounds to 6 digits
+            out.append(f"{name}: differs by up to {np.abs(a.astype(float) - b.astype(float)).max():.3g}")
+    for group in ("opt", "vis", "stat"):
+        out += [f"{group}.{n}" for n in struct_fields(getattr(ref, group), getattr(built, group))]
+    for kind in (mujoco.mjtObj.mjOBJ_BODY, mujoco.mjtObj.mjOBJ_JOINT, mujoco.mjtObj.mjOBJ_GEOM,
+                 mujoco.mjtObj.mjOBJ_SITE, mujoco.mjtObj.mjOBJ_ACTUATOR, mujoco.mjtObj.mjOBJ_SENSOR):
+        count = {mujoco.mjtObj.mjOBJ_BODY: "nbody", mujoco.mjtObj.mjOBJ_JOINT: "njnt", mujoco.mjtObj.mjOBJ_GEOM: "ngeom",
+                 mujoco.mjtObj.mjOBJ_SITE: "nsite", mujoco.mjtObj.mjOBJ_ACTUATOR: "nu",
+                 mujoco.mjtObj.mjOBJ_SENSOR: "nsensor"}[kind]
+        names = [[mujoco.mj_id2name(m, kind, i) for i in range(getattr(m, count))] for m in (ref, built)]
+        if names[0] != names[1]:
+            out.append(f"{count} names: {sorted(set(names[0]) ^ set(names[1]))[:6]} or their order")
+    return out
+
+
+def struct_fields(a, b, prefix="") -> list[str]:
+    out = []
+    for n in dir(a):
+        x = getattr(a, n)
+        if n.startswith("_") or callable(x):
+            continue
+        if isinstance(x, (int, float, np.ndarray)):
+            if not np.allclose(np.asarray(x, float), np.asarray(getattr(b, n), float), rtol=1e-5, atol=1e-7):
+                out.append(f"{prefix}{n}: {x} against {getattr(b, n)}")
+        else:
+            out += struct_fields(x, getattr(b, n), f"{prefix}{n}.")
+    return out
+
+
+@pytest.mark.parametrize("robot, scene", [("go1", "go1_velocity_flat.xml"), ("g1", "g1_velocity_flat.xml")])
+def test_the_go1_and_g1_from_their_own_files_compile_to_the_committed_scenes(robot, scene):
+    zoo = mjlab_zoo()
+    if zoo is None or not os.path.isdir(zoo):
+        pytest.skip("mjlab's asset zoo is not here (CI's mjlab stage sets WARPGYM_MJLAB_ROBOTS)")
+    from warpgym.tasks.legged.g1 import g1_robot_file
+    from warpgym.tasks.legged.go1 import GO1_PHYSICS, go1_robot_file
+
+    definition, physics = {"go1": (go1_robot_file(zoo), GO1_PHYSICS), "g1": (g1_robot_file(zoo), {})}[robot]
+    built = build_scene(definition, physics).compile()
+    ref = mujoco.MjModel.from_xml_path(os.path.join(ASSETS, scene))
+    assert differences(ref, built) == []
+    # what a difference would look like: one actuator's effort limit
+    other = build_scene(RobotFile(**{**definition.__dict__, "actuators": (
+        Actuator(**{**definition.actuators[0].__dict__, "effort_limit": 20.0}), *definition.actuators[1:])}),
+        physics).compile()
+    assert any(d.startswith("actuator_forcerange") for d in differences(ref, other))
+
+
+TOY = """<mujoco model="toy">
+  <worldbody>
+    <body name="base" pos="0 0 0.5">
+      <freejoint name="root"/>
+      <geom name="base_collision" type="box" size="0.1 0.05 0.05" mass="2"/>
+      <geom type="box" size="0.11 0.06 0.06" contype="0" conaffinity="0" group="2"/>
+      <body name="leg" pos="0 0 -0.05">
+        <joint name="hip" axis="0 1 0" range="-1 1"/>
+        <geom name="leg_collision" type="capsule" fromto="0 0 0 0 0 -0.2" size="0.02" mass="0.3"/>
+        <body name="shin" pos="0 0 -0.2">
+          <joint name="knee" axis="0 1 0" range="-2 0"/>
+          <geom name="foot_collision" type="sphere" pos="0 0 -0.2" size="0.025" mass="0.1"/>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+
+@pytest.fixture
+def toy(tmp_path):
+    path = tmp_path / "toy.xml"
+    path.write_text(TOY)
+    return RobotFile(str(path), root="base", feet=("foot_collision",), base_height=0.42,
+                     joint_pos={"knee": -0.6}, actuators=(Actuator("hip|knee", 10.0, 0.01, natural_frequency=5.0,
+                                                                   damping_ratio=1.5),),
+                     collision=Collision((".*_collision",), condim={"foot_collision": 6, ".*": 1}))
+
+
+def test_gains_come_from_the_reflected_inertia_and_the_pose_from_the_definition(toy):
+    m = build_scene(toy).compile()
+    w = 2 * np.pi * 5.0
+    kp, kd = 0.01 * w * w, 2 * 1.5 * 0.01 * w
+    np.testing.assert_allclose(m.actuator_gainprm[:, 0], kp, rtol=1e-6)
+    np.testing.assert_allclose(m.actuator_biasprm[:, :3], [[0, -kp, -kd]] * 2, rtol=1e-6)
+    np.testing.assert_allclose(m.dof_armature[6:], 0.01)
+    # the control range is where the force saturates at the joint's limits: range -+ effort / stiffness
+    np.testing.assert_allclose(m.actuator_ctrlrange[1], [-2 - 10 / kp, 0 + 10 / kp], rtol=1e-6)
+    assert not m.actuator_ctrllimited.any() and m.actuator_forcelimited.all()
+    np.testing.assert_allclose(m.key_qpos[0], [0, 0, 0.42, 1, 0, 0, 0, 0.0, -0.6])
+    np.testing.assert_allclose(m.key_ctrl[0], [0.0, -0.6])
+    # the visual box is gone; the collision policy: the foot condim 6, the rest 1, nothing else collides
+    names = [mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_GEOM, g) for g in range(m.ngeom)]
+    assert names == ["terrain", "robot/base_collision", "robot/leg_collision", "robot/foot_collision"]
+    assert list(m.geom_condim[1:]) == [1, 1, 6]
+    assert [mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_SENSOR, s) for s in range(m.nsensor)] == [
+        "feet_ground_contact_foot_collision_found", "feet_ground_contact_foot_collision_force"]
+
+
+@pytest.mark.parametrize("change, says", [
+    ({"file": "/nowhere/robot.xml"}, "does not exist"),
+    ({"root": "torso"}, "no body 'torso' to be the base; its bodies are ['base', 'leg', 'shin']"),
+    ({"feet": ("toe",)}, "no foot geom(s) ['toe']"),
+    ({"actuators": (Actuator("ankle", 5.0, 0.01, 1.0, 0.1),)}, "matches no joint"),
+    ({"actuators": ()}, "no actuators"),
+    ({"actuators": (Actuator("hip|knee", 5.0),)}, "give stiffness and damping, or an armature > 0"),
+    ({"actuators": (Actuator("hip|knee", 5.0, stiffness=1.0, damping=0.1), Actuator("knee", 5.0, stiffness=1.0,
+                                                                                      damping=0.1))},
+     "matches two actuators"),
+    ({"feet_are": "hoof"}, "feet_are='hoof'"),
+])
+def test_a_wrong_definition_is_one_line_naming_the_value(toy, change, says):
+    with pytest.raises(ValueError) as e:
+        build_scene(RobotFile(**{**toy.__dict__, **change}))
+    assert says in str(e.value) and "\n" not in str(e.value)
