@@ -66,22 +66,29 @@ def struct_fields(a, b, prefix="") -> list[str]:
     return out
 
 
-@pytest.mark.parametrize("robot, scene", [("go1", "go1_velocity_flat.xml"), ("g1", "g1_velocity_flat.xml")])
-def test_the_go1_and_g1_from_their_own_files_compile_to_the_committed_scenes(robot, scene):
+@pytest.mark.parametrize("scene", ["go1_velocity_flat", "g1_velocity_flat", "go1_velocity_rough", "g1_velocity_rough"])
+def test_the_go1_and_g1_from_their_own_files_compile_to_the_committed_scenes(scene):
+    """Each of the four committed scenes, rebuilt: the robot's definition, its task's options, the ground (a floor or
+    an empty terrain body) and the contact sensors its task reads."""
     zoo = mjlab_zoo()
     if zoo is None or not os.path.isdir(zoo):
         pytest.skip("mjlab's asset zoo is not here (CI's mjlab stage sets WARPGYM_MJLAB_ROBOTS)")
     from warpgym.tasks.legged.g1 import g1_robot_file
-    from warpgym.tasks.legged.go1 import GO1_PHYSICS, go1_robot_file
+    from warpgym.tasks.legged.go1 import GO1_PHYSICS, GO1_ROUGH_TOUCHES, go1_robot_file
 
-    definition, physics = {"go1": (go1_robot_file(zoo), GO1_PHYSICS), "g1": (g1_robot_file(zoo), {})}[robot]
-    built = build_scene(definition, physics).compile()
-    ref = mujoco.MjModel.from_xml_path(os.path.join(ASSETS, scene))
+    rough = scene.endswith("rough")
+    go1 = scene.startswith("go1")
+    definition = go1_robot_file(zoo) if go1 else g1_robot_file(zoo)
+    physics = {**(GO1_PHYSICS if go1 else {}), **({"ccd_iterations": 500} if rough else {})}
+    args = dict(physics=physics, floor=not rough, self_collision=rough or not go1,
+                touches=GO1_ROUGH_TOUCHES if go1 and rough else ())
+    built = build_scene(definition, **args).compile()
+    ref = mujoco.MjModel.from_xml_path(os.path.join(ASSETS, f"{scene}.xml"))
     assert differences(ref, built) == []
     # what a difference would look like: one actuator's effort limit
     other = build_scene(RobotFile(**{**definition.__dict__, "actuators": (
         Actuator(**{**definition.actuators[0].__dict__, "effort_limit": 20.0}), *definition.actuators[1:])}),
-        physics).compile()
+        **args).compile()
     assert any(d.startswith("actuator_forcerange") for d in differences(ref, other))
 
 
@@ -151,3 +158,15 @@ def test_a_wrong_definition_is_one_line_naming_the_value(toy, change, says):
     with pytest.raises(ValueError) as e:
         build_scene(RobotFile(**{**toy.__dict__, **change}))
     assert says in str(e.value) and "\n" not in str(e.value)
+
+
+def test_rough_ground_takes_an_empty_terrain_body_and_the_touch_sensors_a_task_reads(toy):
+    m = build_scene(toy, floor=False, self_collision=True, touches=(("leg_touch", ("leg_.*",)),)).compile()
+    assert m.ngeom == 3 and mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "terrain") == 1  # no plane
+    names = [mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_SENSOR, s) for s in range(m.nsensor)]
+    assert names[2:] == ["self_collision_base_found", "self_collision_base_force", "leg_touch_leg_collision_found",
+                         "leg_touch_leg_collision_force"]
+    assert list(m.sensor_intprm[4:, 1]) == [0, 0]  # every contact of the group, not their net force
+    with pytest.raises(ValueError, match=r"touches 'shin_touch': no geom of .* matches \['shin_.*'\]"):
+        build_scene(toy, touches=(("shin_touch", ("shin_.*",)),))
+

@@ -103,8 +103,7 @@ def g1_robot_file(zoo: str) -> RobotFile:
 
     return RobotFile(
         os.path.join(zoo, "unitree_g1", "xmls", "g1.xml"), root="pelvis",
-        feet=("left_ankle_roll_link", "right_ankle_roll_link"), feet_are="subtree", self_collision_sensor=True,
-        base_height=0.76,
+        feet=("left_ankle_roll_link", "right_ankle_roll_link"), feet_are="subtree", base_height=0.76,
         joint_pos={".*_hip_pitch_joint": -0.312, ".*_knee_joint": 0.669, ".*_ankle_pitch_joint": -0.363,
                    ".*_elbow_joint": 0.6, "left_shoulder_roll_joint": 0.2, "left_shoulder_pitch_joint": 0.2,
                    "right_shoulder_roll_joint": -0.2, "right_shoulder_pitch_joint": 0.2},

@@ -115,3 +115,9 @@ def go1_robot_file(zoo: str) -> RobotFile:
         collision=Collision((r".*_collision\d*",), contype=1, conaffinity=1,
                             condim={GO1_FOOT: 6, r".*_collision\d*": 1}, priority={GO1_FOOT: 1, ".*": 0},
                             friction={GO1_FOOT: (1.0, 5e-3, 5e-4)}, solref=(0.01, 1.0)))
+
+
+# the rough task's contact sensors beyond the feet's, in mjlab's order (its unitree_go1_rough_env_cfg)
+GO1_ROUGH_TOUCHES = (("thigh_ground_touch", (r"[FR][LR]_thigh_collision\d",)),
+                     ("shank_ground_touch", (r"[FR][LR]_calf_collision\d",)),
+                     ("trunk_ground_touch", ("trunk_collision", "head_collision")))

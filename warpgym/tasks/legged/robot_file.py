@@ -1,13 +1,14 @@
 """A legged robot from its own MJCF file: the scene a velocity task steps, built with MuJoCo's MjSpec from the file and
 a few numbers, the way mjlab's entity and scene configs build theirs.
 
-A ``RobotFile`` names the file, the root body, the feet's collision geoms, the standing pose, the actuators (PD
-position targets: stiffness and damping given, or derived from the reflected inertia, a natural frequency and a
-damping ratio) and what collides. ``build_scene`` attaches the robot under the ``robot/`` prefix beside a floor body
-named ``terrain``, keeps its collision geometry (visual meshes are dropped: the scene is for stepping), applies the
-collision policy, adds a position actuator per actuated joint and the feet's contact sensors against the ground, and
-writes the standing pose as the keyframe. MuJoCo's compile of the result is the model; tests/test_robot_file.py
-checks the Go1's against the scene committed from mjlab's environment, field by field.
+A ``RobotFile`` names the file, the root body, the feet (collision geoms, or bodies' subtrees), the standing pose,
+the actuators (PD position targets: stiffness and damping given, or derived from the reflected inertia, a natural
+frequency and a damping ratio) and what collides. ``build_scene`` attaches the robot under the ``robot/`` prefix
+beside a body named ``terrain`` (a floor, or empty for the generated ground), keeps its collision geometry (visual
+meshes are dropped: the scene is for stepping), applies the collision policy, adds a position actuator per actuated
+joint and the contact sensors the task reads, and writes the standing pose as the keyframe. MuJoCo's compile of the
+result is the model; tests/test_robot_file.py checks the Go1's and the G1's against the scenes committed from
+mjlab's environment, field by field.
 """
 
 from __future__ import annotations
@@ -80,7 +81,6 @@ class RobotFile:
     actuators: tuple[Actuator, ...] = ()
     collision: Collision | None = None  # None: the file's own contact settings
     feet_are: str = "geom"  # "geom": each foot one collision geom; "subtree": a body and what hangs from it
-    self_collision_sensor: bool = False  # a contact sensor of the robot's subtree with itself (mjlab's humanoids)
 
     def __hash__(self):
         return hash((self.file, self.root, self.feet, self.base_height, tuple(self.joint_pos.items())))
@@ -150,10 +150,14 @@ def _collide(spec, policy: Collision) -> None:
                 target[: len(value)] = value
 
 
-def build_scene(robot: RobotFile, physics: dict | None = None):
-    """The velocity task's scene on flat ground as an ``MjSpec``: MuJoCo's options (``PHYSICS``, changed by
-    ``physics``), a floor body ``terrain``, the robot under ``robot/``, its actuators, the feet's contact sensors, the
-    standing keyframe; lit and coloured as mjlab's scenes are."""
+def build_scene(robot: RobotFile, physics: dict | None = None, floor: bool = True, self_collision: bool = False,
+                touches: tuple = ()):
+    """A velocity task's scene as an ``MjSpec``: MuJoCo's options (``PHYSICS``, changed by ``physics``), a body
+    ``terrain`` (with a floor plane, or empty for the generated ground to fill), the robot under ``robot/``, its
+    actuators, the standing keyframe; lit and coloured as mjlab's scenes are. Its contact sensors, in mjlab's order:
+    each foot's with the ground (``feet_ground_contact_<foot>_found`` and ``_force``, the net force), the robot's
+    with itself (``self_collision``: ``self_collision_<root>_...``), and each group of ``touches``, ``(name, geom
+    patterns)``, a sensor of each matching geom with the ground (``<name>_<geom>_...``)."""
     import mujoco  # noqa: PLC0415
     import numpy as np  # noqa: PLC0415
 
@@ -164,10 +168,12 @@ def build_scene(robot: RobotFile, physics: dict | None = None):
     _look(scene)
     scene.worldbody.add_light(name="sun", pos=[0, 0, 1.5], dir=[0, 0, -1], type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL)
     terrain = scene.worldbody.add_body(name="terrain")
-    terrain.add_geom(name="terrain", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.01], material="groundplane")
+    if floor:
+        terrain.add_geom(name="terrain", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.01], material="groundplane")
     part = robot_spec(robot)
     joints = [j for j in part.joints if j.type != mujoco.mjtJoint.mjJNT_FREE]
     chosen = _add_actuators(part, robot, joints)
+    geom_names = [g.name for g in part.geoms]  # before the attach prefixes them
     # the standing pose, read before the attach renames the joints
     pose = {j.name: float(next((v for p, v in robot.joint_pos.items() if _full(p, j.name)), 0.0)) for j in joints}
     qpos = [0.0, 0.0, robot.base_height, 1.0, 0.0, 0.0, 0.0] + [pose[j.name] for j in joints]
@@ -179,10 +185,19 @@ def build_scene(robot: RobotFile, physics: dict | None = None):
         for data, tag in ((found, "found"), (force, "force")):
             _contact_sensor(scene, f"feet_ground_contact_{foot}_{tag}", kind, PREFIX + foot, mujoco.mjtObj.mjOBJ_BODY,
                             "terrain", data, NETFORCE)
-    if robot.self_collision_sensor:
+    if self_collision:
         for data, tag in ((found, "found"), (force, "force")):
             _contact_sensor(scene, f"self_collision_{robot.root}_{tag}", mujoco.mjtObj.mjOBJ_XBODY, PREFIX + robot.root,
                             mujoco.mjtObj.mjOBJ_XBODY, PREFIX + robot.root, data, 0)
+    for name, patterns in touches:
+        hits = [g for g in geom_names if any(_full(p, g) for p in patterns)]
+        if not hits:
+            raise ValueError(f"touches {name!r}: no geom of {robot.file} matches {list(patterns)}; its named geoms are "
+                             f"{[g for g in geom_names if g]}")
+        for geom in hits:
+            for data, tag in ((found, "found"), (force, "force")):
+                _contact_sensor(scene, f"{name}_{geom}_{tag}", mujoco.mjtObj.mjOBJ_GEOM, PREFIX + geom,
+                                mujoco.mjtObj.mjOBJ_BODY, "terrain", data, 0)
     scene.add_key(name="init_state", qpos=np.array(qpos), ctrl=np.array(ctrl))
     return scene
 
