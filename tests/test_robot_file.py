@@ -1,6 +1,7 @@
 """A legged robot's scene built from its own MJCF file (warpgym.tasks.legged.robot_file): the Go1's and the G1's,
-from the raw files of mjlab's asset zoo and the numbers of its configs, are MuJoCo's compile of the committed scenes
-field by field; a small robot of the test's own checks the derived gains, the standing keyframe and the refusals."""
+from the raw files of mjlab's asset zoo (committed without their meshes) and the numbers of its configs, are MuJoCo's
+compile of the committed scenes field by field; a small robot of the test's own checks the derived gains, the
+standing keyframe and the refusals."""
 
 import importlib.util
 import os
@@ -68,17 +69,15 @@ def struct_fields(a, b, prefix="") -> list[str]:
 
 @pytest.mark.parametrize("scene", ["go1_velocity_flat", "g1_velocity_flat", "go1_velocity_rough", "g1_velocity_rough"])
 def test_the_go1_and_g1_from_their_own_files_compile_to_the_committed_scenes(scene):
-    """Each of the four committed scenes, rebuilt: the robot's definition, its task's options, the ground (a floor or
-    an empty terrain body) and the contact sensors its task reads."""
-    zoo = mjlab_zoo()
-    if zoo is None or not os.path.isdir(zoo):
-        pytest.skip("mjlab's asset zoo is not here (CI's mjlab stage sets WARPGYM_MJLAB_ROBOTS)")
+    """Each of the four committed scenes, rebuilt from the robot's own file (committed without its meshes): the
+    robot's definition, its task's options, the ground (a floor or an empty terrain body) and the contact sensors its
+    task reads."""
     from warpgym.tasks.legged.g1 import g1_robot_file
     from warpgym.tasks.legged.go1 import GO1_PHYSICS, GO1_ROUGH_TOUCHES, go1_robot_file
 
     rough = scene.endswith("rough")
     go1 = scene.startswith("go1")
-    definition = go1_robot_file(zoo) if go1 else g1_robot_file(zoo)
+    definition = go1_robot_file() if go1 else g1_robot_file()
     physics = {**(GO1_PHYSICS if go1 else {}), **({"ccd_iterations": 500} if rough else {})}
     args = dict(physics=physics, floor=not rough, self_collision=rough or not go1,
                 touches=GO1_ROUGH_TOUCHES if go1 and rough else ())
@@ -90,6 +89,17 @@ def test_the_go1_and_g1_from_their_own_files_compile_to_the_committed_scenes(sce
         Actuator(**{**definition.actuators[0].__dict__, "effort_limit": 20.0}), *definition.actuators[1:])}),
         **args).compile()
     assert any(d.startswith("actuator_forcerange") for d in differences(ref, other))
+
+
+@pytest.mark.parametrize("robot", ["go1", "g1"])
+def test_the_committed_robot_files_are_mjlabs_asset_zoos(robot):
+    """assets/unitree_<robot>.xml is the file mjlab's wheel ships, but for its first line (CI's mjlab stage)."""
+    zoo = mjlab_zoo()
+    if zoo is None or not os.path.isdir(zoo):
+        pytest.skip("mjlab's asset zoo is not here (CI's mjlab stage sets WARPGYM_MJLAB_ROBOTS)")
+    ours = open(os.path.join(ASSETS, f"unitree_{robot}.xml")).read().split("\n", 1)
+    assert ours[0].startswith("<!-- MuJoCo Menagerie's Unitree")
+    assert ours[1] == open(os.path.join(zoo, f"unitree_{robot}", "xmls", f"{robot}.xml")).read()
 
 
 TOY = """<mujoco model="toy">

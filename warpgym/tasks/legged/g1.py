@@ -74,8 +74,9 @@ class G1VelocityRough(G1VelocityFlat):
 
 
 # ---------------------------------------------------------------------------------------------------------------
-# the G1 from its own MJCF file (mjlab's asset zoo: unitree_g1/xmls/g1.xml) and the numbers of mjlab's
-# g1_constants.py: tests/test_robot_file.py builds the flat scene from them and compares it with g1_velocity_flat.xml
+# the G1 from its own MJCF file (assets/unitree_g1.xml: mjlab's asset zoo's unitree_g1/xmls/g1.xml) and the numbers
+# of mjlab's g1_constants.py: tests/test_robot_file.py builds the scenes from them and compares them with
+# g1_velocity_flat.xml and g1_velocity_rough.xml
 
 
 def two_stage_planetary(rotor: tuple[float, float, float], gears: tuple[float, float, float]) -> float:
@@ -94,15 +95,15 @@ G1_MOTORS = {
 G1_FOOT = r"^(left|right)_foot[1-7]_collision$"
 
 
-def g1_robot_file(zoo: str) -> RobotFile:
-    """The G1's definition, its file under ``zoo`` (mjlab's ``asset_zoo/robots`` folder)."""
+def g1_robot_file(file: str | None = None) -> RobotFile:
+    """The G1's definition; ``file``: its MJCF (default: the one beside the tasks' scenes)."""
     def motor(joints, kind, pair=1):  # the waist's pitch and roll and each ankle: two motors on one joint
         rotor, gears, effort = G1_MOTORS[kind]
         return Actuator(joints, pair * effort, pair * two_stage_planetary(rotor, gears), natural_frequency=10.0,
                         damping_ratio=2.0)
 
     return RobotFile(
-        os.path.join(zoo, "unitree_g1", "xmls", "g1.xml"), root="pelvis",
+        file or os.path.join(os.path.dirname(__file__), "assets", "unitree_g1.xml"), root="pelvis",
         feet=("left_ankle_roll_link", "right_ankle_roll_link"), feet_are="subtree", base_height=0.76,
         joint_pos={".*_hip_pitch_joint": -0.312, ".*_knee_joint": 0.669, ".*_ankle_pitch_joint": -0.363,
                    ".*_elbow_joint": 0.6, "left_shoulder_roll_joint": 0.2, "left_shoulder_pitch_joint": 0.2,

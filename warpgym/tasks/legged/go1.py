@@ -94,21 +94,22 @@ class Go1VelocityRough(Go1VelocityFlat):
 
 
 # ---------------------------------------------------------------------------------------------------------------
-# the Go1 from its own MJCF file (mjlab's asset zoo: unitree_go1/xmls/go1.xml) and the numbers of mjlab's
-# go1_constants.py: tests/test_robot_file.py builds the flat scene from them and compares it with go1_velocity_flat.xml
+# the Go1 from its own MJCF file (assets/unitree_go1.xml: mjlab's asset zoo's unitree_go1/xmls/go1.xml) and the
+# numbers of mjlab's go1_constants.py: tests/test_robot_file.py builds the scenes from them and compares them with
+# go1_velocity_flat.xml and go1_velocity_rough.xml
 
 GO1_ROTOR_INERTIA = 0.000111842  # [kg m^2], Unitree's URDF
 GO1_FOOT = "^[FR][LR]_foot_collision$"
 GO1_PHYSICS = {"cone": "elliptic", "impratio": 10.0}  # the Go1's tasks' changes to mjlab's options
 
 
-def go1_robot_file(zoo: str) -> RobotFile:
-    """The Go1's definition, its file under ``zoo`` (mjlab's ``asset_zoo/robots`` folder)."""
+def go1_robot_file(file: str | None = None) -> RobotFile:
+    """The Go1's definition; ``file``: its MJCF (default: the one beside the tasks' scenes)."""
     def motor(joints, gear, effort):
         return Actuator(joints, effort, GO1_ROTOR_INERTIA * gear * gear, natural_frequency=10.0, damping_ratio=2.0)
 
     return RobotFile(
-        os.path.join(zoo, "unitree_go1", "xmls", "go1.xml"), root="trunk",
+        file or os.path.join(os.path.dirname(__file__), "assets", "unitree_go1.xml"), root="trunk",
         feet=tuple(f"{f}_foot_collision" for f in FEET), base_height=0.278,
         joint_pos={".*thigh_joint": 0.9, ".*calf_joint": -1.8, ".*R_hip_joint": 0.1, ".*L_hip_joint": -0.1},
         actuators=(motor((".*_hip_joint", ".*_thigh_joint"), 6.0, 23.7), motor(".*_calf_joint", 9.0, 35.55)),
