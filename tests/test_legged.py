@@ -25,12 +25,13 @@ def go1():
 
 def test_the_tasks_are_in_the_registry_and_gymnasium():
     assert task_names("legged") == ["Go1VelocityFlat-v0", "G1VelocityFlat-v0", "Go1VelocityRough-v0",
-                                    "G1VelocityRough-v0"]
+                                    "G1VelocityRough-v0", "VelocityFlat-v0", "VelocityRough-v0"]
     for name, task in LEGGED.items():
         entry = task_entry(name)
         assert entry.family == "legged" and entry.gym_id == f"warpgym/{name}" and entry.episode_length == 1000
         ground = "Rough" if "Rough" in name else "Flat"
-        assert task.mirrors == f"Mjlab-Velocity-{ground}-Unitree-{name.split('Velocity')[0]}"
+        robot = name.split("Velocity")[0]
+        assert task.mirrors == f"Mjlab-Velocity-{ground}" + (f"-Unitree-{robot}" if robot else "")
     envs = gym.make_vec("warpgym/G1VelocityFlat-v0", num_envs=2, device="cpu", events={"push_robot": None})
     obs, info = envs.reset(seed=0)
     # mjlab's widths: the G1's policy sees 99 entries and its critic 111 (the Go1's 48 and 72)

@@ -131,23 +131,21 @@ def test_upright_is_measured_against_the_slope_under_the_base(go1):
 
 @pytest.mark.parametrize("task", ["Go1VelocityRough-v0", "G1VelocityRough-v0"])
 def test_the_scene_and_ground_compile_to_mjlabs_model(task):
-    """MuJoCo 3.17's compile of the exported rough scene with the generated ground against mjlab's env's own model
+    """MuJoCo 3.17's compile of the rough scene built from the robot's own file, with the generated ground, against mjlab's env's own model
     for the same ground seed (tests/data/legged/rough_models.npz, ``python -m benchmarks.physics.mjlab_side models``;
     CI records it afresh): every field, the robot's geoms by name and the ground's as a set (the two name the
     ground's geoms in different orders)."""
+    import dataclasses
     import os
 
     import mujoco
 
-    from warpgym.sim.scene import compile_scene
     from warpgym.tasks.legged import LEGGED
-    from warpgym.tasks.legged.terrain import add_to_spec, generate
+    from warpgym.tasks.legged.model import compile_task_scene
 
     folder = os.environ.get("WARPGYM_MJLAB_REFERENCE") or os.path.join(os.path.dirname(__file__), "data", "legged")
     ref = np.load(os.path.join(folder, "rough_models.npz"))
-    spec = LEGGED[task]
-    ground = generate(spec.terrain, int(ref["seed"]))
-    m = compile_scene(spec.scene_path, lambda s: add_to_spec(s, ground)).mjm
+    m = compile_task_scene(dataclasses.replace(LEGGED[task], terrain_seed=int(ref["seed"])))[0].mjm
 
     def field(name):
         obj = m

@@ -67,28 +67,32 @@ def struct_fields(a, b, prefix="") -> list[str]:
     return out
 
 
-@pytest.mark.parametrize("scene", ["go1_velocity_flat", "g1_velocity_flat", "go1_velocity_rough", "g1_velocity_rough"])
-def test_the_go1_and_g1_from_their_own_files_compile_to_the_committed_scenes(scene):
-    """Each of the four committed scenes, rebuilt from the robot's own file (committed without its meshes): the
-    robot's definition, its task's options, the ground (a floor or an empty terrain body) and the contact sensors its
-    task reads."""
-    from warpgym.tasks.legged.g1 import g1_robot_file
-    from warpgym.tasks.legged.go1 import GO1_PHYSICS, GO1_ROUGH_TOUCHES, go1_robot_file
+@pytest.mark.parametrize("task", ["Go1VelocityFlat-v0", "G1VelocityFlat-v0", "Go1VelocityRough-v0",
+                                  "G1VelocityRough-v0"])
+def test_the_tasks_build_the_scenes_exported_from_mjlab_from_the_robots_own_files(task):
+    """The four tasks' scenes come from the builder (the robot's own file, committed without its meshes, and its
+    definition; the task's options, ground and contact sensors): MuJoCo's compile of each equals the scene exported
+    from mjlab's env (assets/<task>.xml, the check), the rough ones on the same generated ground."""
+    import dataclasses
 
-    rough = scene.endswith("rough")
-    go1 = scene.startswith("go1")
-    definition = go1_robot_file() if go1 else g1_robot_file()
-    physics = {**(GO1_PHYSICS if go1 else {}), **({"ccd_iterations": 500} if rough else {})}
-    args = dict(physics=physics, floor=not rough, self_collision=rough or not go1,
-                touches=GO1_ROUGH_TOUCHES if go1 and rough else ())
-    built = build_scene(definition, **args).compile()
-    ref = mujoco.MjModel.from_xml_path(os.path.join(ASSETS, f"{scene}.xml"))
-    assert differences(ref, built) == []
+    from warpgym.sim.scene import compile_scene
+    from warpgym.tasks.legged import LEGGED
+    from warpgym.tasks.legged.model import compile_task_scene, task_scene
+    from warpgym.tasks.legged.terrain import add_to_spec
+
+    spec = LEGGED[task]
+    built, ground = compile_task_scene(spec)
+    exported = os.path.join(ASSETS, spec.name.replace("Velocity", "_velocity_").replace("-v0", "").lower() + ".xml")
+    ref = compile_scene(exported, None if ground is None else lambda s: add_to_spec(s, ground)).mjm
+    assert built.path == spec.robot.file and differences(ref, built.mjm) == []
     # what a difference would look like: one actuator's effort limit
-    other = build_scene(RobotFile(**{**definition.__dict__, "actuators": (
-        Actuator(**{**definition.actuators[0].__dict__, "effort_limit": 20.0}), *definition.actuators[1:])}),
-        **args).compile()
-    assert any(d.startswith("actuator_forcerange") for d in differences(ref, other))
+    robot = spec.robot
+    weaker = dataclasses.replace(robot, actuators=(dataclasses.replace(robot.actuators[0], effort_limit=20.0),
+                                                   *robot.actuators[1:]))
+    other = task_scene(dataclasses.replace(spec, robot=weaker))
+    if ground is not None:
+        add_to_spec(other, ground)
+    assert any(d.startswith("actuator_forcerange") for d in differences(ref, other.compile()))
 
 
 @pytest.mark.parametrize("robot", ["go1", "g1"])
@@ -139,8 +143,9 @@ def test_gains_come_from_the_reflected_inertia_and_the_pose_from_the_definition(
     np.testing.assert_allclose(m.actuator_gainprm[:, 0], kp, rtol=1e-6)
     np.testing.assert_allclose(m.actuator_biasprm[:, :3], [[0, -kp, -kd]] * 2, rtol=1e-6)
     np.testing.assert_allclose(m.dof_armature[6:], 0.01)
-    # the control range is where the force saturates at the joint's limits: range -+ effort / stiffness
-    np.testing.assert_allclose(m.actuator_ctrlrange[1], [-2 - 10 / kp, 0 + 10 / kp], rtol=1e-6)
+    # the control range is where the force saturates at the joint's limits: range -+ effort / stiffness (the toy's
+    # ranges are in MJCF's default degrees)
+    np.testing.assert_allclose(m.actuator_ctrlrange[1], [np.radians(-2) - 10 / kp, 0 + 10 / kp], rtol=1e-6)
     assert not m.actuator_ctrllimited.any() and m.actuator_forcelimited.all()
     np.testing.assert_allclose(m.key_qpos[0], [0, 0, 0.42, 1, 0, 0, 0, 0.0, -0.6])
     np.testing.assert_allclose(m.key_ctrl[0], [0.0, -0.6])
@@ -148,8 +153,13 @@ def test_gains_come_from_the_reflected_inertia_and_the_pose_from_the_definition(
     names = [mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_GEOM, g) for g in range(m.ngeom)]
     assert names == ["terrain", "robot/base_collision", "robot/leg_collision", "robot/foot_collision"]
     assert list(m.geom_condim[1:]) == [1, 1, 6]
+    # what the velocity task reads and the file lacks: the IMU at the base, its angular momentum, a site at the foot
     assert [mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_SENSOR, s) for s in range(m.nsensor)] == [
-        "feet_ground_contact_foot_collision_found", "feet_ground_contact_foot_collision_force"]
+        "robot/imu_ang_vel", "robot/imu_lin_vel", "robot/root_angmom", "feet_ground_contact_foot_collision_found",
+        "feet_ground_contact_foot_collision_force"]
+    assert [mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_SITE, s) for s in range(m.nsite)] == [
+        "robot/imu", "robot/foot_collision_site"]
+    np.testing.assert_allclose(m.site_pos[1], [0, 0, -0.2])  # the foot geom's place in its body
 
 
 @pytest.mark.parametrize("change, says", [
@@ -174,9 +184,9 @@ def test_rough_ground_takes_an_empty_terrain_body_and_the_touch_sensors_a_task_r
     m = build_scene(toy, floor=False, self_collision=True, touches=(("leg_touch", ("leg_.*",)),)).compile()
     assert m.ngeom == 3 and mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "terrain") == 1  # no plane
     names = [mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_SENSOR, s) for s in range(m.nsensor)]
-    assert names[2:] == ["self_collision_base_found", "self_collision_base_force", "leg_touch_leg_collision_found",
+    assert names[5:] == ["self_collision_base_found", "self_collision_base_force", "leg_touch_leg_collision_found",
                          "leg_touch_leg_collision_force"]
-    assert list(m.sensor_intprm[4:, 1]) == [0, 0]  # every contact of the group, not their net force
+    assert list(m.sensor_intprm[7:, 1]) == [0, 0]  # every contact of the group, not their net force
     with pytest.raises(ValueError, match=r"touches 'shin_touch': no geom of .* matches \['shin_.*'\]"):
         build_scene(toy, touches=(("shin_touch", ("shin_.*",)),))
 

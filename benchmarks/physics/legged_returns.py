@@ -29,9 +29,9 @@ def warpgym_returns(ckpt: dict, num_envs: int, seed: int) -> dict:
 
     from agents.checkpoint import policy_from_checkpoint  # noqa: PLC0415
     from warpgym.envs.legged import LeggedVecEnv  # noqa: PLC0415
-    from warpgym.tasks.legged import get_legged_task  # noqa: PLC0415
+    from warpgym.tasks.legged import trained_legged_task  # noqa: PLC0415
 
-    task = get_legged_task(ckpt["config"]["env_args"]["task"])
+    task = trained_legged_task(ckpt["config"]["env_args"])
     spec = ckpt["spec"]
     policy, normalize = policy_from_checkpoint(ckpt, spec["num_obs"], spec["num_actions"], torch.device("cpu"))
     env = LeggedVecEnv(task, num_envs=num_envs, device="cpu", seed=seed)

@@ -73,7 +73,7 @@ def main(argv=None) -> int:
         "trained": {"checkpoint": os.path.abspath(path), "iteration": ckpt.get("iteration"),
                     "samples": ckpt.get("samples")},
         "warpgym": warpgym.__version__,
-        **(entry.export_contract(name) if entry.export_contract is not None else
+        **(entry.export_contract(name, ckpt["config"]["env_args"]) if entry.export_contract is not None else
            {"observation": f"the observation of warpgym/{name}'s env (docs/tasks.md)",
             "action": f"the action warpgym/{name}'s env takes (docs/tasks.md)"}),
     }

@@ -89,7 +89,8 @@ def build_config(args, task: str, num_envs: int, device: str, saved: dict | None
 
     entry = task_entry(task)
     # the learner's env: for Gymnasium's tasks, actions in [-1, 1] mapped onto the control ranges
-    common = {"task": task, "device": device, "max_episode_steps": args.episode_length, **dict(entry.learner_kwargs)}
+    common = {"task": task, "device": device, "max_episode_steps": args.episode_length, **dict(entry.learner_kwargs),
+              **({"robot": args.robot} if getattr(args, "robot", None) else {})}
     if entry.physics_flags:
         from warpgym.tasks.robots import get_task  # noqa: PLC0415
 
@@ -189,6 +190,7 @@ def plan_run(args, rank: int) -> RunPlan:
         found = str(int(check_resume(args.resume, saved, args.task))) if rank == 0 else ""
         args.seed = saved["seed"]
         args.episode_length = saved["env_args"].get("max_episode_steps")
+        args.robot = saved["env_args"].get("robot")
         args.substeps = saved["env_args"].get("substeps")
         args.physics = recorded(saved["env_args"].get("physics"))
         return RunPlan(saved["task"], args.resume, device, saved["num_envs"], saved,

@@ -17,7 +17,12 @@ def parser(description: str | None = None) -> CommandParser:
     ap = CommandParser(prog="warpgym train", description=description)
     ap.add_argument("--task", default=None, help="Ant (default), Humanoid, one of Gymnasium's MuJoCo tasks "
                                                  "(InvertedPendulum-v5 ... HumanoidStandup-v5) or a legged task "
-                                                 "(Go1VelocityFlat-v0, G1VelocityFlat-v0, Go1VelocityRough-v0, G1VelocityRough-v0)")
+                                                 "(Go1VelocityFlat-v0, G1VelocityFlat-v0, Go1VelocityRough-v0, G1VelocityRough-v0, or with "
+                                                 "--robot VelocityFlat-v0, VelocityRough-v0)")
+    ap.add_argument("--robot", default=None, metavar="NAME|FILE.toml",
+                    help="the robot of a legged velocity task: a zoo robot (a1, aliengo, go1, g1, ...) or a robot's "
+                         "TOML definition naming its URDF or MJCF file (docs/robots.md); --task then defaults to "
+                         "VelocityFlat-v0 (VelocityRough-v0 for rough ground)")
     ap.add_argument("--num-envs", type=positive_int(4096), default=None,
                     help="default: the task's preset on a GPU (8192 for the Ant, 4096 for the Humanoid and "
                          "the legged tasks), fewer on the CPU")
@@ -187,6 +192,8 @@ def check_values(ap, args) -> None:
                 ap.error(f"--task {args.task!r}: {e}")
             ap.error(f"--task {args.task!r}: choose one of {list(TASK_NAMES.values())}, or a task of your own "
                      "module: --task my_module:MyTask-v0")
+    if args.robot is not None:
+        check_robot(ap, args)
     if args.target is not None:
         from agents.config import Config  # noqa: PLC0415
 
@@ -207,6 +214,30 @@ def check_values(ap, args) -> None:
             names = ", ".join([flag(f) for f in given] + (["--physics"] if args.physics else []))
             ap.error(f"{names}: a resumed run keeps the envs it was started with; drop {names} "
                      "or start a new run with --run-dir")
+
+
+def check_robot(ap, args) -> None:
+    """``--robot``: a new run's, of a legged task (VelocityFlat-v0 by default); its definition read, its scene built
+    and its standing pose held in native MuJoCo before anything trains. A definition file is recorded by its
+    absolute path, so that play, eval and export rebuild the same robot."""
+    if args.resume is not None:
+        ap.error(f"--robot {args.robot}: a resumed run keeps the robot it was started with; drop --robot")
+    from warpgym.tasks.legged import get_legged_task  # noqa: PLC0415
+    from warpgym.tasks.legged.robot_task import stands, zoo  # noqa: PLC0415
+
+    args.task = args.task or "VelocityFlat-v0"
+    try:
+        get_legged_task(args.task)
+    except ValueError:
+        ap.error(f"--robot {args.robot}: --task {args.task} is not a legged velocity task; choose VelocityFlat-v0 or "
+                 "VelocityRough-v0")
+
+    if args.robot.lower() not in zoo():
+        args.robot = os.path.abspath(os.path.expanduser(args.robot))
+    try:
+        stands(get_legged_task(args.task).replace(robot=args.robot))
+    except ValueError as e:
+        ap.error(f"--robot: {e}")
 
 
 def with_flag_names(message: str) -> str:

@@ -14,10 +14,10 @@ def evaluate(args, ckpt: dict, name: str, device: str, env_args: dict, entry) ->
     from agents.checkpoint import policy_from_checkpoint  # noqa: PLC0415
     from warpgym.cli import write_json  # noqa: PLC0415
     from warpgym.native.legged import native_episodes, warpgym_episodes  # noqa: PLC0415
-    from warpgym.tasks.legged import get_legged_task  # noqa: PLC0415
+    from warpgym.tasks.legged import trained_legged_task  # noqa: PLC0415
 
     refuse_gymnasium_flags(args, name)
-    task = get_legged_task(name)
+    task = trained_legged_task({**env_args, "task": name})
     spec = ckpt["spec"]
     policy, normalize = policy_from_checkpoint(ckpt, spec["num_obs"], spec["num_actions"], torch.device(device))
     episodes = args.episodes * len(args.seeds)

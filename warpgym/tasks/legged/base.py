@@ -130,7 +130,10 @@ def with_height_scan(table: Terms, max_distance: float, noise: float) -> Terms:
 class LeggedTask:
     name: str
     mirrors: str  # the mjlab task this one mirrors
-    scene_file: str  # in warpgym/tasks/legged/assets, or a path
+    # the scene: built from a robot's own file and definition (``robot``: a robot_file.RobotFile; a robot_task.robot
+    # name, TOML definition or robot file through ``replace``) or, without one, an MJCF scene file (in
+    # warpgym/tasks/legged/assets, or a path)
+    scene_file: str
     # the robot's parts, by their names in the scene
     root_body: str
     upright_body: str  # whose tilt the upright reward scores
@@ -177,6 +180,8 @@ class LeggedTask:
     critic_obs: Terms = CRITIC_OBS
     terminations: Terms = TERMINATIONS
     events: Terms = EVENTS
+    robot: object = None
+    physics: tuple = ()  # ((option, value), ...): changes to the robot's MuJoCo options (robot_file.PHYSICS)
     # the force [N] above which a contact group's sensor counts a touch (mjlab's contact sensors' threshold)
     self_collision_force: float = 10.0
     # rough ground (terrain=None: the scene's floor): a TerrainGrid (warpgym.tasks.legged.terrain, curriculum=True)
@@ -207,6 +212,9 @@ class LeggedTask:
 
     @property
     def scene_path(self) -> str:
+        """The file the scene comes from: the robot's own (the scene built from it) or the scene file."""
+        if self.robot is not None:
+            return self.robot.file
         return self.scene_file if os.sep in self.scene_file else os.path.join(ASSETS, self.scene_file)
 
     def weights(self) -> dict[str, float]:
@@ -223,6 +231,11 @@ class LeggedTask:
         unknown = sorted(set(changes) - {f.name for f in fields(self)})
         if unknown:
             raise ValueError(f"{self.name} has no argument(s) {unknown}: it takes {self.argument_names()}")
+        robot = changes.pop("robot", None)
+        if robot is not None:  # the robot first: its parts and its own changes, then the caller's
+            from warpgym.tasks.legged.robot_task import with_robot  # noqa: PLC0415
+
+            return with_robot(self, robot).replace(**changes)
         for name in TABLES:
             if name in changes:
                 changes[name] = getattr(self, name).changed(changes[name], f"{self.name}: {name}")
@@ -282,6 +295,11 @@ class LeggedTask:
         if upright is not None and dict(upright.params).get("on_terrain") and self.height_scan is None:
             raise ValueError(f"{self.name}: rewards['upright'] measures tilt against the ground (on_terrain=1), which "
                              "needs a height_scan to fit the ground's normal to")
+        if self.robot is not None and not hasattr(self.robot, "feet"):
+            fail("robot", "must be a robot's definition (robot_file.RobotFile): pass robot= a zoo name, a TOML "
+                          "definition or a robot file through replace")
+        if not (isinstance(self.physics, tuple) and all(isinstance(p, tuple) and len(p) == 2 for p in self.physics)):
+            fail("physics", "must be ((option, value), ...) pairs, e.g. (('ccd_iterations', 500),)")
         if "illegal_contact" in self.terminations and not self.illegal_contact_sensors:
             raise ValueError(f"{self.name}: terminations['illegal_contact'] has no sensors to feel it: name them in "
                              "illegal_contact_sensors")

@@ -4,21 +4,22 @@ effort limits, the control period and the command's ranges, from MuJoCo's compil
 
 from __future__ import annotations
 
-from warpgym.tasks.legged import get_legged_task
+from warpgym.tasks.legged import trained_legged_task
 from warpgym.tasks.legged.model import compile_task_scene, policy_terms, resolve
 
 
-def deployment_contract(name: str) -> dict:
-    """What a controller needs around a legged policy, from MuJoCo's compile of the task's scene."""
+def deployment_contract(name: str, env_args: dict | None = None) -> dict:
+    """What a controller needs around a legged policy, from MuJoCo's compile of the task's scene (the robot a run
+    trained, from its ``env_args``)."""
 
-    task = get_legged_task(name)
+    task = trained_legged_task({**(env_args or {}), "task": name})
     compiled, _ = compile_task_scene(task)
     m = compiled.mjm
     idx = resolve(task, m)
     act = idx.joint_actuator
     rounded = lambda values: [round(float(v), 6) for v in values]  # noqa: E731
     return {
-        "mirrors": task.mirrors,
+        "mirrors": task.mirrors, **({"robot": task.robot.label} if task.robot is not None else {}),
         "control_dt": task.decimation * task.timestep, "physics_dt": task.timestep,
         "observation": [{"name": n, "size": size, "what": what} for n, size, what in policy_terms(task, idx, len(act))],
         "action": {"joints": list(idx.joint_names), "default_joint_pos": rounded(idx.default_joint_pos),

@@ -31,52 +31,10 @@ RUNNING = (
     (r".*shoulder_yaw.*", 0.15), (r".*elbow.*", 0.35), (r".*wrist.*", 0.3))
 
 
-@dataclass(frozen=True)
-class G1VelocityFlat(LeggedTask):
-    name: str = "G1VelocityFlat-v0"
-    mirrors: str = "Mjlab-Velocity-Flat-Unitree-G1"
-    scene_file: str = "g1_velocity_flat.xml"
-    root_body: str = "robot/pelvis"
-    upright_body: str = "robot/torso_link"
-    angvel_body: str = "robot/torso_link"
-    com_body: str = "robot/torso_link"
-    foot_geoms: tuple = tuple(f"robot/{s}_foot{i}_collision" for s in SIDES for i in range(1, 8))
-    foot_sites: tuple = tuple(f"robot/{s}_foot" for s in SIDES)
-    foot_sensors: tuple = tuple(f"feet_ground_contact_{s}_ankle_roll_link" for s in SIDES)
-    self_collision_sensor: str = "self_collision_pelvis"
-    nconmax: int = 48
-    rewards: object = REWARDS.changed({
-        "body_ang_vel": -0.05, "angular_momentum": -0.02, "self_collisions": -1.0,
-        "pose": {"params": {"std_standing": PerJoint(((".*", 0.05),)), "std_walking": PerJoint(WALKING),
-                            "std_running": PerJoint(RUNNING)}}}, "G1VelocityFlat-v0: rewards")
-
-
-@dataclass(frozen=True)
-class G1VelocityRough(G1VelocityFlat):
-    """Unitree G1 on mjlab's rough ground: ``Mjlab-Velocity-Rough-Unitree-G1`` (``unitree_g1_rough_env_cfg``): the
-    generated ground with its curriculum, the height scan under the pelvis in both observations, the feet's scanned
-    heights and more room for contacts; the fall still ends an episode."""
-
-    name: str = "G1VelocityRough-v0"
-    mirrors: str = "Mjlab-Velocity-Rough-Unitree-G1"
-    scene_file: str = "g1_velocity_rough.xml"
-    nconmax: int = 70
-    njmax: int = 1500
-    contact_sensor_maxmatch: int = 500
-    terrain: object = ROUGH_CURRICULUM
-    height_scan: object = TERRAIN_SCAN
-    foot_scan: object = G1_FOOT_SCAN
-    policy_obs: object = with_height_scan(POLICY_OBS, TERRAIN_SCAN.max_distance, noise=0.1)
-    critic_obs: object = with_height_scan(CRITIC_OBS, TERRAIN_SCAN.max_distance, noise=0.0)
-    terminations: object = TERMINATIONS.changed({
-        "out_of_terrain_bounds": Termination(ends.out_of_terrain_bounds, time_out=True)},
-        "G1VelocityRough-v0: terminations")
-
-
 # ---------------------------------------------------------------------------------------------------------------
 # the G1 from its own MJCF file (assets/unitree_g1.xml: mjlab's asset zoo's unitree_g1/xmls/g1.xml) and the numbers
-# of mjlab's g1_constants.py: tests/test_robot_file.py builds the scenes from them and compares them with
-# g1_velocity_flat.xml and g1_velocity_rough.xml
+# of mjlab's g1_constants.py: the tasks build their scenes from them (tests/test_robot_file.py compares them
+# with g1_velocity_flat.xml and g1_velocity_rough.xml, exported from mjlab's env)
 
 
 def two_stage_planetary(rotor: tuple[float, float, float], gears: tuple[float, float, float]) -> float:
@@ -103,8 +61,11 @@ def g1_robot_file(file: str | None = None) -> RobotFile:
                         damping_ratio=2.0)
 
     return RobotFile(
-        file or os.path.join(os.path.dirname(__file__), "assets", "unitree_g1.xml"), root="pelvis",
-        feet=("left_ankle_roll_link", "right_ankle_roll_link"), feet_are="subtree", base_height=0.76,
+        file or os.path.join(os.path.dirname(__file__), "assets", "unitree_g1.xml"), root="pelvis", name="Unitree G1",
+        torso="torso_link", feet=("left_ankle_roll_link", "right_ankle_roll_link"), feet_are="subtree",
+        foot_sites=("left_foot", "right_foot"), imu="imu_in_pelvis", base_height=0.76, self_collisions=True,
+        posture={"standing": 0.05, "walking": dict(WALKING), "running": dict(RUNNING)},
+        task={"rewards": {"body_ang_vel": -0.05, "angular_momentum": -0.02, "self_collisions": -1.0}},
         joint_pos={".*_hip_pitch_joint": -0.312, ".*_knee_joint": 0.669, ".*_ankle_pitch_joint": -0.363,
                    ".*_elbow_joint": 0.6, "left_shoulder_roll_joint": 0.2, "left_shoulder_pitch_joint": 0.2,
                    "right_shoulder_roll_joint": -0.2, "right_shoulder_pitch_joint": 0.2},
@@ -117,3 +78,49 @@ def g1_robot_file(file: str | None = None) -> RobotFile:
                    motor((".*_ankle_pitch_joint", ".*_ankle_roll_joint"), "5020", pair=2)),
         collision=Collision((".*_collision",), contype=1, conaffinity=1, condim={G1_FOOT: 3, ".*_collision": 1},
                             priority={G1_FOOT: 1, ".*": 0}, friction={G1_FOOT: (0.6,)}))
+
+
+G1 = g1_robot_file()
+
+
+@dataclass(frozen=True)
+class G1VelocityFlat(LeggedTask):
+    name: str = "G1VelocityFlat-v0"
+    mirrors: str = "Mjlab-Velocity-Flat-Unitree-G1"
+    scene_file: str = ""
+    robot: object = G1
+    root_body: str = "robot/pelvis"
+    upright_body: str = "robot/torso_link"
+    angvel_body: str = "robot/torso_link"
+    com_body: str = "robot/torso_link"
+    foot_geoms: tuple = tuple(f"robot/{s}_foot{i}_collision" for s in SIDES for i in range(1, 8))
+    foot_sites: tuple = tuple(f"robot/{s}_foot" for s in SIDES)
+    foot_sensors: tuple = tuple(f"feet_ground_contact_{s}_ankle_roll_link" for s in SIDES)
+    self_collision_sensor: str = "self_collision_pelvis"
+    nconmax: int = 48
+    rewards: object = REWARDS.changed({
+        "body_ang_vel": -0.05, "angular_momentum": -0.02, "self_collisions": -1.0,
+        "pose": {"params": {"std_standing": PerJoint(((".*", 0.05),)), "std_walking": PerJoint(WALKING),
+                            "std_running": PerJoint(RUNNING)}}}, "G1VelocityFlat-v0: rewards")
+
+
+@dataclass(frozen=True)
+class G1VelocityRough(G1VelocityFlat):
+    """Unitree G1 on mjlab's rough ground: ``Mjlab-Velocity-Rough-Unitree-G1`` (``unitree_g1_rough_env_cfg``): the
+    generated ground with its curriculum, the height scan under the pelvis in both observations, the feet's scanned
+    heights and more room for contacts; the fall still ends an episode."""
+
+    name: str = "G1VelocityRough-v0"
+    mirrors: str = "Mjlab-Velocity-Rough-Unitree-G1"
+    physics: tuple = (("ccd_iterations", 500),)
+    nconmax: int = 70
+    njmax: int = 1500
+    contact_sensor_maxmatch: int = 500
+    terrain: object = ROUGH_CURRICULUM
+    height_scan: object = TERRAIN_SCAN
+    foot_scan: object = G1_FOOT_SCAN
+    policy_obs: object = with_height_scan(POLICY_OBS, TERRAIN_SCAN.max_distance, noise=0.1)
+    critic_obs: object = with_height_scan(CRITIC_OBS, TERRAIN_SCAN.max_distance, noise=0.0)
+    terminations: object = TERMINATIONS.changed({
+        "out_of_terrain_bounds": Termination(ends.out_of_terrain_bounds, time_out=True)},
+        "G1VelocityRough-v0: terminations")

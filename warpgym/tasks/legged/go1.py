@@ -12,7 +12,7 @@ from dataclasses import dataclass, replace
 from kernels.legged import events as ev
 from kernels.legged import terminations as ends
 from warpgym.tasks.legged.base import CRITIC_OBS, EVENTS, POLICY_OBS, REWARDS, TERMINATIONS, LeggedTask, with_height_scan
-from warpgym.tasks.legged.robot_file import Actuator, Collision, RobotFile
+from warpgym.tasks.legged.robot_file import Actuator, Collision, RobotFile, Touch
 from warpgym.tasks.legged.scan import GO1_FOOT_SCAN, TERRAIN_SCAN
 from warpgym.tasks.legged.terrain import ROUGH
 from warpgym.tasks.terms import Event, PerJoint, Termination, Terms
@@ -38,11 +38,47 @@ GO1_EVENTS = Terms("event", [
     *((n, EVENTS[n]) for n in ("base_com", "encoder_bias"))])
 
 
+# ---------------------------------------------------------------------------------------------------------------
+# the Go1 from its own MJCF file (assets/unitree_go1.xml: mjlab's asset zoo's unitree_go1/xmls/go1.xml) and the
+# numbers of mjlab's go1_constants.py: the tasks build their scenes from them (tests/test_robot_file.py compares
+# them with go1_velocity_flat.xml and go1_velocity_rough.xml, exported from mjlab's env)
+
+GO1_ROTOR_INERTIA = 0.000111842  # [kg m^2], Unitree's URDF
+GO1_FOOT = "^[FR][LR]_foot_collision$"
+GO1_PHYSICS = {"cone": "elliptic", "impratio": 10.0}  # the Go1's tasks' changes to mjlab's options
+GO1_POSTURE = {"standing": {HIP_THIGH: 0.05, CALF: 0.1}, "walking": {HIP_THIGH: 0.3, CALF: 0.6},
+               "running": {HIP_THIGH: 0.3, CALF: 0.6}}
+
+
+def go1_robot_file(file: str | None = None) -> RobotFile:
+    """The Go1's definition; ``file``: its MJCF (default: the one beside the tasks' scenes)."""
+    def motor(joints, gear, effort):
+        return Actuator(joints, effort, GO1_ROTOR_INERTIA * gear * gear, natural_frequency=10.0, damping_ratio=2.0)
+
+    return RobotFile(
+        file or os.path.join(os.path.dirname(__file__), "assets", "unitree_go1.xml"), root="trunk", name="Unitree Go1",
+        feet=tuple(f"{f}_foot_collision" for f in FEET), foot_sites=FEET, base_height=0.278,
+        joint_pos={".*thigh_joint": 0.9, ".*calf_joint": -1.8, ".*R_hip_joint": 0.1, ".*L_hip_joint": -0.1},
+        actuators=(motor((".*_hip_joint", ".*_thigh_joint"), 6.0, 23.7), motor(".*_calf_joint", 9.0, 35.55)),
+        collision=Collision((r".*_collision\d*",), contype=1, conaffinity=1,
+                            condim={GO1_FOOT: 6, r".*_collision\d*": 1}, priority={GO1_FOOT: 1, ".*": 0},
+                            friction={GO1_FOOT: (1.0, 5e-3, 5e-4)}, solref=(0.01, 1.0)),
+        # the rough task's contact sensors beyond the feet's, in mjlab's order (its unitree_go1_rough_env_cfg)
+        touches=(Touch("illegal", (r"[FR][LR]_thigh_collision\d",), name="thigh_ground_touch"),
+                 Touch("shank", (r"[FR][LR]_calf_collision\d",)), Touch("trunk", ("trunk_collision", "head_collision"))),
+        posture=GO1_POSTURE, physics=GO1_PHYSICS, self_collisions=True)
+
+
+GO1 = go1_robot_file()
+GO1_ROUGH_TOUCHES = tuple((t.sensor, t.geoms) for t in GO1.touches)
+
+
 @dataclass(frozen=True)
 class Go1VelocityFlat(LeggedTask):
     name: str = "Go1VelocityFlat-v0"
     mirrors: str = "Mjlab-Velocity-Flat-Unitree-Go1"
-    scene_file: str = "go1_velocity_flat.xml"
+    scene_file: str = ""
+    robot: object = GO1
     root_body: str = "robot/trunk"
     upright_body: str = "robot/trunk"
     angvel_body: str = "robot/trunk"
@@ -70,7 +106,7 @@ class Go1VelocityRough(Go1VelocityFlat):
 
     name: str = "Go1VelocityRough-v0"
     mirrors: str = "Mjlab-Velocity-Rough-Unitree-Go1"
-    scene_file: str = "go1_velocity_rough.xml"
+    physics: tuple = (("ccd_iterations", 500),)
     self_collision_sensor: str = "self_collision_trunk"
     shank_sensors: tuple = tuple(f"shank_ground_touch_{f}_calf_collision{i}" for f in FEET for i in (1, 2))
     trunk_sensors: tuple = ("trunk_ground_touch_trunk_collision", "trunk_ground_touch_head_collision")
@@ -91,34 +127,3 @@ class Go1VelocityRough(Go1VelocityFlat):
     terrain: object = ROUGH_CURRICULUM
     height_scan: object = TERRAIN_SCAN
     foot_scan: object = GO1_FOOT_SCAN
-
-
-# ---------------------------------------------------------------------------------------------------------------
-# the Go1 from its own MJCF file (assets/unitree_go1.xml: mjlab's asset zoo's unitree_go1/xmls/go1.xml) and the
-# numbers of mjlab's go1_constants.py: tests/test_robot_file.py builds the scenes from them and compares them with
-# go1_velocity_flat.xml and go1_velocity_rough.xml
-
-GO1_ROTOR_INERTIA = 0.000111842  # [kg m^2], Unitree's URDF
-GO1_FOOT = "^[FR][LR]_foot_collision$"
-GO1_PHYSICS = {"cone": "elliptic", "impratio": 10.0}  # the Go1's tasks' changes to mjlab's options
-
-
-def go1_robot_file(file: str | None = None) -> RobotFile:
-    """The Go1's definition; ``file``: its MJCF (default: the one beside the tasks' scenes)."""
-    def motor(joints, gear, effort):
-        return Actuator(joints, effort, GO1_ROTOR_INERTIA * gear * gear, natural_frequency=10.0, damping_ratio=2.0)
-
-    return RobotFile(
-        file or os.path.join(os.path.dirname(__file__), "assets", "unitree_go1.xml"), root="trunk",
-        feet=tuple(f"{f}_foot_collision" for f in FEET), base_height=0.278,
-        joint_pos={".*thigh_joint": 0.9, ".*calf_joint": -1.8, ".*R_hip_joint": 0.1, ".*L_hip_joint": -0.1},
-        actuators=(motor((".*_hip_joint", ".*_thigh_joint"), 6.0, 23.7), motor(".*_calf_joint", 9.0, 35.55)),
-        collision=Collision((r".*_collision\d*",), contype=1, conaffinity=1,
-                            condim={GO1_FOOT: 6, r".*_collision\d*": 1}, priority={GO1_FOOT: 1, ".*": 0},
-                            friction={GO1_FOOT: (1.0, 5e-3, 5e-4)}, solref=(0.01, 1.0)))
-
-
-# the rough task's contact sensors beyond the feet's, in mjlab's order (its unitree_go1_rough_env_cfg)
-GO1_ROUGH_TOUCHES = (("thigh_ground_touch", (r"[FR][LR]_thigh_collision\d",)),
-                     ("shank_ground_touch", (r"[FR][LR]_calf_collision\d",)),
-                     ("trunk_ground_touch", ("trunk_collision", "head_collision")))

@@ -53,7 +53,7 @@ def _find(task: LeggedTask, mjm, kind: str, field: str, name: str) -> int:
     names = _names(mjm, kind)
     if name not in names:
         known = [n for n in names if n]
-        raise ValueError(f"{task.name}: {field}={getattr(task, field)!r}: the scene ({task.scene_file}) has no {kind} "
+        raise ValueError(f"{task.name}: {field}={getattr(task, field)!r}: the scene ({task.scene_path}) has no {kind} "
                          f"{name!r}; its {kind}s are {known}")
     return names.index(name)
 
@@ -150,10 +150,30 @@ def compile_task_scene(task: LeggedTask):
     from warpgym.sim.scene import compile_scene  # noqa: PLC0415
     from warpgym.tasks.legged.terrain import add_to_spec  # noqa: PLC0415
 
-    if task.terrain is None:
+    ground = None if task.terrain is None else task.terrain.generate(task.terrain_seed)
+    if task.robot is not None:
+        from warpgym.sim.gym_model import CompiledModel  # noqa: PLC0415
+        from warpgym.tasks.legged.robot_file import compile_robot_scene  # noqa: PLC0415
+
+        spec = task_scene(task)
+        if ground is not None:
+            add_to_spec(spec, ground)
+        return CompiledModel(compile_robot_scene(spec, task.robot), task.robot.file), ground
+    if ground is None:
         return compile_scene(task.scene_path), None
-    ground = task.terrain.generate(task.terrain_seed)
     return compile_scene(task.scene_path, lambda spec: add_to_spec(spec, ground)), ground
+
+
+def task_scene(task: LeggedTask):
+    """The ``MjSpec`` of a task's scene built from its robot: the robot's options changed by the task's, a floor on
+    flat ground (an empty terrain body on rough), the self-collision sensor where the task reads one, and each group
+    of the robot's touches whose sensors the task names."""
+    from warpgym.tasks.legged.robot_file import build_scene  # noqa: PLC0415
+
+    read = {"illegal": task.illegal_contact_sensors, "shank": task.shank_sensors, "trunk": task.trunk_sensors}
+    touches = tuple((t.sensor, t.geoms) for t in task.robot.touches if read.get(t.role))
+    return build_scene(task.robot, physics=dict(task.physics), floor=task.terrain is None,
+                       self_collision=bool(task.self_collision_sensor), touches=touches)
 
 
 def kernel_structs(task: LeggedTask, idx: RobotIndex, device: str):
