@@ -244,3 +244,78 @@ def test_warpgym_train_checks_the_robot_before_anything_trains(toy_urdf, tmp_pat
     assert args.task == "VelocityRough-v0" and args.robot == "go1"
     args = train_args.parse_args(["--robot", "g1"])
     assert args.task == "VelocityFlat-v0"
+
+
+def l_block_obj() -> str:
+    """An L of 0.3 m arms, 0.1 m wide and 0.1 m tall, as one closed, non-convex OBJ mesh: its hull fills the notch
+    between the arms."""
+    outline = [(0, 0), (0.3, 0), (0.3, 0.1), (0.1, 0.1), (0.1, 0.3), (0, 0.3)]
+    n = len(outline)
+    verts = [(x, y, 0.0) for x, y in outline] + [(x, y, 0.1) for x, y in outline]
+    faces = []
+    for a, b, c in ((0, 1, 2), (0, 2, 3), (0, 3, 4), (0, 4, 5)):
+        faces += [(a, c, b), (a + n, b + n, c + n)]
+    for i in range(n):
+        j = (i + 1) % n
+        faces += [(i, j, j + n), (i, j + n, i + n)]
+    return "".join(f"v {x} {y} {z}\n" for x, y, z in verts) + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in faces)
+
+
+def test_convex_decomposition_splits_a_non_convex_mesh_that_its_hull_would_fill(tmp_path, monkeypatch):
+    """An L-shaped body collides as its hull by default; decomposed, as CoACD's convex parts: a ball dropped over
+    the notch between its arms rests on the hull's top, but on the floor once the L is split; the parts come from
+    the cache the second time (CoACD not called)."""
+    pytest.importorskip("coacd")
+    from warpgym.tasks.legged import convex
+
+    monkeypatch.setenv("WARPGYM_CACHE", str(tmp_path / "cache"))
+    (tmp_path / "l.obj").write_text(l_block_obj())
+    xml = f"""<mujoco><compiler meshdir="{tmp_path}"/><asset><mesh name="l" file="l.obj"/></asset><worldbody>
+      <geom name="floor" type="plane" size="2 2 0.1"/>
+      <body name="block"><geom name="l_collision" type="mesh" mesh="l" mass="1"/></body>
+      <body name="ball" pos="0.17 0.17 0.3"><freejoint/><geom type="sphere" size="0.03" mass="0.1"/></body>
+    </worldbody></mujoco>"""
+
+    def rest_height(split: bool) -> float:
+        spec = mujoco.MjSpec.from_string(xml)
+        if split:
+            split = convex.decompose(spec, lambda s: s.compile())
+            assert list(split) == ["l_collision"] and split["l_collision"] >= 2
+        m = spec.compile()
+        d = mujoco.MjData(m)
+        for _ in range(1000):
+            mujoco.mj_step(m, d)
+        return float(d.qpos[2])
+
+    assert rest_height(False) == pytest.approx(0.1 + 0.03, abs=5e-3)  # on the hull, over the notch
+    assert rest_height(True) == pytest.approx(0.03, abs=5e-3)  # in the notch, on the floor
+    assert len(os.listdir(tmp_path / "cache" / "convex")) == 1
+
+    import coacd
+
+    monkeypatch.setattr(coacd, "run_coacd", lambda *a, **k: pytest.fail("the cache was not read"))
+    assert rest_height(True) == pytest.approx(0.03, abs=5e-3)
+
+
+def test_a_robot_definition_turns_decomposition_on(tmp_path, monkeypatch, toy_urdf):
+    """``convex_decomposition`` in a definition: the robot's non-convex collision mesh becomes parts that collide as
+    it did (its contact settings), the original kept for its mass alone; a convex one (the toy's box) stays whole."""
+    pytest.importorskip("coacd")
+    monkeypatch.setenv("WARPGYM_CACHE", str(tmp_path / "cache"))
+    box = build_scene(dataclasses.replace(toy_urdf, convex_decomposition=True)).compile()
+    assert box.nmesh == 1
+    # a file of its own: MuJoCo caches a mesh by its file's name
+    with open(os.path.join(toy_urdf.package_root, "meshes", "l.obj"), "w") as f:
+        f.write(l_block_obj())
+    urdf = tmp_path / "l.urdf"
+    urdf.write_text(open(toy_urdf.file).read().replace("meshes/body.obj", "meshes/l.obj"))
+    l_robot = dataclasses.replace(toy_urdf, file=str(urdf))
+    m = build_scene(dataclasses.replace(l_robot, convex_decomposition=True)).compile()
+    names = [mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_GEOM, g) for g in range(m.ngeom)]
+    parts = [g for g, n in enumerate(names) if n.startswith("robot/base_collision_part")]
+    whole = names.index("robot/base_collision")
+    assert len(parts) >= 2 and m.geom_contype[whole] == m.geom_conaffinity[whole] == 0
+    assert all((m.geom_contype[p], m.geom_conaffinity[p]) == (2, 1) for p in parts)  # no self-collisions
+    plain = build_scene(l_robot).compile()
+    np.testing.assert_allclose(m.body_mass, plain.body_mass)
+    np.testing.assert_allclose(m.body_inertia, plain.body_inertia)

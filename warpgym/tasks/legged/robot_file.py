@@ -136,6 +136,7 @@ class RobotFile:
     physics: dict = field(default_factory=dict)  # changes to ``PHYSICS`` the robot needs (the Go1: elliptic cones)
     package_root: str = ""  # where a URDF's ``package://NAME/...`` paths point: the package's folder or its parent
     balance_inertia: bool = False  # MuJoCo's compiler option balanceinertia (inertias that break A + B >= C)
+    convex_decomposition: bool = False  # each non-convex collision mesh split into convex parts (convex.py, CoACD)
     task: dict = field(default_factory=dict)  # changes to the velocity task this robot walks in (LeggedTask.replace)
 
     @property
@@ -200,6 +201,10 @@ def robot_spec(robot: RobotFile):
         for geom in spec.geoms:
             if geom.contype or geom.conaffinity:
                 geom.contype, geom.conaffinity = 2, 1
+    if robot.convex_decomposition:
+        from warpgym.tasks.legged.convex import decompose  # noqa: PLC0415
+
+        decompose(spec, lambda copy: compile_robot_scene(copy, robot))
     _add_task_sensors(spec, robot)
     return spec
 
