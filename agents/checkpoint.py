@@ -158,7 +158,9 @@ def set_rng_state(state: dict, device: torch.device) -> None:
 
 
 def policy_from_checkpoint(ckpt: dict, num_obs: int, num_actions: int, device: torch.device):
-    """The trained actor-critic and its observation normaliser, ready for evaluation."""
+    """The trained policy (PPO's actor-critic, or the off-policy learner's policy) and its observation normaliser,
+    ready for evaluation: ``policy.act_deterministic(normalize(obs))`` acts, ``policy.actor`` is that action's
+    module (agents.export)."""
     from agents.actor_critic import ActorCritic  # noqa: PLC0415
     from agents.normalizer import RunningMeanStd  # noqa: PLC0415
 
@@ -166,8 +168,14 @@ def policy_from_checkpoint(ckpt: dict, num_obs: int, num_actions: int, device: t
     have = (ckpt["spec"]["num_obs"], ckpt["spec"]["num_actions"])
     if have != (num_obs, num_actions):
         raise ValueError(f"checkpoint is for obs/action sizes {have}, the env has {(num_obs, num_actions)}")
-    policy = ActorCritic(num_obs, num_actions, tuple(cfg["net_dims"]), cfg["activation"],
-                         num_critic_obs=ckpt["spec"].get("num_critic_obs", 0)).to(device)
+    if cfg.get("agent") == "AgentSAC":  # the off-policy learner's: its policy alone (agents.sac)
+        from agents.sac.networks import SquashedGaussianPolicy  # noqa: PLC0415
+
+        policy = SquashedGaussianPolicy(num_obs, num_actions, tuple(cfg["actor_dims"]), cfg["layer_norm"],
+                                        cfg["log_std_min"], cfg["log_std_max"]).to(device)
+    else:
+        policy = ActorCritic(num_obs, num_actions, tuple(cfg["net_dims"]), cfg["activation"],
+                             num_critic_obs=ckpt["spec"].get("num_critic_obs", 0)).to(device)
     policy.load_state_dict(ckpt["policy"])
     if not cfg["normalize_obs"]:
         return policy, lambda obs: obs

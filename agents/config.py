@@ -25,8 +25,81 @@ def _is_number(v) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
 
 
+class RunConfig:
+    """What every learner's configuration does alike: presets with overrides, checked replacements, the target, the
+    dict a run directory's config.json and a checkpoint keep. ``RENAMED``: fields under an earlier name."""
+
+    RENAMED: dict[str, str] = {}
+
+    @classmethod
+    def renamed(cls, values: dict) -> dict:
+        """``values`` with fields under an earlier name (``RENAMED``) under today's; both given: today's wins."""
+        out = dict(values)
+        for old, new in cls.RENAMED.items():
+            if old in out:
+                value = out.pop(old)
+                out.setdefault(new, value)
+        return out
+
+    @classmethod
+    def from_preset(cls, preset: dict, **overrides):
+        """A task's starting point (the env's side keeps its tasks' presets: warpgym's registry entry) with
+        ``overrides``, checked."""
+        return cls(**{**dict(preset), **cls.renamed(overrides)}).validated()
+
+    def replace(self, **changes):
+        changes = self.renamed(changes)
+        names = {f.name for f in fields(self)}
+        unknown = sorted(set(changes) - names)
+        if unknown:
+            raise ValueError(f"unknown config field(s) {unknown}: choose from {sorted(names)}")
+        return replace(self, **changes).validated()
+
+    def validated(self):
+        raise NotImplementedError
+
+    def check_run_fields(self) -> None:
+        """The fields of the run itself (evaluations, checkpoints, the target), as every learner has them."""
+        for name in ("save_gap", "eval_envs"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int) or v < 1:
+                raise ValueError(f"{name}={v!r} must be a positive integer")
+        if not (_is_number(self.eval_gap) and self.eval_gap >= 0):
+            raise ValueError(f"eval_gap={self.eval_gap!r} must be 0 or a positive number of seconds")
+        for name in ("normalize_obs", "tf32", "keep_checkpoints"):
+            if not isinstance(getattr(self, name), bool):
+                raise ValueError(f"{name}={getattr(self, name)!r} must be True or False")
+        self.target_pair()
+        marks = tuple(self.save_at)
+        if any(not (isinstance(t, (int, float)) and math.isfinite(t) and t >= 0) for t in marks):
+            raise ValueError(f"save_at={self.save_at!r} must hold non-negative numbers of seconds, e.g. (60, 120)")
+        self.save_at = tuple(sorted(float(t) for t in marks))
+
+    def target_pair(self) -> tuple[str, float] | None:
+        """``target`` as (key, value), or None without one; raises on a malformed one."""
+        if not self.target:
+            return None
+        key, sep, value = str(self.target).partition("=")
+        try:
+            number = float(value)
+        except ValueError:
+            number = math.nan
+        if not (sep and key.strip() and math.isfinite(number)):
+            raise ValueError(f"target={self.target!r}: write KEY=VALUE with a logged key and a number, "
+                             "e.g. target=eval/speed=9.5 or target=eval/return=5850")
+        return key.strip(), number
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        for key in ("env_class", "eval_env_class"):
+            d[key] = getattr(d[key], "__qualname__", None) if d[key] is not None else None
+        return d
+
+
 @dataclass
-class Config:
+class Config(RunConfig):
+    RENAMED = RENAMED
+
     # mirrors ElegantRL's ``Arguments.agent`` for the tutorial's workflow; PPO is the one agent here
     agent: str = "AgentPPO"
     env_class: Callable | None = None  # builds the training env from env_args
@@ -95,34 +168,10 @@ class Config:
     # iteration that ends after each), e.g. (60, 120): policies of known training time to compare
     save_at: tuple[float, ...] = ()
 
-    @staticmethod
-    def renamed(values: dict) -> dict:
-        """``values`` with fields under an earlier name (``RENAMED``) under today's; both given: today's wins."""
-        out = dict(values)
-        for old, new in RENAMED.items():
-            if old in out:
-                value = out.pop(old)
-                out.setdefault(new, value)
-        return out
-
-    @classmethod
-    def from_preset(cls, preset: dict, **overrides) -> Config:
-        """A task's starting point (the env's side keeps its tasks' presets: warpgym's registry entry ``preset``)
-        with ``overrides``, checked."""
-        return cls(**{**dict(preset), **cls.renamed(overrides)}).validated()
-
-    def replace(self, **changes) -> Config:
-        changes = self.renamed(changes)
-        names = {f.name for f in fields(self)}
-        unknown = sorted(set(changes) - names)
-        if unknown:
-            raise ValueError(f"unknown config field(s) {unknown}: choose from {sorted(names)}")
-        return replace(self, **changes).validated()
-
     def validated(self) -> Config:
         if self.agent != "AgentPPO":
             raise ValueError(f"agent={self.agent!r}: this package implements 'AgentPPO' only")
-        for name in ("minibatch_size", "horizon_len", "repeat_times", "save_gap", "eval_envs"):
+        for name in ("minibatch_size", "horizon_len", "repeat_times"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int) or v < 1:
                 raise ValueError(f"{name}={v!r} must be a positive integer")
@@ -141,19 +190,14 @@ class Config:
             v = getattr(self, name)
             if not (_is_number(v) and v >= 0):
                 raise ValueError(f"{name}={v!r} must be 0 or a positive number, e.g. {name}={getattr(Config, name)}")
-        for name in ("overlap", "compile_update", "normalize_obs", "tf32", "keep_checkpoints", "anneal_lr",
-                     "eval_background", "stagger_episodes"):
+        for name in ("overlap", "compile_update", "anneal_lr", "eval_background", "stagger_episodes"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name}={getattr(self, name)!r} must be True or False")
         data_parallel.check_mode(self.multi_gpu)
-        self.target_pair()
+        self.check_run_fields()
         if self.activation not in ("elu", "relu", "tanh"):
             raise ValueError(f"activation={self.activation!r}: choose 'elu', 'relu' or 'tanh'")
-        marks = tuple(self.save_at)
-        if any(not (isinstance(t, (int, float)) and math.isfinite(t) and t >= 0) for t in marks):
-            raise ValueError(f"save_at={self.save_at!r} must hold non-negative numbers of seconds, e.g. (60, 120)")
         self.net_dims = tuple(self.net_dims)
-        self.save_at = tuple(sorted(float(t) for t in marks))
         return self
 
     def check_batch(self, num_envs: int, processes: int = 1) -> int:
@@ -165,23 +209,3 @@ class Config:
         """Steps one process collects per iteration among ``processes`` (``horizon_len`` but under
         ``multi_gpu='split-horizon'``, where it is the run's total: agents.data_parallel)."""
         return data_parallel.horizon_per_process(self.multi_gpu, self.horizon_len, processes)
-
-    def target_pair(self) -> tuple[str, float] | None:
-        """``target`` as (key, value), or None without one; raises on a malformed one."""
-        if not self.target:
-            return None
-        key, sep, value = str(self.target).partition("=")
-        try:
-            number = float(value)
-        except ValueError:
-            number = math.nan
-        if not (sep and key.strip() and math.isfinite(number)):
-            raise ValueError(f"target={self.target!r}: write KEY=VALUE with a logged key and a number, "
-                             "e.g. target=eval/speed=9.5 or target=eval/return=5850")
-        return key.strip(), number
-
-    def to_dict(self) -> dict:
-        d = asdict(self)
-        for key in ("env_class", "eval_env_class"):
-            d[key] = getattr(d[key], "__qualname__", None) if d[key] is not None else None
-        return d

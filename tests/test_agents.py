@@ -18,7 +18,7 @@ from agents.actor_critic import ActorCritic, gaussian_kl, gaussian_log_prob
 from agents.checkpoint import load, policy_from_checkpoint, save_atomic, with_normalizer
 from agents.logger import read_metrics
 from agents.ppo import adapted_lr, surrogate_loss, value_loss
-from agents.runner import progress_line
+from agents.loop import progress_line
 from agents.storage import compute_gae
 from point_mass import PointMassVecEnv
 

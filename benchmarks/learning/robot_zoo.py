@@ -8,6 +8,8 @@ first that tracks within 0.15 m/s (xy) and 0.25 rad/s (yaw) with no falls in ``-
 
 ``--together N`` trains N robots at once on the one GPU (the times are then upper bounds: the runs share it); the
 scoring runs on the CPU cores, a checkpoint a process. OUT/robot_zoo.json holds every checkpoint's scores.
+``--algos ppo sac`` trains each robot with each learner (``warpgym train --algo``), side by side under
+``--together``; ``--gate-xy`` tightens the gate (the Go1's is 0.10 m/s).
 """
 
 from __future__ import annotations
@@ -22,31 +24,39 @@ import time
 GATE = {"error_xy": 0.15, "error_yaw": 0.25, "falls": 0}
 
 
-def train_command(robot: str, run_dir: str, time_limit: float, every: float, seed: int, num_envs: int | None) -> list:
+def train_command(robot: str, run_dir: str, time_limit: float, every: float, seed: int, num_envs: int | None,
+                  algo: str = "ppo") -> list:
     marks = [str(int(t)) for t in range(int(every), int(time_limit) + 1, int(every))]
     return [sys.executable, "-m", "warpgym", "train", "--robot", robot, "--seed", str(seed), "--time-limit",
             str(time_limit), "--save-at", *marks, "--run-dir", run_dir, "--no-plots", "--no-eval",
-            *(["--num-envs", str(num_envs)] if num_envs else [])]
+            *(["--num-envs", str(num_envs)] if num_envs else []), *(["--algo", algo] if algo != "ppo" else [])]
+
+
+def run_names(args) -> list[tuple[str, str, str]]:
+    """(run name, robot, learner) of every run: the robot's name alone where one learner trains them all."""
+    return [(robot if len(args.algos) == 1 else f"{robot}-{algo}", robot, algo)
+            for robot in args.robots for algo in args.algos]
 
 
 def train_all(args) -> dict[str, dict]:
     """The robots' runs, ``--together`` at a time; each one's log beside its run."""
-    out, waiting, running, done = args.out, list(args.robots), {}, {}
+    out, waiting, running, done = args.out, run_names(args), {}, {}
     while waiting or running:
         while waiting and len(running) < args.together:
-            robot = waiting.pop(0)
-            run_dir = os.path.join(out, robot)
-            log = open(os.path.join(out, f"{robot}.log"), "w")
-            cmd = train_command(robot, run_dir, args.time_limit, args.every, args.seed, args.num_envs)
-            running[robot] = (subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT), log, run_dir,
-                              time.time())
+            name, robot, algo = waiting.pop(0)
+            run_dir = os.path.join(out, name)
+            log = open(os.path.join(out, f"{name}.log"), "w")
+            cmd = train_command(robot, run_dir, args.time_limit, args.every, args.seed, args.num_envs, algo)
+            running[name] = (subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT), log, run_dir,
+                             time.time(), robot, algo)
         time.sleep(2.0)
-        for robot, (proc, log, run_dir, started) in list(running.items()):
+        for name, (proc, log, run_dir, started, robot, algo) in list(running.items()):
             if proc.poll() is not None:
                 log.close()
-                done[robot] = {"run_dir": run_dir, "rc": proc.returncode, "wall_s": round(time.time() - started, 1),
-                               "together": min(args.together, len(args.robots))}
-                del running[robot]
+                done[name] = {"run_dir": run_dir, "rc": proc.returncode, "wall_s": round(time.time() - started, 1),
+                              "together": min(args.together, len(args.robots) * len(args.algos)), "robot": robot,
+                              "algo": algo}
+                del running[name]
     return done
 
 
@@ -74,36 +84,38 @@ def score(job: tuple[str, str, int]) -> dict:
             "episodes": t.episodes}
 
 
-def passes(row: dict) -> bool:
-    return row["error_xy"] <= GATE["error_xy"] and row["error_yaw"] <= GATE["error_yaw"] and row["falls"] == 0
+def passes(row: dict, gate: dict = GATE) -> bool:
+    return row["error_xy"] <= gate["error_xy"] and row["error_yaw"] <= gate["error_yaw"] and row["falls"] == 0
 
 
 def summarize(runs: dict, scores: list[dict], gpu: str, args) -> dict:
     robots = {}
-    for robot, run in runs.items():
+    gate = {**GATE, "error_xy": args.gate_xy, "error_yaw": args.gate_yaw}
+    for name, run in runs.items():
+        robot = run["robot"]
         summary_path = os.path.join(run["run_dir"], "summary.json")
         summary = json.load(open(summary_path)) if os.path.isfile(summary_path) else {}
         kept = {k["path"]: k for k in summary.get("kept_checkpoints", [])}
         rows = sorted(({**r, "time_s": kept[r["path"]]["time_s"], "samples": kept[r["path"]]["samples"]}
-                       for r in scores if r["robot"] == robot and r["path"] in kept), key=lambda r: r["time_s"])
-        first = next((r for r in rows if passes(r)), None)
+                       for r in scores if r["robot"] == name and r["path"] in kept), key=lambda r: r["time_s"])
+        first = next((r for r in rows if passes(r, gate)), None)
         from warpgym.tasks.legged.robot_task import load_robot  # noqa: PLC0415
 
         definition = load_robot(robot)
-        robots[robot] = {"name": definition.label, "file": os.path.basename(definition.file), **run,
+        robots[name] = {"name": definition.label, "file": os.path.basename(definition.file), **run,
                          "samples_per_s": summary.get("steady_samples_per_s_median"),
                          "first_iteration_s": summary.get("first_iteration_time_s"),
                          "gate_s": first["time_s"] if first else None, "gate_row": first, "checkpoints": rows,
                          "best": min(rows, key=lambda r: (r["falls"], r["error_xy"] + r["error_yaw"])) if rows else None}
-    return {"gpu": gpu, "date": time.strftime("%Y-%m-%d"), "gate": GATE, "episodes": args.episodes,
+    return {"gpu": gpu, "date": time.strftime("%Y-%m-%d"), "gate": gate, "episodes": args.episodes,
             "time_limit_s": args.time_limit, "every_s": args.every, "seed": args.seed, "together": args.together,
             "command": "python -m benchmarks.learning.robot_zoo run " + " ".join(sys.argv[2:]), "robots": robots}
 
 
 def table(*runs: dict) -> str:
     """One row per robot and run (a robot run twice, with different company on the GPU, has two)."""
-    lines = ["| robot | file | time to the gate | error xy / yaw then [m/s, rad/s] | best in the run (xy / yaw, falls) "
-             "| env steps/s (training) | runs sharing the GPU |", "|---|---|---|---|---|---|---|"]
+    lines = ["| robot | file | learner | time to the gate | error xy / yaw then [m/s, rad/s] | best in the run (xy / yaw, "
+             "falls) | env steps/s (training) | runs sharing the GPU |", "|---|---|---|---|---|---|---|---|"]
     for data in runs:
         for r in data["robots"].values():
             gate, best = r["gate_row"], r["best"]
@@ -112,7 +124,11 @@ def table(*runs: dict) -> str:
             top = ("%.3f / %.3f, %d of %d" % (best["error_xy"], best["error_yaw"], best["falls"], best["episodes"])
                    if best else "-")
             rate = "%.0f k" % (r["samples_per_s"] / 1e3) if r.get("samples_per_s") else "-"
-            lines.append(f"| {r['name']} | {r['file']} | {when} | {then} | {top} | {rate} | {r['together']} |")
+            learner = {"ppo": "PPO", "sac": "SAC"}.get(r.get("algo", "ppo"), r.get("algo"))
+            if data["gate"]["error_xy"] != GATE["error_xy"]:
+                when += f" (xy <= {data['gate']['error_xy']:g})"
+            lines.append(f"| {r['name']} | {r['file']} | {learner} | {when} | {then} | {top} | {rate} | "
+                         f"{r['together']} |")
     return "\n".join(lines)
 
 
@@ -138,6 +154,9 @@ def main(argv=None) -> int:
     run.add_argument("--num-envs", type=int, default=None)
     run.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     run.add_argument("--gifs", action="store_true", help="draw each robot's chosen checkpoint (warpgym play --gif)")
+    run.add_argument("--algos", nargs="+", default=["ppo"], choices=("ppo", "sac"))
+    run.add_argument("--gate-xy", type=float, default=GATE["error_xy"])
+    run.add_argument("--gate-yaw", type=float, default=GATE["error_yaw"])
     tab = sub.add_parser("table")
     tab.add_argument("json", nargs="+")
     args = ap.parse_args(argv)
@@ -147,10 +166,10 @@ def main(argv=None) -> int:
     os.makedirs(args.out, exist_ok=True)
     runs = train_all(args)
     jobs = []
-    for robot, r in runs.items():
+    for name, r in runs.items():
         summary = os.path.join(r["run_dir"], "summary.json")
         kept = json.load(open(summary)).get("kept_checkpoints", []) if os.path.isfile(summary) else []
-        jobs += [(k["path"], robot, args.episodes) for k in kept]
+        jobs += [(k["path"], name, args.episodes) for k in kept]
     from multiprocessing import get_context  # noqa: PLC0415
 
     with get_context("spawn").Pool(max(1, min(args.workers, len(jobs) or 1))) as pool:

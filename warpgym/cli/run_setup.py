@@ -55,35 +55,18 @@ def check_resume(run_dir: str, saved: dict, task_flag: str | None) -> bool:
     return True
 
 
-def build_config(args, task: str, num_envs: int, device: str, saved: dict | None = None, processes: int = 1) -> Config:
-    """The task's preset, or the saved config of the run being resumed, then the flags given; the training env
-    is this process's share of ``num_envs`` among ``processes`` (Config.multi_gpu)."""
-    if saved is not None:
-        known = {f.name for f in fields(Config)} - {"env_class", "env_args", "eval_env_class", "eval_env_args"}
-        # a run saved before Config.multi_gpu gave each process num_envs envs and mini-batches of minibatch_size;
-        # one saved before Config.minibatch_size wrote batch_size (Config.renamed)
-        saved = {"multi_gpu": "grow-batch", **Config.renamed(saved)}
-        cfg = Config(**{k: (tuple(v) if k == "net_dims" else v) for k, v in saved.items() if k in known})
-    else:
-        from warpgym.tasks.registry import task_entry  # noqa: PLC0415
+def build_config(args, task: str, num_envs: int, device: str, saved: dict | None = None, processes: int = 1):
+    """The task's preset for the run's learner (``--algo``), or the saved config of the run being resumed, then the
+    flags given; the training env is this process's share of ``num_envs`` among ``processes`` (Config.multi_gpu)."""
+    from agents.algos import by_agent  # noqa: PLC0415
 
-        cfg = Config.from_preset(task_entry(task).preset, seed=args.seed)
-    changes = {k: v for k, v in {
-        "horizon_len": args.horizon_len, "repeat_times": args.repeat_times, "learning_rate": args.learning_rate,
-        "save_gap": args.save_gap, "eval_gap": args.eval_gap, "eval_envs": args.eval_envs,
-        "minibatch_size": args.minibatch_size, "keep_checkpoints": args.keep_checkpoints or None,
-        "overlap": args.overlap or None, "compile_update": args.compile_update or None,
-        "save_at": tuple(args.save_at) if args.save_at else None, "target": args.target,
-        "multi_gpu": args.multi_gpu,
-    }.items() if v is not None}
-    if saved is None and "eval_envs" not in changes and device == "cpu":
-        changes["eval_envs"] = 4
-    cfg = cfg.replace(**{**(args.config or {}), **changes})
-    samples = num_envs * cfg.horizon_len
-    batch = cfg.minibatch_size
-    if saved is None and args.minibatch_size is None and "minibatch_size" not in (args.config or {}) and (
-            batch > samples // 2 or samples % batch):
-        batch = max(samples // 2, 1)  # the preset's mini-batch does not fit this env count
+    algo = by_agent(saved.get("agent")).name if saved is not None else (getattr(args, "algo", None) or "ppo")
+    if algo == "sac":
+        cfg = sac_config(args, task, device, saved)
+        local_envs = num_envs
+    else:
+        cfg = ppo_config(args, task, num_envs, device, saved)
+        local_envs = envs_per_process(cfg.multi_gpu, num_envs, processes)
     from warpgym.envs import entry_point  # noqa: PLC0415
     from warpgym.tasks.registry import task_entry  # noqa: PLC0415
 
@@ -103,14 +86,66 @@ def build_config(args, task: str, num_envs: int, device: str, saved: dict | None
         raise ValueError(f"--substeps / --physics set warpgym's own robots' physics; {task} simulates "
                          "Gymnasium's model file as it is: drop them")
     env_class = entry_point(entry.vector_entry_point)
-    local_envs = envs_per_process(cfg.multi_gpu, num_envs, processes)
     return cfg.replace(
-        minibatch_size=batch,
         env_class=env_class,
         env_args={**common, "num_envs": local_envs, "seed": args.seed},
         eval_env_class=env_class,
         eval_env_args={**common, "num_envs": cfg.eval_envs, "seed": args.seed + 1},
     )
+
+
+def run_changes(args) -> dict:
+    """The flags of the run itself, as config fields (every learner has them)."""
+    return {k: v for k, v in {
+        "save_gap": args.save_gap, "eval_gap": args.eval_gap, "eval_envs": args.eval_envs,
+        "keep_checkpoints": args.keep_checkpoints or None, "save_at": tuple(args.save_at) if args.save_at else None,
+        "target": args.target}.items() if v is not None}
+
+
+def sac_config(args, task: str, device: str, saved: dict | None):
+    """The off-policy learner's config: the task's SAC preset or the resumed run's, then --config and the run's flags."""
+    from agents.sac import SACConfig  # noqa: PLC0415
+
+    if saved is not None:
+        known = {f.name for f in fields(SACConfig)} - {"env_class", "env_args", "eval_env_class", "eval_env_args"}
+        widths = ("actor_dims", "critic_dims", "save_at")
+        cfg = SACConfig(**{k: (tuple(v) if k in widths else v) for k, v in saved.items() if k in known})
+    else:
+        from warpgym.tasks.registry import task_entry  # noqa: PLC0415
+
+        cfg = SACConfig.from_preset(task_entry(task).sac_preset, seed=args.seed)
+    changes = run_changes(args)
+    if saved is None and "eval_envs" not in changes and device == "cpu":
+        changes["eval_envs"] = 4
+    return cfg.replace(**{**(args.config or {}), **changes})
+
+
+def ppo_config(args, task: str, num_envs: int, device: str, saved: dict | None) -> Config:
+    if saved is not None:
+        known = {f.name for f in fields(Config)} - {"env_class", "env_args", "eval_env_class", "eval_env_args"}
+        # a run saved before Config.multi_gpu gave each process num_envs envs and mini-batches of minibatch_size;
+        # one saved before Config.minibatch_size wrote batch_size (Config.renamed)
+        saved = {"multi_gpu": "grow-batch", **Config.renamed(saved)}
+        cfg = Config(**{k: (tuple(v) if k == "net_dims" else v) for k, v in saved.items() if k in known})
+    else:
+        from warpgym.tasks.registry import task_entry  # noqa: PLC0415
+
+        cfg = Config.from_preset(task_entry(task).preset, seed=args.seed)
+    changes = {k: v for k, v in {
+        "horizon_len": args.horizon_len, "repeat_times": args.repeat_times, "learning_rate": args.learning_rate,
+        "minibatch_size": args.minibatch_size, "overlap": args.overlap or None,
+        "compile_update": args.compile_update or None, "multi_gpu": args.multi_gpu,
+    }.items() if v is not None}
+    changes.update(run_changes(args))
+    if saved is None and "eval_envs" not in changes and device == "cpu":
+        changes["eval_envs"] = 4
+    cfg = cfg.replace(**{**(args.config or {}), **changes})
+    samples = num_envs * cfg.horizon_len
+    batch = cfg.minibatch_size
+    if saved is None and args.minibatch_size is None and "minibatch_size" not in (args.config or {}) and (
+            batch > samples // 2 or samples % batch):
+        batch = max(samples // 2, 1)  # the preset's mini-batch does not fit this env count
+    return cfg.replace(minibatch_size=batch)
 
 
 def same_on_every_worker(text: str, device: str) -> str:
@@ -212,7 +247,8 @@ def configure(args, plan: RunPlan, rank: int, processes: int) -> Config:
     envs draw their own resets; without a budget, the task's default number of iterations."""
     try:
         cfg = build_config(args, plan.task, plan.num_envs, plan.device, plan.saved, processes)
-        cfg.check_batch(cfg.env_args["num_envs"], processes)
+        if cfg.agent == "AgentPPO":
+            cfg.check_batch(cfg.env_args["num_envs"], processes)
     except ValueError as e:
         train_args.parser().error(with_flag_names(str(e)))
     if rank > 0:  # rank r's envs draw their own resets (seed + 1000 r); rank 0 alone logs, evaluates and saves

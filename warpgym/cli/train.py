@@ -17,6 +17,7 @@ import sys
 import time
 
 from agents import Config, OnPolicyRunner
+from agents.algos import by_agent
 from agents.data_parallel import kl_target
 from warpgym.cli import process_start_time, train_args, write_json
 from warpgym.cli.run_setup import RunPlan, configure, device_kind, plan_run
@@ -34,11 +35,12 @@ def summarize(history: list[dict], device_name: str, cfg: Config) -> dict:
 
     rows = history[len(history) // 5 :]
     workers = int(os.environ.get("WORLD_SIZE", "1"))
-    out = {"device": device_name, "num_envs": cfg.env_args["num_envs"], "iterations": len(history),
-           "workers": workers, "num_envs_total": cfg.env_args["num_envs"] * workers, "multi_gpu": cfg.multi_gpu,
-           "kl_target": kl_target(cfg.multi_gpu, cfg.desired_kl, workers),
-           "horizon_per_process": cfg.process_horizon(workers),
+    out = {"device": device_name, "agent": cfg.agent, "num_envs": cfg.env_args["num_envs"],
+           "iterations": len(history), "workers": workers, "num_envs_total": cfg.env_args["num_envs"] * workers,
            "steady_samples_per_s_median": steady_median(history) or 0.0}
+    if cfg.agent == "AgentPPO":
+        out.update(multi_gpu=cfg.multi_gpu, kl_target=kl_target(cfg.multi_gpu, cfg.desired_kl, workers),
+                   horizon_per_process=cfg.process_horizon(workers))
     phases = sorted({k for r in rows for k in r if k.startswith("phase/")} | {"iteration_s"})
     out["steady_phase_s_median"] = {k: steady_median(history, k) for k in phases if any(k in r for r in rows)}
     if history:
@@ -201,12 +203,17 @@ def make_runner(args, plan: RunPlan, cfg: Config, startup: Startup) -> tuple[OnP
 
         recorder = EvalVideoRecorder(plan.run_dir, steps=args.video_length, every=args.video_every,
                                      print_fn=lambda s: print(s, flush=True))
-    runner = OnPolicyRunner(env, cfg, run_dir=plan.run_dir, eval_env=eval_env, start_time=PROCESS_START,
-                            print_fn=lambda s: print(s, flush=True), profile=args.profile,
-                            cuda_graph=not args.no_cuda_graph, rollout_graph=args.rollout_graph,
-                            eval_recorder=recorder)
-    startup.phase("policy and optimiser ready; the first iterations capture the update graph and the rollout's "
-                  f"({runner.collector.capture}: agents.collect)")
+    common = dict(run_dir=plan.run_dir, eval_env=eval_env, start_time=PROCESS_START,
+                  print_fn=lambda s: print(s, flush=True), profile=args.profile, cuda_graph=not args.no_cuda_graph,
+                  eval_recorder=recorder)
+    if cfg.agent == "AgentPPO":
+        runner = OnPolicyRunner(env, cfg, rollout_graph=args.rollout_graph, **common)
+        startup.phase("policy and optimiser ready; the first iterations capture the update graph and the rollout's "
+                      f"({runner.capture}: agents.collect)")
+    else:
+        runner = by_agent(cfg.agent).runner(env, cfg, **common)
+        startup.phase(f"policy, critics, replay and optimisers ready; after {cfg.learning_starts} steps each env "
+                      f"step and its updates are captured ({runner.capture}: agents.sac.runner)")
     return runner, env
 
 
@@ -230,7 +237,7 @@ def run_summary(args, history: list[dict], device_name: str, cfg: Config, runner
     if cfg.target:
         summary["target"] = {"target": cfg.target, "reached": runner.target_reached}
     # the capture the rollouts had: "off" where the device cannot capture or a capture failed and fell back
-    summary["rollout_graph"] = runner.collector.capture
+    summary["rollout_graph"] = runner.capture
     summary["startup"] = startup.record()
     summary["faults"] = {k[len("faults/"):]: v for k, v in (history[-1] if history else {}).items()
                          if k.startswith("faults/")}
@@ -264,14 +271,9 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
                                                           "num_envs": plan.num_envs, "seed": args.seed,
                                                           **cfg.to_dict()})
     say = print if rank == 0 else (lambda *a, **k: None)
-    local_envs = cfg.env_args["num_envs"]
-    widened = kl_target(cfg.multi_gpu, cfg.desired_kl, processes)
-    steps = cfg.process_horizon(processes)
-    shares = (f" x {processes} processes, {local_envs} envs each (--multi-gpu {cfg.multi_gpu}: "
-              f"{local_envs * processes} in all" + (f", {steps} of horizon_len {cfg.horizon_len} steps each"
-                                                    if steps != cfg.horizon_len else "")
-              + (f", KL target {widened:g}" if widened != cfg.desired_kl else "") + ")") if processes > 1 else ""
-    say(f"warpgym PPO | {plan.task} | {plan.num_envs} envs on {plan.device} ({device_name}){shares} | run dir "
+    shares = share_line(cfg, processes) if processes > 1 else ""
+    learner = "PPO" if cfg.agent == "AgentPPO" else "SAC"
+    say(f"warpgym {learner} | {plan.task} | {plan.num_envs} envs on {plan.device} ({device_name}){shares} | run dir "
         f"{run_dir}", flush=True)
     startup = Startup(say)
     if args.no_mathdx:
@@ -314,6 +316,17 @@ def train(args, rank: int, watch=None, live: dict | None = None) -> int:
         print(f"stopped on request after iteration {runner.iteration}. {resume_hint(run_dir)}", flush=True)
     print(closing_line(plan.task, run_dir, summary), flush=True)
     return 0
+
+
+def share_line(cfg: Config, processes: int) -> str:
+    """How PPO's processes divide the run (the header's middle)."""
+    local_envs = cfg.env_args["num_envs"]
+    widened = kl_target(cfg.multi_gpu, cfg.desired_kl, processes)
+    steps = cfg.process_horizon(processes)
+    return (f" x {processes} processes, {local_envs} envs each (--multi-gpu {cfg.multi_gpu}: "
+            f"{local_envs * processes} in all" + (f", {steps} of horizon_len {cfg.horizon_len} steps each"
+                                                  if steps != cfg.horizon_len else "")
+            + (f", KL target {widened:g}" if widened != cfg.desired_kl else "") + ")")
 
 
 def closing_line(task: str, run_dir: str, summary: dict) -> str:

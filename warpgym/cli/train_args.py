@@ -23,6 +23,10 @@ def parser(description: str | None = None) -> CommandParser:
                     help="the robot of a legged velocity task: a zoo robot (a1, aliengo, go1, g1, ...) or a robot's "
                          "TOML definition naming its URDF or MJCF file (docs/robots.md); --task then defaults to "
                          "VelocityFlat-v0 (VelocityRough-v0 for rough ground)")
+    ap.add_argument("--algo", default=None, choices=("ppo", "sac"),
+                    help="the learner: ppo (default; several GPUs through torchrun) or sac (off-policy: soft "
+                         "actor-critic with a distributional critic, a device replay and several updates per env "
+                         "step, one GPU; agents/sac); its settings through --config, e.g. --config batch_size=4096")
     ap.add_argument("--num-envs", type=positive_int(4096), default=None,
                     help="default: the task's preset on a GPU (8192 for the Ant, 4096 for the Humanoid and "
                          "the legged tasks), fewer on the CPU")
@@ -54,8 +58,9 @@ def parser(description: str | None = None) -> CommandParser:
     ap.add_argument("--physics", action="append", default=[], metavar="NAME=VALUE",
                     help="a physics setting (warpgym/sim/physics.py), e.g. --physics armature=0.05; repeat for more")
     ap.add_argument("--config", action="append", default=[], metavar="NAME=VALUE",
-                    help="any PPO setting of agents/config.py's Config, e.g. --config gamma=0.999 --config "
-                         "net_dims=256,256 --config reward_scale=0.1; repeat for more (a sweep's knobs)")
+                    help="any setting of the learner's config (PPO: agents/config.py's Config; --algo sac: "
+                         "agents/sac/config.py's SACConfig), e.g. --config gamma=0.999 --config net_dims=256,256 "
+                         "--config reward_scale=0.1; repeat for more (a sweep's knobs)")
     ap.add_argument("--save-at", type=non_negative_float(60), nargs="+", default=None, metavar="SECONDS",
                     help="also keep checkpoint-<iteration>.pt at the first iteration after each of these "
                          "wall-clock seconds since start, e.g. --save-at 60 120 (summary.json lists them)")
@@ -114,8 +119,9 @@ def parse_args(argv=None, description: str | None = None):
         ap.error(f"--physics: {e}")
     try:
         # a resumed run's are checked against its own saved config
-        args.config = parse_config(args.config) if args.resume is not None else task_config(args.task or "Ant",
-                                                                                              args.config)
+        algo = args.algo or "ppo"  # a resumed run's learner is its own (run_setup), its settings checked there
+        args.config = (parse_config(args.config, saved_algo(args.resume)) if args.resume is not None
+                       else task_config(args.task or "Ant", args.config, algo))
     except ValueError as e:
         ap.error(f"--config: {e}")
     if args.video:
@@ -130,36 +136,59 @@ def parse_args(argv=None, description: str | None = None):
 NOT_CONFIGURABLE = ("agent", "env_class", "env_args", "eval_env_class", "eval_env_args", "seed")
 
 
-def parse_config(texts: list[str]) -> dict:
-    """``["gamma=0.999", "net_dims=256,256"]`` -> {"gamma": 0.999, "net_dims": (256, 256)}; each name a Config
-    field (agents/config.py), checked with the preset when the run is configured."""
+# the settings that are sequences of layer widths or of seconds, written comma-separated
+WIDTHS = ("net_dims", "actor_dims", "critic_dims")
+
+
+def saved_algo(run_dir: str) -> str:
+    """The learner of a run directory's config.json (PPO's for a run saved before the off-policy learner)."""
+    import json  # noqa: PLC0415
+
+    from agents.algos import by_agent  # noqa: PLC0415
+
+    try:
+        with open(os.path.join(run_dir, "config.json")) as f:
+            agent = json.load(f).get("agent")
+    except (OSError, ValueError, AttributeError):
+        return "ppo"  # the resume's own checks say what is wrong with the file
+    try:
+        return by_agent(agent).name
+    except ValueError:
+        return "ppo"
+
+
+def parse_config(texts: list[str], algo: str = "ppo") -> dict:
+    """``["gamma=0.999", "net_dims=256,256"]`` -> {"gamma": 0.999, "net_dims": (256, 256)}; each name a field of
+    the learner's config (agents/config.py's Config, agents/sac/config.py's SACConfig), checked with the preset when
+    the run is configured."""
     from dataclasses import fields  # noqa: PLC0415
 
-    from agents.config import RENAMED, Config  # noqa: PLC0415
+    from agents.algos import algo as learner  # noqa: PLC0415
     from warpgym.sim.physics import parse_setting  # noqa: PLC0415
 
-    names = {f.name for f in fields(Config)} - set(NOT_CONFIGURABLE)
+    config = learner(algo).config
+    names = {f.name for f in fields(config)} - set(NOT_CONFIGURABLE)
     out = {}
     for text in texts:
         name, value = parse_setting(text)
-        name = RENAMED.get(name, name)  # an earlier name still works
+        name = config.RENAMED.get(name, name)  # an earlier name still works
         if name not in names:
-            raise ValueError(f"{name!r} is not a PPO setting; choose from {sorted(names)}")
-        if name in ("net_dims", "save_at"):
+            raise ValueError(f"{name!r} is not a {algo.upper()} setting; choose from {sorted(names)}")
+        if name in WIDTHS or name == "save_at":
             try:
-                value = tuple(int(v) if name == "net_dims" else float(v) for v in str(value).split(","))
+                value = tuple(int(v) if name in WIDTHS else float(v) for v in str(value).split(","))
             except ValueError:
                 raise ValueError(f"{text!r}: write comma-separated numbers, e.g. {name}=256,128") from None
         out[name] = value
     return out
 
 
-def task_config(task: str, texts: list[str]) -> dict:
+def task_config(task: str, texts: list[str], algo: str = "ppo") -> dict:
     """``parse_config``'s settings, checked against ``task``'s preset: a ValueError names a wrong one."""
-    from agents.config import Config  # noqa: PLC0415
+    from agents.algos import algo as learner  # noqa: PLC0415
 
-    config = parse_config(texts)
-    Config.from_preset(task_entry(task).preset).replace(**config)
+    config = parse_config(texts, algo)
+    learner(algo).config.from_preset(task_entry(task).preset_for(algo)).replace(**config)
     return config
 
 
@@ -194,6 +223,18 @@ def check_values(ap, args) -> None:
                      "module: --task my_module:MyTask-v0")
     if args.robot is not None:
         check_robot(ap, args)
+    if args.algo is not None and args.resume is not None:
+        ap.error(f"--algo {args.algo}: a resumed run keeps the learner it was started with; drop --algo")
+    if args.algo == "sac":
+        ppo_only = [f for f, v in (("--horizon-len", args.horizon_len), ("--minibatch-size", args.minibatch_size),
+                                   ("--repeat-times", args.repeat_times), ("--learning-rate", args.learning_rate),
+                                   ("--multi-gpu", args.multi_gpu), ("--overlap", args.overlap or None),
+                                   ("--compile-update", args.compile_update or None)) if v is not None]
+        if ppo_only:
+            ap.error(f"{', '.join(ppo_only)}: PPO's settings; --algo sac takes its own through --config "
+                     "(steps_per_iteration, batch_size, num_updates, actor_lr, critic_lr: agents/sac/config.py)")
+        if int(os.environ.get("WORLD_SIZE", "1")) > 1:
+            ap.error("--algo sac trains on one GPU: run python -m warpgym train --algo sac, not torchrun")
     if args.target is not None:
         from agents.config import Config  # noqa: PLC0415
 

@@ -53,3 +53,14 @@ LEGGED = dict(net_dims=(512, 256, 128), horizon_len=24, minibatch_size=24576, re
               value_coef=1.0, max_grad_norm=1.0, bounds_coef=0.0, reward_scale=1.0, stagger_episodes=True,
               eval_gap=60.0)
 PRESETS.update({name: LEGGED for name in LEGGED_TASKS})
+
+# The off-policy learner's starting points (agents.sac.SACConfig fields), by family: `warpgym train --algo sac`.
+# The legged tasks take FastSAC's humanoid settings (4096 envs, batch 8192, 8 critic steps an env step, the actor
+# every 4th, gamma 0.97, a 101-atom critic, layer norm, bf16), its support narrowed to the returns mjlab's rewards
+# (scaled by the control step) add up to at gamma 0.97; Gymnasium's tasks SAC's usual gamma, rewards scaled by 0.1 so
+# that a return of the suite's figures sits inside the support, and SAC's target entropy of -1 per action.
+SAC_LEGGED = dict(v_min=-10.0, v_max=10.0, gamma=0.97, eval_gap=60.0)
+SAC_SUITE = dict(v_min=-50.0, v_max=150.0, gamma=0.99, reward_scale=0.1, target_entropy_ratio=1.0, alpha_init=0.01,
+                 num_updates=4, policy_frequency=2, eval_gap=60.0)
+SAC_ROBOTS = dict(v_min=-50.0, v_max=150.0, gamma=0.99, reward_scale=0.01, target_entropy_ratio=1.0, alpha_init=0.01,
+                  num_updates=4, policy_frequency=2)

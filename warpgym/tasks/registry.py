@@ -26,7 +26,7 @@ from warpgym.tasks.legged import LEGGED, LeggedTask
 from warpgym.tasks.legged.contract import deployment_contract
 from warpgym.tasks.names import imported
 from warpgym.tasks.presets import LEGGED as LEGGED_PRESET
-from warpgym.tasks.presets import PRESETS
+from warpgym.tasks.presets import PRESETS, SAC_LEGGED, SAC_ROBOTS, SAC_SUITE
 from warpgym.tasks.suite import SUITE, GymTask
 
 
@@ -54,6 +54,7 @@ class TaskEntry:
     default_envs: tuple[int, int]
     default_iterations: tuple[int, int]
     preset: dict = None  # PPO's starting point (agents.Config fields, warpgym.tasks.presets)
+    sac_preset: dict = None  # the off-policy learner's (agents.sac.SACConfig fields; `warpgym train --algo sac`)
     # the commands' parts that differ by family, as callables (each imports its module when called:
     # ``_command``): how `warpgym eval` scores a policy, and what `warpgym export` writes about the task (None: the
     # env's own observation and action, docs/tasks.md)
@@ -63,6 +64,10 @@ class TaskEntry:
     # beside MuJoCo Warp's own (env_steps_per_s, mjwarp_steps_per_s: a median or each timing)
     bench: Callable = None
     asymmetric: bool = False  # the critic has an observation group of its own (info["critic_obs"])
+
+    def preset_for(self, algo: str) -> dict:
+        """The starting point of a learner (agents.algos' names) on this task."""
+        return self.sac_preset if algo == "sac" else self.preset
 
     def defaults(self, device_kind: str) -> tuple[int, int]:
         """(envs, iterations) for a device kind, "cuda" or "cpu"."""
@@ -88,7 +93,7 @@ def _robot(name: str, episode_length: int, envs: tuple[int, int], iterations: tu
                      draw_clip=_command("warpgym.media.robots", "draw_robot_clip"), training_clips=True,
                      scored_in="native MuJoCo",
                      reports_speed=True, default_envs=envs, default_iterations=iterations,
-                     preset=PRESETS[preset or name],
+                     preset=PRESETS[preset or name], sac_preset=SAC_ROBOTS,
                      evaluate=_command("warpgym.cli.eval.robots", "evaluate"),
                      bench=_command("warpgym.cli.bench.robots", "bench_robot_task"))
 
@@ -99,7 +104,7 @@ def _suite(name: str, episode_length: int, preset: str | None = None) -> TaskEnt
                      physics_flags=False, clip_keys=("dof_pos", "dof_vel"), clip_all_worlds=False,
                      draw_clip=_command("warpgym.media.suite", "draw_suite_clip"), training_clips=False,
                      scored_in="Gymnasium's env", reports_speed=False, default_envs=(4096, 64),
-                     default_iterations=(500, 100), preset=PRESETS[preset or name],
+                     default_iterations=(500, 100), preset=PRESETS[preset or name], sac_preset=SAC_SUITE,
                      evaluate=_command("warpgym.cli.eval.suite", "evaluate"),
                      bench=_command("warpgym.cli.bench.suite", "bench_suite_task"))
 
@@ -111,7 +116,7 @@ def _legged(name: str, episode_length: int) -> TaskEntry:
                      physics_flags=False, clip_keys=("dof_pos", "dof_vel"), clip_all_worlds=False,
                      draw_clip=_command("warpgym.media.legged", "draw_legged_clip"), training_clips=False,
                      scored_in="native MuJoCo", reports_speed=False, default_envs=(4096, 32),
-                     default_iterations=(1000, 30), preset=PRESETS.get(name, LEGGED_PRESET),
+                     default_iterations=(1000, 30), preset=PRESETS.get(name, LEGGED_PRESET), sac_preset=SAC_LEGGED,
                      evaluate=_command("warpgym.cli.eval.legged", "evaluate"),
                      export_contract=deployment_contract, asymmetric=True,
                      bench=_command("warpgym.cli.bench.legged", "bench_legged_task"))
