@@ -13,22 +13,19 @@ class Algo:
     agent: str  # the config's ``agent`` field
     config: Callable  # the config class
     runner: Callable  # (env, cfg, run_dir=..., eval_env=..., ...) -> a TrainingLoop
-    summary: str
 
 
 def _ppo() -> Algo:
     from agents.config import Config  # noqa: PLC0415
     from agents.runner import OnPolicyRunner  # noqa: PLC0415
 
-    return Algo("ppo", "AgentPPO", Config, OnPolicyRunner, "PPO (on-policy; rollouts of all envs, GAE, clipped "
-                "surrogate, several GPUs through torchrun)")
+    return Algo("ppo", "AgentPPO", Config, OnPolicyRunner)
 
 
 def _sac() -> Algo:
     from agents.sac import OffPolicyRunner, SACConfig  # noqa: PLC0415
 
-    return Algo("sac", "AgentSAC", SACConfig, OffPolicyRunner, "soft actor-critic (off-policy; device replay, "
-                "distributional clipped double Q, several updates per env step, one GPU)")
+    return Algo("sac", "AgentSAC", SACConfig, OffPolicyRunner)
 
 
 ALGOS: dict[str, Callable[[], Algo]] = {"ppo": _ppo, "sac": _sac}

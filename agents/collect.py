@@ -27,6 +27,7 @@ import torch
 from agents.actor_critic import ActorCritic
 from agents.config import Config
 from agents.profiling import PhaseTimer
+from agents.protocol import critic_obs_of
 from agents.rollout import EpisodeTracker
 from agents.storage import RolloutStorage, compute_gae
 
@@ -116,7 +117,7 @@ class Collector:
         obs, info = self.env.stagger_episodes() if stagger else self.env.reset()
         self.last_raw_obs = obs.clone()
         if self.storage.critic_obs is not None:
-            self.last_raw_critic = _critic_of(info, self.env).clone()
+            self.last_raw_critic = critic_obs_of(info, self.env).clone()
         return self.last_raw_obs, self.last_raw_critic
 
     def rollout(self, timer: PhaseTimer) -> None:
@@ -207,12 +208,3 @@ class Collector:
         self.episodes.end_rollout(s.dones)
         self.step_index.zero_()
         timer.lap("bootstrap, GAE")
-
-
-def _critic_of(info: dict, env) -> torch.Tensor:
-    """The critic's observation in a reset's or step's info (agents.protocol), or a clear error."""
-    critic = info.get("critic_obs") if isinstance(info, dict) else None
-    if critic is None:
-        raise TypeError(f"{type(env).__name__} declares num_critic_obs but its reset() info has no 'critic_obs': "
-                        "return the critic's observation there (agents.protocol)")
-    return critic

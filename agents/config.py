@@ -25,6 +25,15 @@ def _is_number(v) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
 
 
+def check_positive_ints(cfg, names: tuple[str, ...]) -> None:
+    """Each of ``cfg``'s fields ``names`` a positive integer (True and False are not), or a ValueError naming the
+    field, its value and its default."""
+    for name in names:
+        v = getattr(cfg, name)
+        if isinstance(v, bool) or not isinstance(v, int) or v < 1:
+            raise ValueError(f"{name}={v!r} must be a positive integer, e.g. {name}={getattr(type(cfg), name)}")
+
+
 class RunConfig:
     """What every learner's configuration does alike: presets with overrides, checked replacements, the target, the
     dict a run directory's config.json and a checkpoint keep. ``RENAMED``: fields under an earlier name."""
@@ -60,10 +69,7 @@ class RunConfig:
 
     def check_run_fields(self) -> None:
         """The fields of the run itself (evaluations, checkpoints, the target), as every learner has them."""
-        for name in ("save_gap", "eval_envs"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int) or v < 1:
-                raise ValueError(f"{name}={v!r} must be a positive integer")
+        check_positive_ints(self, ("save_gap", "eval_envs"))
         if not (_is_number(self.eval_gap) and self.eval_gap >= 0):
             raise ValueError(f"eval_gap={self.eval_gap!r} must be 0 or a positive number of seconds")
         for name in ("normalize_obs", "tf32", "keep_checkpoints"):
@@ -171,10 +177,7 @@ class Config(RunConfig):
     def validated(self) -> Config:
         if self.agent != "AgentPPO":
             raise ValueError(f"agent={self.agent!r}: this package implements 'AgentPPO' only")
-        for name in ("minibatch_size", "horizon_len", "repeat_times"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int) or v < 1:
-                raise ValueError(f"{name}={v!r} must be a positive integer")
+        check_positive_ints(self, ("minibatch_size", "horizon_len", "repeat_times"))
         if not self.net_dims or any((not isinstance(d, int)) or d < 1 for d in self.net_dims):
             raise ValueError(f"net_dims={self.net_dims!r} must be a non-empty sequence of positive layer widths")
         for name, lo, hi in (("gamma", 0.0, 1.0), ("lambda_gae", 0.0, 1.0), ("clip_ratio", 0.0, 1.0)):

@@ -2,8 +2,8 @@
 iteration's statistics staged to the host and logged one iteration late (the GPU never waits on logging), the
 evaluations, the targets, the checkpoints kept at marks and the atomic saves. A learner (``OnPolicyRunner``,
 ``agents.sac.OffPolicyRunner``) subclasses ``TrainingLoop``, calls ``init_loop`` and supplies ``iterate()`` (one
-iteration: its statistics as device tensors), ``state_dict()``, ``policy`` (``act_deterministic``) and
-``normalize``; ``before_iteration`` and ``close`` are optional."""
+iteration: its statistics as device tensors), ``state_dict()``, ``policy`` (``act_deterministic``) and the
+normalisers ``normalizer`` and ``critic_normalizer``; ``before_iteration`` and ``close`` are optional."""
 
 from __future__ import annotations
 
@@ -72,6 +72,24 @@ class TrainingLoop:
         """Log the learner's own count of non-finite observations or rewards with the env's faults."""
         self._faults = {**self._faults, "nonfinite_obs_rewards": counter}
         self._fault_help["nonfinite_obs_rewards"] = self.NONFINITE_HELP
+
+    # the observation normalisers: a learner sets ``normalizer`` and ``critic_normalizer`` (None where the critic
+    # reads the policy's observation)
+    def normalize(self, obs: torch.Tensor) -> torch.Tensor:
+        return self.normalizer(obs) if self.cfg.normalize_obs else obs
+
+    def normalize_critic(self, critic_obs: torch.Tensor) -> torch.Tensor:
+        return self.critic_normalizer(critic_obs) if self.cfg.normalize_obs else critic_obs
+
+    def normalizer_states(self) -> dict:
+        return {"normalizer": self.normalizer.state_dict(),
+                **({"critic_normalizer": self.critic_normalizer.state_dict()} if self.critic_normalizer is not None
+                   else {})}
+
+    def load_normalizers(self, ckpt: dict) -> None:
+        self.normalizer.load_state_dict(ckpt["normalizer"])
+        if self.critic_normalizer is not None:
+            self.critic_normalizer.load_state_dict(ckpt["critic_normalizer"])
 
     def before_iteration(self, progress: float) -> None:
         """Called before each iteration with how far through its budget the run is, in [0, 1]."""

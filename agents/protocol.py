@@ -84,3 +84,12 @@ def env_spec(env) -> EnvSpec:
     return EnvSpec(int(env.num_envs), _size(env, "num_obs", "single_observation_space"),
                    _size(env, "num_actions", "single_action_space"), torch.device(device), int(steps),
                    bool(getattr(env, "graph_capturable", False)), int(critic))
+
+
+def critic_obs_of(info: dict, env) -> torch.Tensor:
+    """The critic's observation in a reset's or step's info (agents.protocol), or a clear error."""
+    critic = info.get("critic_obs") if isinstance(info, dict) else None
+    if critic is None:
+        raise TypeError(f"{type(env).__name__} declares num_critic_obs but its reset() info has no 'critic_obs': "
+                        "return the critic's observation there (agents.protocol)")
+    return critic

@@ -84,12 +84,6 @@ class OnPolicyRunner(TrainingLoop):
 
     # ------------------------------------------------------------------ pieces
 
-    def normalize(self, obs: torch.Tensor) -> torch.Tensor:
-        return self.normalizer(obs) if self.cfg.normalize_obs else obs
-
-    def normalize_critic(self, critic_obs: torch.Tensor) -> torch.Tensor:
-        return self.critic_normalizer(critic_obs) if self.cfg.normalize_obs else critic_obs
-
     def _normalizer_buffers(self) -> list[torch.Tensor]:
         both = [self.normalizer] + ([self.critic_normalizer] if self.critic_normalizer is not None else [])
         return [b for n in both for b in n.buffers()]
@@ -175,8 +169,7 @@ class OnPolicyRunner(TrainingLoop):
     def state_dict(self) -> dict:
         return {
             **self.loop_state(),
-            "policy": self.policy.state_dict(), "normalizer": self.normalizer.state_dict(),
-            **({"critic_normalizer": self.critic_normalizer.state_dict()} if self.critic_normalizer is not None else {}),
+            "policy": self.policy.state_dict(), **self.normalizer_states(),
             "optimizer": self.ppo.optimizer.state_dict(), "lr": self.ppo.lr.item(), "lr_free": self.ppo.lr_free.item(),
         }
 
@@ -188,9 +181,7 @@ class OnPolicyRunner(TrainingLoop):
         processes may resume a run; every process but rank 0 draws new exploration noise."""
         ckpt = self.read_checkpoint(path)
         self.policy.load_state_dict(ckpt["policy"])
-        self.normalizer.load_state_dict(ckpt["normalizer"])
-        if self.critic_normalizer is not None:
-            self.critic_normalizer.load_state_dict(ckpt["critic_normalizer"])
+        self.load_normalizers(ckpt)
         if resume:
             self.ppo.optimizer.load_state_dict(ckpt["optimizer"])
             self.ppo.lr.fill_(ckpt["lr"])

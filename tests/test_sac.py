@@ -3,8 +3,6 @@ hand-computed cases, learning on the point mass against a number, checkpoints, a
 
 from __future__ import annotations
 
-import math
-
 import pytest
 import torch
 
@@ -165,11 +163,33 @@ def test_a_sac_checkpoint_plays_exports_and_resumes(trained, tmp_path):
                               eval_env=PointMassVecEnv(16, seed=1), print_fn=lambda s: None)
     resumed.load(f"{run_dir}/checkpoint.pt")
     assert resumed.iteration == 60 and resumed.samples == history[-1]["samples"]
-    assert resumed.sac.log_alpha.item() == pytest.approx(math.log(history[-1]["sac/alpha"]), abs=0.05)
-    with torch.no_grad():
-        assert torch.allclose(resumed.policy.act_deterministic(normalize(obs)), acts)
+    assert torch.equal(resumed.sac.log_alpha.detach(), ckpt["log_alpha"])
+    with torch.no_grad():  # its weights and its normaliser are the checkpoint's
+        assert torch.allclose(resumed.policy.act_deterministic(resumed.normalize(obs)), acts)
     more = resumed.learn(max_iterations=62)  # refills learning_starts steps, then updates again
-    assert [r["iteration"] for r in more] == [61, 62]
+    assert [r["iteration"] for r in more] == [61, 62] and more[-1]["sac/critic_loss"] > 0
+
+
+def test_an_asymmetric_critic_keeps_its_own_observations_and_learns_the_position():
+    """The policy sees the velocity alone, the critic the position too (tests/test_asymmetric.py's env): the replay
+    keeps the critic's true next observation across an episode's end, and the trained critic values a mass at rest
+    at the origin above one at rest 2.8 m out, which it could not through the velocity."""
+    from test_asymmetric import HiddenPositionMass  # noqa: PLC0415
+
+    env = HiddenPositionMass(16)
+    runner = OffPolicyRunner(env, SACConfig(**{**SMALL, "learning_starts": 10**6}), print_fn=lambda s: None)
+    runner.learn(max_iterations=3)  # 75 steps, no update: the episodes end after step 50
+    b = runner.buffer
+    assert b.critic_obs.shape == (SMALL["buffer_size"], 16, 4) and b.obs.shape[-1] == 2
+    assert torch.equal(b.next_critic_obs[:48], b.critic_obs[1:49])  # within the episode, the next is the next
+    assert b.ended[49].all() and not torch.equal(b.next_critic_obs[49], b.critic_obs[50])  # across its end, not
+    assert (b.critic_obs[50][:, 2:] == 0).all()  # the new episode starts at rest
+    trained = OffPolicyRunner(HiddenPositionMass(32), SACConfig(**SMALL), print_fn=lambda s: None)
+    trained.learn(max_iterations=20)
+    states = torch.tensor([[0.0, 0.0, 0.0, 0.0], [2.0, 2.0, 0.0, 0.0]])
+    with torch.no_grad():
+        q = trained.critic.values(trained.critic(trained.normalize_critic(states), torch.zeros(2, 2))).mean(0)
+    assert q[0] - q[1] > 5.0, q.tolist()
 
 
 # ---------------------------------------------------------------------------------------------- errors

@@ -13,7 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Callable
 
-from agents.config import RunConfig, _is_number
+from agents.config import RunConfig, _is_number, check_positive_ints
 
 
 @dataclass
@@ -76,11 +76,8 @@ class SACConfig(RunConfig):
     def validated(self) -> SACConfig:
         if self.agent != "AgentSAC":
             raise ValueError(f"agent={self.agent!r}: SACConfig is the config of 'AgentSAC'")
-        for name in ("num_critics", "num_atoms", "n_step", "batch_size", "num_updates", "policy_frequency",
-                     "buffer_size", "learning_starts", "steps_per_iteration"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int) or v < 1:
-                raise ValueError(f"{name}={v!r} must be a positive integer, e.g. {name}={getattr(SACConfig, name)}")
+        check_positive_ints(self, ("num_critics", "num_atoms", "n_step", "batch_size", "num_updates",
+                                   "policy_frequency", "buffer_size", "learning_starts", "steps_per_iteration"))
         if self.num_atoms < 2:
             raise ValueError(f"num_atoms={self.num_atoms}: a distribution needs at least 2 atoms, e.g. num_atoms=101")
         if self.num_updates % self.policy_frequency:

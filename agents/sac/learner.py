@@ -41,6 +41,7 @@ class SAC:
         self.amp = cfg.amp and cuda
         # sums since the last take(): the critic's statistics, its steps, the actor's, its steps
         self.sums = torch.zeros(len(CRITIC_STATS) + 1 + len(ACTOR_STATS) + 1, device=device)
+        self._one = torch.ones((), device=device)  # a step's count in the sums
 
     @contextmanager
     def _autocast(self):
@@ -95,7 +96,7 @@ class SAC:
             for tp, p in zip(self.critic_target.parameters(), self.critic.parameters()):
                 tp.lerp_(p, self.cfg.tau)
         n = len(CRITIC_STATS)
-        self.sums[: n + 1] += torch.stack([loss.detach(), q_target, torch.ones((), device=self.device)])
+        self.sums[: n + 1] += torch.stack([loss.detach(), q_target, self._one])
 
     def actor_step(self, b: dict[str, torch.Tensor]) -> None:
         self.critic.requires_grad_(False)  # the actor's loss moves the actor alone
@@ -120,7 +121,7 @@ class SAC:
         self.alpha_opt.step()
         n = len(CRITIC_STATS) + 1
         self.sums[n:] += torch.stack([loss.detach(), -log_prob.detach().mean(), alpha[0], q.detach().mean(),
-                                      torch.ones((), device=self.device)])
+                                      self._one])
 
     def update(self) -> None:
         """One env step's updates."""

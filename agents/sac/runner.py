@@ -15,6 +15,7 @@ from __future__ import annotations
 import torch
 
 from agents.loop import TrainingLoop
+from agents.protocol import critic_obs_of
 from agents.normalizer import RunningMeanStd
 from agents.rollout import EpisodeTracker
 from agents.sac.config import SACConfig
@@ -76,24 +77,12 @@ class OffPolicyRunner(TrainingLoop):
         """What one step's CUDA graph holds: "step" (the env's step too), "update" (the updates alone) or "off"."""
         return self._capture
 
-    def normalize(self, obs: torch.Tensor) -> torch.Tensor:
-        return self.normalizer(obs) if self.cfg.normalize_obs else obs
-
-    def normalize_critic(self, critic_obs: torch.Tensor) -> torch.Tensor:
-        if self.critic_normalizer is None:
-            return self.normalize(critic_obs)
-        return self.critic_normalizer(critic_obs) if self.cfg.normalize_obs else critic_obs
-
     # ------------------------------------------------------------------ steps
     def start(self) -> None:
         obs, info = self.env.reset()
         self.last_raw_obs = obs.clone()
         if self.spec.num_critic_obs:
-            critic = info.get("critic_obs") if isinstance(info, dict) else None
-            if critic is None:
-                raise TypeError(f"{type(self.env).__name__} declares num_critic_obs but its reset() info has no "
-                                "'critic_obs': return the critic's observation there (agents.protocol)")
-            self.last_raw_critic = critic.clone()
+            self.last_raw_critic = critic_obs_of(info, self.env).clone()
 
     @torch.no_grad()
     def act_and_store(self) -> None:
@@ -186,9 +175,7 @@ class OffPolicyRunner(TrainingLoop):
             **self.loop_state(),
             "policy": self.policy.state_dict(), "critic": self.critic.state_dict(),
             "critic_target": self.sac.critic_target.state_dict(), "log_alpha": self.sac.log_alpha.detach().clone(),
-            "normalizer": self.normalizer.state_dict(),
-            **({"critic_normalizer": self.critic_normalizer.state_dict()} if self.critic_normalizer is not None else {}),
-            "optimizer": self.sac.optimizer_states(),
+            **self.normalizer_states(), "optimizer": self.sac.optimizer_states(),
         }
 
     def load(self, path: str, resume: bool = True) -> None:
@@ -201,9 +188,7 @@ class OffPolicyRunner(TrainingLoop):
         self.policy.load_state_dict(ckpt["policy"])
         self.critic.load_state_dict(ckpt["critic"])
         self.sac.critic_target.load_state_dict(ckpt["critic_target"])
-        self.normalizer.load_state_dict(ckpt["normalizer"])
-        if self.critic_normalizer is not None:
-            self.critic_normalizer.load_state_dict(ckpt["critic_normalizer"])
+        self.load_normalizers(ckpt)
         if resume:
             with torch.no_grad():
                 self.sac.log_alpha.copy_(ckpt["log_alpha"])

@@ -94,6 +94,13 @@ def build_config(args, task: str, num_envs: int, device: str, saved: dict | None
     )
 
 
+def from_saved(config, saved: dict, sequences: tuple[str, ...]):
+    """A learner's config as a run's config.json holds it (its lists of widths back to tuples; what is not one of the
+    config's fields, or is the envs', left out: the command rebuilds those)."""
+    known = {f.name for f in fields(config)} - {"env_class", "env_args", "eval_env_class", "eval_env_args"}
+    return config(**{k: (tuple(v) if k in sequences else v) for k, v in saved.items() if k in known})
+
+
 def run_changes(args) -> dict:
     """The flags of the run itself, as config fields (every learner has them)."""
     return {k: v for k, v in {
@@ -107,9 +114,7 @@ def sac_config(args, task: str, device: str, saved: dict | None):
     from agents.sac import SACConfig  # noqa: PLC0415
 
     if saved is not None:
-        known = {f.name for f in fields(SACConfig)} - {"env_class", "env_args", "eval_env_class", "eval_env_args"}
-        widths = ("actor_dims", "critic_dims", "save_at")
-        cfg = SACConfig(**{k: (tuple(v) if k in widths else v) for k, v in saved.items() if k in known})
+        cfg = from_saved(SACConfig, saved, ("actor_dims", "critic_dims"))
     else:
         from warpgym.tasks.registry import task_entry  # noqa: PLC0415
 
@@ -122,11 +127,9 @@ def sac_config(args, task: str, device: str, saved: dict | None):
 
 def ppo_config(args, task: str, num_envs: int, device: str, saved: dict | None) -> Config:
     if saved is not None:
-        known = {f.name for f in fields(Config)} - {"env_class", "env_args", "eval_env_class", "eval_env_args"}
         # a run saved before Config.multi_gpu gave each process num_envs envs and mini-batches of minibatch_size;
         # one saved before Config.minibatch_size wrote batch_size (Config.renamed)
-        saved = {"multi_gpu": "grow-batch", **Config.renamed(saved)}
-        cfg = Config(**{k: (tuple(v) if k == "net_dims" else v) for k, v in saved.items() if k in known})
+        cfg = from_saved(Config, {"multi_gpu": "grow-batch", **Config.renamed(saved)}, ("net_dims",))
     else:
         from warpgym.tasks.registry import task_entry  # noqa: PLC0415
 

@@ -207,13 +207,14 @@ def make_runner(args, plan: RunPlan, cfg: Config, startup: Startup) -> tuple[OnP
                   print_fn=lambda s: print(s, flush=True), profile=args.profile, cuda_graph=not args.no_cuda_graph,
                   eval_recorder=recorder)
     if cfg.agent == "AgentPPO":
-        runner = OnPolicyRunner(env, cfg, rollout_graph=args.rollout_graph, **common)
-        startup.phase("policy and optimiser ready; the first iterations capture the update graph and the rollout's "
-                      f"({runner.capture}: agents.collect)")
+        common["rollout_graph"] = args.rollout_graph
+        ready = ("policy and optimiser ready; the first iterations capture the update graph and the rollout's "
+                 "({}: agents.collect)")
     else:
-        runner = by_agent(cfg.agent).runner(env, cfg, **common)
-        startup.phase(f"policy, critics, replay and optimisers ready; after {cfg.learning_starts} steps each env "
-                      f"step and its updates are captured ({runner.capture}: agents.sac.runner)")
+        ready = (f"policy, critics, replay and optimisers ready; after {cfg.learning_starts} steps each env step and "
+                 "its updates are captured ({}: agents.sac.runner)")
+    runner = by_agent(cfg.agent).runner(env, cfg, **common)
+    startup.phase(ready.format(runner.capture))
     return runner, env
 
 

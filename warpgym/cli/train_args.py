@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 
+from agents.algos import ALGOS
 from agents.data_parallel import MODES as MULTI_GPU_MODES
 from warpgym.cli.flags import CommandParser, check_device, non_negative_float, non_negative_int, positive_float, \
     positive_int
@@ -23,7 +24,7 @@ def parser(description: str | None = None) -> CommandParser:
                     help="the robot of a legged velocity task: a zoo robot (a1, aliengo, go1, g1, ...) or a robot's "
                          "TOML definition naming its URDF or MJCF file (docs/robots.md); --task then defaults to "
                          "VelocityFlat-v0 (VelocityRough-v0 for rough ground)")
-    ap.add_argument("--algo", default=None, choices=("ppo", "sac"),
+    ap.add_argument("--algo", default=None, choices=sorted(ALGOS),
                     help="the learner: ppo (default; several GPUs through torchrun) or sac (off-policy: soft "
                          "actor-critic with a distributional critic, a device replay and several updates per env "
                          "step, one GPU; agents/sac); its settings through --config, e.g. --config batch_size=4096")

@@ -55,10 +55,11 @@ LEGGED = dict(net_dims=(512, 256, 128), horizon_len=24, minibatch_size=24576, re
 PRESETS.update({name: LEGGED for name in LEGGED_TASKS})
 
 # The off-policy learner's starting points (agents.sac.SACConfig fields), by family: `warpgym train --algo sac`.
-# The legged tasks take FastSAC's humanoid settings (4096 envs, batch 8192, 8 critic steps an env step, the actor
-# every 4th, gamma 0.97, a 101-atom critic, layer norm, bf16), its support narrowed to the returns mjlab's rewards
-# (scaled by the control step) add up to at gamma 0.97; Gymnasium's tasks SAC's usual gamma, rewards scaled by 0.1 so
-# that a return of the suite's figures sits inside the support, and SAC's target entropy of -1 per action.
+# The legged tasks take FastSAC's humanoid settings (SACConfig's defaults: batch 8192, 8 critic steps an env step,
+# the actor every 4th, gamma 0.97, a 101-atom critic, layer norm, bf16), the critic's support halved: mjlab's rewards
+# are scaled by the control step. Gymnasium's tasks and warpgym's robots take SAC's usual gamma and target entropy
+# of -1 per action, their rewards scaled so that the suite's returns fit the support. None of these is tuned yet
+# (docs/benchmarks.md, "Off-policy learning").
 SAC_LEGGED = dict(v_min=-10.0, v_max=10.0, gamma=0.97, eval_gap=60.0)
 SAC_SUITE = dict(v_min=-50.0, v_max=150.0, gamma=0.99, reward_scale=0.1, target_entropy_ratio=1.0, alpha_init=0.01,
                  num_updates=4, policy_frequency=2, eval_gap=60.0)
