@@ -242,6 +242,7 @@ def test_a_wrong_sac_setting_is_refused_before_anything_is_built(field, capsys):
 @pytest.mark.parametrize("argv, says", [
     (["--algo", "sac", "--horizon-len", "8"], "--horizon-len: PPO's settings; --algo sac takes its own"),
     (["--algo", "sac", "--overlap"], "--overlap: PPO's settings"),
+    (["--algo", "sac", "--no-rollout-graph"], "--rollout-graph: PPO's settings"),
     (["--config", "num_updates=2"], "'num_updates' is not a PPO setting"),
     (["--algo", "sac", "--config", "net_dims=64"], "'net_dims' is not a SAC setting"),
 ])

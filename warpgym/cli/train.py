@@ -207,7 +207,7 @@ def make_runner(args, plan: RunPlan, cfg: Config, startup: Startup) -> tuple[OnP
                   print_fn=lambda s: print(s, flush=True), profile=args.profile, cuda_graph=not args.no_cuda_graph,
                   eval_recorder=recorder)
     if cfg.agent == "AgentPPO":
-        common["rollout_graph"] = args.rollout_graph
+        common["rollout_graph"] = args.rollout_graph or "step"
         ready = ("policy and optimiser ready; the first iterations capture the update graph and the rollout's "
                  "({}: agents.collect)")
     else:

@@ -89,7 +89,7 @@ def parser(description: str | None = None) -> CommandParser:
     ap.add_argument("--no-plots", action="store_true")
     ap.add_argument("--no-cuda-graph", action="store_true",
                     help="run everything eagerly: no CUDA graph of the rollout or of the PPO update")
-    ap.add_argument("--rollout-graph", choices=("step", "rollout", "off"), default="step",
+    ap.add_argument("--rollout-graph", choices=("step", "rollout", "off"), default=None,
                     help="how rollouts are captured as CUDA graphs: one env step, replayed horizon_len times "
                          "(default: the fastest start), the whole rollout as one graph, or off (agents.collect)")
     ap.add_argument("--no-rollout-graph", action="store_const", const="off", dest="rollout_graph",
@@ -230,7 +230,8 @@ def check_values(ap, args) -> None:
         ppo_only = [f for f, v in (("--horizon-len", args.horizon_len), ("--minibatch-size", args.minibatch_size),
                                    ("--repeat-times", args.repeat_times), ("--learning-rate", args.learning_rate),
                                    ("--multi-gpu", args.multi_gpu), ("--overlap", args.overlap or None),
-                                   ("--compile-update", args.compile_update or None)) if v is not None]
+                                   ("--compile-update", args.compile_update or None),
+                                   ("--rollout-graph", args.rollout_graph)) if v is not None]
         if ppo_only:
             ap.error(f"{', '.join(ppo_only)}: PPO's settings; --algo sac takes its own through --config "
                      "(steps_per_iteration, batch_size, num_updates, actor_lr, critic_lr: agents/sac/config.py)")
